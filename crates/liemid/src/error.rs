@@ -1,0 +1,96 @@
+//! Error values of the library. Every variant carries the numbers that explain it.
+
+use thiserror::Error;
+
+/// Everything that can go wrong when building a system or stepping it.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum Error {
+    /// The inertia tensor is not symmetric positive definite (or not finite).
+    #[error("inertia tensor is not symmetric positive definite: {reason}")]
+    InvalidInertia {
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// The mass matrix of a vector-space system is not symmetric positive definite.
+    #[error("mass matrix is not symmetric positive definite: {reason}")]
+    InvalidMass {
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// A model parameter is out of range or not finite.
+    #[error("invalid parameter `{name}` = {value}: {reason}")]
+    InvalidParameter {
+        /// Name of the parameter.
+        name: &'static str,
+        /// The offending value.
+        value: f64,
+        /// Why it is rejected.
+        reason: &'static str,
+    },
+    /// A state holds a NaN or an infinity.
+    #[error("state field `{field}` is not finite at t = {t}")]
+    NonFiniteState {
+        /// The field (`pi`, `rotation`, `t`, `p`, `u`).
+        field: &'static str,
+        /// The state's time.
+        t: f64,
+    },
+    /// The step size is zero or not finite.
+    #[error("step size h = {h} must be finite and non-zero")]
+    InvalidStep {
+        /// The step size.
+        h: f64,
+    },
+    /// The end time lies before the start time (or either is not finite).
+    #[error("end time t_end = {t_end} is before the start time t0 = {t0} (or not finite)")]
+    EndBeforeStart {
+        /// Start time.
+        t0: f64,
+        /// End time.
+        t_end: f64,
+    },
+    /// The output interval of the driver is zero.
+    #[error("observer interval `every` must be at least 1")]
+    InvalidObserverInterval,
+    /// Newton's method for an implicit step equation did not converge.
+    #[error(
+        "{method}: {equation} did not converge in the step from t = {t} with h = {h} \
+         (residual {residual:.3e} after {iterations} iterations); the step is probably too \
+         large for the rotation rate"
+    )]
+    NewtonDidNotConverge {
+        /// The integrator.
+        method: &'static str,
+        /// The equation being solved.
+        equation: &'static str,
+        /// Time at the start of the failing step.
+        t: f64,
+        /// The step size.
+        h: f64,
+        /// Norm of the last residual (relative to the equation's scale).
+        residual: f64,
+        /// Iterations taken.
+        iterations: u32,
+    },
+    /// The state became NaN or infinite during a step.
+    #[error("{method}: the state became non-finite in the step from t = {t} with h = {h}")]
+    NonFiniteResult {
+        /// The integrator.
+        method: &'static str,
+        /// Time at the start of the failing step.
+        t: f64,
+        /// The step size.
+        h: f64,
+    },
+    /// The observer asked the driver to stop with an error of its own.
+    #[error("observer stopped the run at t = {t}: {reason}")]
+    ObserverFailed {
+        /// Time of the state the observer saw.
+        t: f64,
+        /// The observer's message.
+        reason: String,
+    },
+}
+
+/// Result type of the library.
+pub type Result<T, E = Error> = core::result::Result<T, E>;

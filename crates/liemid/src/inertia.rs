@@ -1,0 +1,154 @@
+//! The body inertia tensor: a constant symmetric positive definite 3x3 matrix, with a fast
+//! path for principal (diagonal) tensors.
+
+use crate::error::{Error, Result};
+use crate::linalg::{Mat3, Vec3};
+
+/// A validated body inertia tensor `I` (kg m²) with its inverse.
+///
+/// Principal tensors (diagonal in the body frame) multiply and solve componentwise; full
+/// tensors use the matrix and its inverse, formed once at construction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Inertia {
+    matrix: Mat3,
+    inverse: Mat3,
+    principal: Option<(Vec3, Vec3)>,
+}
+
+impl Inertia {
+    /// A principal inertia tensor `diag(I₁, I₂, I₃)`; every moment must be finite and
+    /// positive.
+    pub fn principal(moments: [f64; 3]) -> Result<Self> {
+        for (k, &m) in moments.iter().enumerate() {
+            if !m.is_finite() || m <= 0.0 {
+                return Err(Error::InvalidInertia {
+                    reason: format!("principal moment I{} = {m} must be finite and positive", k + 1),
+                });
+            }
+        }
+        let d = Vec3::from_array(moments);
+        let inv = Vec3::new(1.0 / d.x, 1.0 / d.y, 1.0 / d.z);
+        Ok(Inertia {
+            matrix: Mat3::from_diagonal(d),
+            inverse: Mat3::from_diagonal(inv),
+            principal: Some((d, inv)),
+        })
+    }
+
+    /// A full inertia tensor given by its rows. It must be finite, symmetric (to a relative
+    /// `1e-12`) and positive definite (all Cholesky pivots positive). A diagonal matrix takes
+    /// the principal fast path.
+    pub fn from_matrix(rows: [[f64; 3]; 3]) -> Result<Self> {
+        let m = Mat3::from_rows(rows);
+        if !m.is_finite() {
+            return Err(Error::InvalidInertia {
+                reason: "entries must be finite".into(),
+            });
+        }
+        let scale = m.max_abs();
+        for i in 0..3 {
+            for j in (i + 1)..3 {
+                if (m.m[i][j] - m.m[j][i]).abs() > 1e-12 * scale {
+                    return Err(Error::InvalidInertia {
+                        reason: format!(
+                            "not symmetric: I[{i}][{j}] = {} but I[{j}][{i}] = {}",
+                            m.m[i][j], m.m[j][i]
+                        ),
+                    });
+                }
+            }
+        }
+        if m.m[0][1] == 0.0 && m.m[0][2] == 0.0 && m.m[1][2] == 0.0 {
+            return Inertia::principal([m.m[0][0], m.m[1][1], m.m[2][2]]);
+        }
+        // Cholesky pivots of the symmetrised matrix.
+        let s = (m + m.transpose()) * 0.5;
+        let a = &s.m;
+        let d0 = a[0][0];
+        let d1 = if d0 > 0.0 { a[1][1] - a[0][1] * a[0][1] / d0 } else { d0 };
+        let d2 = s.determinant();
+        if d0 <= 0.0 || d1 <= 0.0 || d2 <= 0.0 {
+            return Err(Error::InvalidInertia {
+                reason: format!(
+                    "not positive definite (leading principal minors {d0:e}, {:e}, {d2:e})",
+                    d0 * d1
+                ),
+            });
+        }
+        let inverse = s.inverse().ok_or_else(|| Error::InvalidInertia {
+            reason: "singular".into(),
+        })?;
+        Ok(Inertia {
+            matrix: s,
+            inverse: (inverse + inverse.transpose()) * 0.5,
+            principal: None,
+        })
+    }
+
+    /// The tensor `I` as a matrix.
+    #[must_use]
+    pub fn matrix(&self) -> &Mat3 {
+        &self.matrix
+    }
+
+    /// The inverse `I⁻¹`.
+    #[must_use]
+    pub fn inverse(&self) -> &Mat3 {
+        &self.inverse
+    }
+
+    /// The principal moments, when the tensor is diagonal.
+    #[must_use]
+    pub fn principal_moments(&self) -> Option<Vec3> {
+        self.principal.map(|(d, _)| d)
+    }
+
+    /// `I v`.
+    #[must_use]
+    #[inline]
+    pub fn apply(&self, v: Vec3) -> Vec3 {
+        match &self.principal {
+            Some((d, _)) => d.component_mul(v),
+            None => self.matrix * v,
+        }
+    }
+
+    /// `I⁻¹ v`: the body angular velocity of the momentum `v`.
+    #[must_use]
+    #[inline]
+    pub fn apply_inverse(&self, v: Vec3) -> Vec3 {
+        match &self.principal {
+            Some((_, inv)) => inv.component_mul(v),
+            None => self.inverse * v,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rejects_bad_tensors_with_reasons() {
+        let e = Inertia::principal([1.0, 0.0, 2.0]).unwrap_err();
+        assert!(e.to_string().contains("I2 = 0"), "{e}");
+        assert!(Inertia::principal([1.0, f64::NAN, 2.0]).is_err());
+        assert!(Inertia::principal([-1.0, 1.0, 2.0]).is_err());
+        let e = Inertia::from_matrix([[1.0, 0.5, 0.0], [0.4, 1.0, 0.0], [0.0, 0.0, 1.0]]).unwrap_err();
+        assert!(e.to_string().contains("not symmetric"), "{e}");
+        let e = Inertia::from_matrix([[1.0, 2.0, 0.0], [2.0, 1.0, 0.0], [0.0, 0.0, 1.0]]).unwrap_err();
+        assert!(e.to_string().contains("not positive definite"), "{e}");
+        assert!(Inertia::from_matrix([[1.0, 0.0, 0.0], [0.0, f64::INFINITY, 0.0], [0.0, 0.0, 1.0]]).is_err());
+    }
+
+    #[test]
+    fn full_tensor_applies_and_inverts() {
+        let i = Inertia::from_matrix([[2.0, 0.3, -0.1], [0.3, 3.0, 0.2], [-0.1, 0.2, 4.0]]).unwrap();
+        assert!(i.principal_moments().is_none());
+        let v = Vec3::new(0.7, -1.1, 2.3);
+        assert!((i.apply_inverse(i.apply(v)) - v).max_abs() < 1e-15);
+        let d = Inertia::from_matrix([[2.0, 0.0, 0.0], [0.0, 3.0, 0.0], [0.0, 0.0, 4.0]]).unwrap();
+        assert_eq!(d.principal_moments(), Some(Vec3::new(2.0, 3.0, 4.0)));
+        assert!((d.apply(v) - Vec3::new(1.4, -3.3, 9.2)).max_abs() < 1e-15);
+    }
+}

@@ -1,0 +1,243 @@
+//! Named test problems with their initial states (and exact solutions where they exist),
+//! shared by the tests, the benchmarks and the command-line tool.
+
+use crate::inertia::Inertia;
+use crate::linalg::{Mat3, Vec3};
+use crate::rigid::{FreeBody, HeavyTop, RigidState};
+use crate::so3;
+use crate::vector::{MassMatrix, MechanicalSystem, PhaseState};
+
+/// A rigid-body problem: a system, an initial state and a default end time.
+#[derive(Clone, Debug)]
+pub struct RigidProblem<S> {
+    /// Short name, e.g. `fast-top`.
+    pub name: &'static str,
+    /// One line on what it is.
+    pub description: &'static str,
+    /// The system.
+    pub system: S,
+    /// The initial state at `t = 0`.
+    pub initial: RigidState,
+    /// The default end time.
+    pub t_end: f64,
+}
+
+fn block_top(name: &'static str, description: &'static str, spin: f64) -> RigidProblem<HeavyTop> {
+    let system = HeavyTop::lagrangian_block();
+    let initial = RigidState::from_angular_velocity(
+        0.0,
+        &system.inertia,
+        Vec3::new(0.0, 0.0, spin),
+        so3::exp(Vec3::new(0.05, 0.0, 0.0)),
+    );
+    RigidProblem {
+        name,
+        description,
+        system,
+        initial,
+        t_end: 0.8,
+    }
+}
+
+/// The fast Lagrangian top of the paper (`heavy-top.md`): an aluminium block spinning at
+/// `Ω₀ = (0, 0, 313π)` rad/s, tilted by 0.05 rad about `e₁`, to `t = 0.8` s.
+#[must_use]
+pub fn fast_top() -> RigidProblem<HeavyTop> {
+    block_top(
+        "fast-top",
+        "fast Lagrangian top: aluminium block, spin 313*pi rad/s, tilt 0.05 rad, t = 0.8 s",
+        313.0 * std::f64::consts::PI,
+    )
+}
+
+/// The same top spinning slower, `Ω₀ = (0, 0, 90π)` rad/s.
+#[must_use]
+pub fn slow_top() -> RigidProblem<HeavyTop> {
+    block_top(
+        "slow-top",
+        "slow Lagrangian top: the same block, spin 90*pi rad/s, t = 0.8 s",
+        90.0 * std::f64::consts::PI,
+    )
+}
+
+/// A torque-dominated top, where the first-order torque error of E1 and E2 is visible:
+/// `I = diag(5, 5, 1)`, `m = 1`, centre of mass `(0, 0, 1)`, `g = 9.81`,
+/// `R₀ = exp(0.3 e₁)`, `Ω₀ = (0, 0, 20)`, to `t = 1`.
+#[must_use]
+pub fn torque_dominated_top() -> RigidProblem<HeavyTop> {
+    let inertia = Inertia::principal([5.0, 5.0, 1.0]).expect("positive");
+    let system = HeavyTop::new(inertia, 1.0, Vec3::new(0.0, 0.0, 1.0), Vec3::new(0.0, 0.0, -9.81)).expect("finite");
+    let initial = RigidState::from_angular_velocity(
+        0.0,
+        &inertia,
+        Vec3::new(0.0, 0.0, 20.0),
+        so3::exp(Vec3::new(0.3, 0.0, 0.0)),
+    );
+    RigidProblem {
+        name: "torque-top",
+        description: "torque-dominated top: I = diag(5, 5, 1), m = 1, X = (0, 0, 1), spin 20 rad/s, t = 1 s",
+        system,
+        initial,
+        t_end: 1.0,
+    }
+}
+
+/// A free asymmetric body spun about its intermediate axis (the tennis-racket or
+/// Dzhanibekov flip): `I = diag(1, 2, 3)`, `Ω₀ = (0.01, 10, 0)`, to `t = 10`.
+#[must_use]
+pub fn free_body() -> RigidProblem<FreeBody> {
+    let inertia = Inertia::principal([1.0, 2.0, 3.0]).expect("positive");
+    RigidProblem {
+        name: "free-body",
+        description: "free asymmetric body about its intermediate axis (tennis-racket flip), t = 10 s",
+        system: FreeBody::new(inertia),
+        initial: RigidState::from_angular_velocity(0.0, &inertia, Vec3::new(0.01, 10.0, 0.0), Mat3::IDENTITY),
+        t_end: 10.0,
+    }
+}
+
+/// A harmonic oscillator `m u'' = −k u` in one dimension.
+#[derive(Clone, Debug)]
+pub struct HarmonicOscillator {
+    mass: MassMatrix,
+    /// Spring constant `k`.
+    pub stiffness: f64,
+}
+
+impl HarmonicOscillator {
+    /// An oscillator with mass `m > 0` and stiffness `k`.
+    pub fn new(mass: f64, stiffness: f64) -> crate::Result<Self> {
+        Ok(HarmonicOscillator {
+            mass: MassMatrix::diagonal(vec![mass])?,
+            stiffness,
+        })
+    }
+
+    /// The exact state at time `t` from `(p0, u0)` at `t = 0`.
+    #[must_use]
+    pub fn exact(&self, p0: f64, u0: f64, t: f64) -> PhaseState {
+        let MassMatrix::Diagonal(m) = &self.mass else {
+            unreachable!()
+        };
+        let m = m[0];
+        let w = (self.stiffness / m).sqrt();
+        let (s, c) = (w * t).sin_cos();
+        PhaseState {
+            t,
+            p: vec![p0 * c - m * w * u0 * s],
+            u: vec![u0 * c + p0 / (m * w) * s],
+        }
+    }
+}
+
+impl MechanicalSystem for HarmonicOscillator {
+    fn mass(&self) -> &MassMatrix {
+        &self.mass
+    }
+    fn force(&self, u: &[f64], _t: f64, f: &mut [f64]) {
+        f[0] = -self.stiffness * u[0];
+    }
+    fn potential_energy(&self, u: &[f64], _t: f64) -> f64 {
+        0.5 * self.stiffness * u[0] * u[0]
+    }
+}
+
+/// The Kepler problem `u'' = −u/|u|³` in the plane (`μ = 1`, unit mass).
+#[derive(Clone, Debug)]
+pub struct Kepler {
+    mass: MassMatrix,
+}
+
+impl Default for Kepler {
+    fn default() -> Self {
+        Kepler {
+            mass: MassMatrix::Diagonal(vec![1.0, 1.0]),
+        }
+    }
+}
+
+impl Kepler {
+    /// The orbit of eccentricity `e` and semi-major axis 1 (period `2π`), starting at
+    /// pericentre on the x axis.
+    #[must_use]
+    pub fn initial(e: f64) -> PhaseState {
+        PhaseState {
+            t: 0.0,
+            p: vec![0.0, ((1.0 + e) / (1.0 - e)).sqrt()],
+            u: vec![1.0 - e, 0.0],
+        }
+    }
+
+    /// The exact state at time `t` on that orbit, from Kepler's equation `E − e sin E = t`.
+    #[must_use]
+    pub fn exact(e: f64, t: f64) -> PhaseState {
+        let mut ea = t;
+        for _ in 0..100 {
+            let d = (ea - e * ea.sin() - t) / (1.0 - e * ea.cos());
+            ea -= d;
+            if d.abs() < 1e-16 {
+                break;
+            }
+        }
+        let (s, c) = ea.sin_cos();
+        let b = (1.0 - e * e).sqrt();
+        let r = 1.0 - e * c;
+        PhaseState {
+            t,
+            p: vec![-s / r, b * c / r],
+            u: vec![c - e, b * s],
+        }
+    }
+
+    /// The angular momentum `u × p`.
+    #[must_use]
+    pub fn angular_momentum(state: &PhaseState) -> f64 {
+        state.u[0] * state.p[1] - state.u[1] * state.p[0]
+    }
+}
+
+impl MechanicalSystem for Kepler {
+    fn mass(&self) -> &MassMatrix {
+        &self.mass
+    }
+    fn force(&self, u: &[f64], _t: f64, f: &mut [f64]) {
+        let r2 = u[0] * u[0] + u[1] * u[1];
+        let s = -1.0 / (r2 * r2.sqrt());
+        f[0] = s * u[0];
+        f[1] = s * u[1];
+    }
+    fn potential_energy(&self, u: &[f64], _t: f64) -> f64 {
+        -1.0 / (u[0] * u[0] + u[1] * u[1]).sqrt()
+    }
+}
+
+/// The nonlinear pendulum `θ'' = −(g/l) sin θ` (unit mass, `u = θ`).
+#[derive(Clone, Debug)]
+pub struct Pendulum {
+    mass: MassMatrix,
+    /// `g/l` (1/s²).
+    pub omega_squared: f64,
+}
+
+impl Pendulum {
+    /// A pendulum with `g/l = omega_squared`.
+    #[must_use]
+    pub fn new(omega_squared: f64) -> Self {
+        Pendulum {
+            mass: MassMatrix::Diagonal(vec![1.0]),
+            omega_squared,
+        }
+    }
+}
+
+impl MechanicalSystem for Pendulum {
+    fn mass(&self) -> &MassMatrix {
+        &self.mass
+    }
+    fn force(&self, u: &[f64], _t: f64, f: &mut [f64]) {
+        f[0] = -self.omega_squared * u[0].sin();
+    }
+    fn potential_energy(&self, u: &[f64], _t: f64) -> f64 {
+        self.omega_squared * (1.0 - u[0].cos())
+    }
+}

@@ -1,0 +1,292 @@
+//! One-step integrators for a rigid body with a fixed point.
+//!
+//! Each method is a type named after the literature, implementing [`RotationIntegrator`].
+//! [`RotationMethod`] names them all for run-time selection and [`AnyRotationIntegrator`]
+//! dispatches to them.
+
+mod akw;
+mod liemid;
+mod newmark;
+mod rk4;
+mod simo_wong;
+
+pub use akw::AustinKrishnaprasadWang;
+pub use liemid::{LieMidpointAlternating, LieMidpointE1, LieMidpointE2, LieMidpointImplicit};
+pub use newmark::KryslEndresNewmark;
+pub use rk4::RungeKutta4Quaternion;
+pub use simo_wong::SimoWong;
+
+use crate::error::{Error, Result};
+use crate::linalg::{Mat3, Vec3};
+use crate::midpoint::NotConverged;
+use crate::rigid::{RigidBodySystem, RigidState};
+
+/// A one-step method for [`RigidBodySystem`]s.
+pub trait RotationIntegrator {
+    /// The method's name as in the literature, e.g. `LIEMID[EA]`.
+    fn name(&self) -> &'static str;
+
+    /// The classical order of accuracy.
+    fn order(&self) -> u32;
+
+    /// Advance `state` by one step `h` (which may be negative). On error the state is left
+    /// unchanged.
+    fn step<S: RigidBodySystem + ?Sized>(&mut self, system: &S, state: &mut RigidState, h: f64) -> Result<()>;
+
+    /// Forget anything cached from earlier steps (the end torque, a quaternion).
+    /// Caches are keyed on the system, time and attitude, so this is needed only when a
+    /// system's torque model is mutated between steps.
+    fn reset(&mut self) {}
+}
+
+/// Reject a step size that is zero or not finite.
+#[inline]
+pub(crate) fn check_step(h: f64) -> Result<()> {
+    if h.is_finite() && h != 0.0 {
+        Ok(())
+    } else {
+        Err(Error::InvalidStep { h })
+    }
+}
+
+/// Map a failed Newton solve to the library's error.
+pub(crate) fn newton_error(method: &'static str, equation: &'static str, t: f64, h: f64, e: NotConverged) -> Error {
+    Error::NewtonDidNotConverge {
+        method,
+        equation,
+        t,
+        h,
+        residual: e.residual,
+        iterations: e.iterations,
+    }
+}
+
+/// Reject a step whose result is not finite, leaving the state unchanged.
+#[inline]
+pub(crate) fn commit(method: &'static str, state: &mut RigidState, h: f64, next: RigidState) -> Result<()> {
+    if next.pi.is_finite() && next.rotation.is_finite() {
+        *state = next;
+        Ok(())
+    } else {
+        Err(Error::NonFiniteResult { method, t: state.t, h })
+    }
+}
+
+/// The torque at the end of the previous step, reused as the start torque of the next
+/// (so that explicit methods pay one torque evaluation per step).
+///
+/// The key is the system's address, the time (to a relative 1e-12, since drivers may
+/// reset the time to `t0 + k h`) and the attitude, bit for bit.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct TorqueCache {
+    entry: Option<(usize, f64, Mat3, Vec3)>,
+}
+
+impl TorqueCache {
+    #[inline]
+    fn address<S: ?Sized>(system: &S) -> usize {
+        system as *const S as *const u8 as usize
+    }
+
+    /// The torque at `(R, t)`, from the cache when it holds that configuration.
+    #[inline]
+    pub(crate) fn torque<S: RigidBodySystem + ?Sized>(&self, system: &S, rotation: &Mat3, t: f64) -> Vec3 {
+        if let Some((addr, tc, rc, torque)) = &self.entry {
+            if *addr == Self::address(system)
+                && (t == *tc || (t - tc).abs() <= 1e-12 * t.abs().max(tc.abs()))
+                && rc == rotation
+            {
+                return *torque;
+            }
+        }
+        system.torque(rotation, t)
+    }
+
+    /// Remember the torque at `(R, t)`.
+    #[inline]
+    pub(crate) fn store<S: RigidBodySystem + ?Sized>(&mut self, system: &S, rotation: &Mat3, t: f64, torque: Vec3) {
+        self.entry = Some((Self::address(system), t, *rotation, torque));
+    }
+
+    pub(crate) fn clear(&mut self) {
+        self.entry = None;
+    }
+}
+
+/// Every rotation method of the crate, for selection by name at run time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum RotationMethod {
+    /// [`LieMidpointE1`]: explicit midpoint Lie, impulse at the end.
+    LieMidpointE1,
+    /// [`LieMidpointE2`]: explicit midpoint Lie, impulse at the start.
+    LieMidpointE2,
+    /// [`LieMidpointAlternating`]: `E1_{h/2} ∘ E2_{h/2}`.
+    LieMidpointAlternating,
+    /// [`LieMidpointImplicit`]: implicit midpoint Lie.
+    LieMidpointImplicit,
+    /// [`AustinKrishnaprasadWang`].
+    AustinKrishnaprasadWang,
+    /// [`SimoWong`].
+    SimoWong,
+    /// [`KryslEndresNewmark`].
+    KryslEndresNewmark,
+    /// [`RungeKutta4Quaternion`].
+    RungeKutta4,
+}
+
+impl RotationMethod {
+    /// All methods, in the order of the paper's line-up, then the baseline.
+    pub const ALL: [RotationMethod; 8] = [
+        RotationMethod::LieMidpointE1,
+        RotationMethod::LieMidpointE2,
+        RotationMethod::LieMidpointAlternating,
+        RotationMethod::LieMidpointImplicit,
+        RotationMethod::AustinKrishnaprasadWang,
+        RotationMethod::SimoWong,
+        RotationMethod::KryslEndresNewmark,
+        RotationMethod::RungeKutta4,
+    ];
+
+    /// The short name used on the command line and in files, e.g. `liemid-ea`.
+    #[must_use]
+    pub fn key(self) -> &'static str {
+        match self {
+            RotationMethod::LieMidpointE1 => "liemid-e1",
+            RotationMethod::LieMidpointE2 => "liemid-e2",
+            RotationMethod::LieMidpointAlternating => "liemid-ea",
+            RotationMethod::LieMidpointImplicit => "liemid-i",
+            RotationMethod::AustinKrishnaprasadWang => "akw",
+            RotationMethod::SimoWong => "simo-wong",
+            RotationMethod::KryslEndresNewmark => "nmb",
+            RotationMethod::RungeKutta4 => "rk4",
+        }
+    }
+
+    /// The method with the short name `key`.
+    #[must_use]
+    pub fn from_key(key: &str) -> Option<Self> {
+        RotationMethod::ALL.into_iter().find(|m| m.key() == key)
+    }
+
+    /// The name in the literature, e.g. `LIEMID[EA]`.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        self.integrator().name()
+    }
+
+    /// The classical order.
+    #[must_use]
+    pub fn order(self) -> u32 {
+        self.integrator().order()
+    }
+
+    /// Torque evaluations per step in a long run.
+    #[must_use]
+    pub fn torque_evaluations_per_step(self) -> &'static str {
+        match self {
+            RotationMethod::LieMidpointE1
+            | RotationMethod::LieMidpointE2
+            | RotationMethod::LieMidpointAlternating
+            | RotationMethod::KryslEndresNewmark => "1",
+            RotationMethod::LieMidpointImplicit
+            | RotationMethod::AustinKrishnaprasadWang
+            | RotationMethod::SimoWong => "1 per Newton iteration",
+            RotationMethod::RungeKutta4 => "4",
+        }
+    }
+
+    /// One line on what the method is and what it conserves.
+    #[must_use]
+    pub fn description(self) -> &'static str {
+        match self {
+            RotationMethod::LieMidpointE1 => {
+                "explicit midpoint Lie, impulse at end; symplectic; keeps |Pi| and pi torque-free, pi.g with gravity"
+            }
+            RotationMethod::LieMidpointE2 => {
+                "explicit midpoint Lie, impulse at start; symplectic; keeps |Pi| and pi torque-free, pi.g with gravity"
+            }
+            RotationMethod::LieMidpointAlternating => {
+                "E1(h/2) o E2(h/2); symplectic, time-reversible; keeps |Pi| and pi torque-free, pi.g with gravity; energy bounded"
+            }
+            RotationMethod::LieMidpointImplicit => {
+                "implicit midpoint Lie, torque at the midpoint; symmetric; keeps |Pi| and pi torque-free, pi.g with gravity"
+            }
+            RotationMethod::AustinKrishnaprasadWang => {
+                "implicit midpoint Lie-Poisson with Cayley update; keeps energy and |Pi| torque-free"
+            }
+            RotationMethod::SimoWong => "Simo-Wong energy-momentum; keeps energy and pi torque-free",
+            RotationMethod::KryslEndresNewmark => {
+                "explicit Newmark (gamma = 1/2, beta = 0) for rotations; symmetric; pi drifts slowly"
+            }
+            RotationMethod::RungeKutta4 => {
+                "classical RK4 on (Pi, unit quaternion), renormalised each step; conserves nothing exactly"
+            }
+        }
+    }
+
+    /// A fresh integrator of this method.
+    #[must_use]
+    pub fn integrator(self) -> AnyRotationIntegrator {
+        match self {
+            RotationMethod::LieMidpointE1 => AnyRotationIntegrator::E1(LieMidpointE1::new()),
+            RotationMethod::LieMidpointE2 => AnyRotationIntegrator::E2(LieMidpointE2::new()),
+            RotationMethod::LieMidpointAlternating => AnyRotationIntegrator::Ea(LieMidpointAlternating::new()),
+            RotationMethod::LieMidpointImplicit => AnyRotationIntegrator::I(LieMidpointImplicit::new()),
+            RotationMethod::AustinKrishnaprasadWang => AnyRotationIntegrator::Akw(AustinKrishnaprasadWang::new()),
+            RotationMethod::SimoWong => AnyRotationIntegrator::Sw(SimoWong::new()),
+            RotationMethod::KryslEndresNewmark => AnyRotationIntegrator::Nmb(KryslEndresNewmark::new()),
+            RotationMethod::RungeKutta4 => AnyRotationIntegrator::Rk4(RungeKutta4Quaternion::new()),
+        }
+    }
+}
+
+/// Any of the crate's rotation integrators, chosen at run time.
+#[derive(Clone, Debug)]
+pub enum AnyRotationIntegrator {
+    /// LIEMID[E1].
+    E1(LieMidpointE1),
+    /// LIEMID[E2].
+    E2(LieMidpointE2),
+    /// LIEMID[EA].
+    Ea(LieMidpointAlternating),
+    /// LIEMID[I].
+    I(LieMidpointImplicit),
+    /// AKW.
+    Akw(AustinKrishnaprasadWang),
+    /// SW.
+    Sw(SimoWong),
+    /// NMB.
+    Nmb(KryslEndresNewmark),
+    /// RK4 on quaternions.
+    Rk4(RungeKutta4Quaternion),
+}
+
+macro_rules! dispatch {
+    ($self:ident, $m:ident => $e:expr) => {
+        match $self {
+            AnyRotationIntegrator::E1($m) => $e,
+            AnyRotationIntegrator::E2($m) => $e,
+            AnyRotationIntegrator::Ea($m) => $e,
+            AnyRotationIntegrator::I($m) => $e,
+            AnyRotationIntegrator::Akw($m) => $e,
+            AnyRotationIntegrator::Sw($m) => $e,
+            AnyRotationIntegrator::Nmb($m) => $e,
+            AnyRotationIntegrator::Rk4($m) => $e,
+        }
+    };
+}
+
+impl RotationIntegrator for AnyRotationIntegrator {
+    fn name(&self) -> &'static str {
+        dispatch!(self, m => m.name())
+    }
+    fn order(&self) -> u32 {
+        dispatch!(self, m => m.order())
+    }
+    fn step<S: RigidBodySystem + ?Sized>(&mut self, system: &S, state: &mut RigidState, h: f64) -> Result<()> {
+        dispatch!(self, m => m.step(system, state, h))
+    }
+    fn reset(&mut self) {
+        dispatch!(self, m => m.reset())
+    }
+}
