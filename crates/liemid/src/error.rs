@@ -72,6 +72,21 @@ pub enum Error {
         /// Iterations taken.
         iterations: u32,
     },
+    /// The rotation increment of a step exceeds half a turn.
+    #[error(
+        "{method}: the step from t = {t} with h = {h} turns the body by {angle:.3} rad, more than \
+         half a turn; the midpoint equation has no unique solution there: reduce the step"
+    )]
+    StepTooLarge {
+        /// The integrator.
+        method: &'static str,
+        /// Time at the start of the failing step.
+        t: f64,
+        /// The step size.
+        h: f64,
+        /// The rotation angle `|Ψ|` of the increment (rad).
+        angle: f64,
+    },
     /// The state became NaN or infinite during a step.
     #[error("{method}: the state became non-finite in the step from t = {t} with h = {h}")]
     NonFiniteResult {

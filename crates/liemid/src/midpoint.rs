@@ -23,13 +23,25 @@ const CONVERGED_ULPS: f64 = 4.0;
 /// Below this many ulps, a correction that no longer halves is round-off noise.
 const STAGNATION_ULPS: f64 = 256.0;
 
-/// A Newton solve that did not converge: the last relative residual and the iterations.
+/// The largest accepted rotation increment `|Ψ|` per (sub)step: beyond a half turn the
+/// midpoint equation has several solutions and the step cannot resolve the rotation.
+pub const MAX_INCREMENT_ANGLE: f64 = std::f64::consts::PI;
+
+/// Why a Newton solve failed.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct NotConverged {
-    /// Residual norm relative to the scale of the equation.
-    pub residual: f64,
-    /// Iterations taken.
-    pub iterations: u32,
+pub enum NotConverged {
+    /// No convergence within [`MAX_ITERATIONS`], or the iterate became non-finite.
+    Iterations {
+        /// Residual norm relative to the scale of the equation.
+        residual: f64,
+        /// Iterations taken.
+        iterations: u32,
+    },
+    /// Converged to a rotation increment of more than [`MAX_INCREMENT_ANGLE`].
+    IncrementTooLarge {
+        /// `|Ψ|` (rad).
+        angle: f64,
+    },
 }
 
 /// The stopping rule shared by all Newton iterations of the crate: converged when the
@@ -78,8 +90,10 @@ pub fn jacobian(inertia: &Inertia, p: Vec3, h: f64, psi: Vec3) -> Mat3 {
 /// linearly with a rate of order `h²` times the torque stiffness). Pass `|_| Vec3::ZERO`
 /// for the plain equation, which then converges quadratically.
 ///
-/// Returns `Ψ` and the number of iterations, or the last residual when `MAX_ITERATIONS`
-/// pass without convergence or the iterate becomes non-finite.
+/// Returns `Ψ` and the number of iterations; an error with the last residual when
+/// `MAX_ITERATIONS` pass without convergence or the iterate becomes non-finite, or with the
+/// angle when the solution turns by more than [`MAX_INCREMENT_ANGLE`] (a spurious root of
+/// a step far too large for the rotation rate).
 #[inline]
 pub fn solve_with(
     inertia: &Inertia,
@@ -107,10 +121,14 @@ pub fn solve_with(
             break;
         }
         if stop.done(delta.norm(), psi.norm()) {
+            let angle = psi.norm();
+            if angle > MAX_INCREMENT_ANGLE {
+                return Err(NotConverged::IncrementTooLarge { angle });
+            }
             return Ok((psi, it));
         }
     }
-    Err(NotConverged {
+    Err(NotConverged::Iterations {
         residual: g.norm() / scale,
         iterations: MAX_ITERATIONS,
     })

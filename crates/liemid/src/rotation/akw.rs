@@ -73,7 +73,7 @@ impl RotationIntegrator for AustinKrishnaprasadWang {
         }
         if !converged {
             let scale = pi0.norm() + (torque0 * h).norm() + f64::MIN_POSITIVE;
-            let e = NotConverged {
+            let e = NotConverged::Iterations {
                 residual: residual / scale,
                 iterations: MAX_ITERATIONS,
             };

@@ -16,17 +16,18 @@ use crate::midpoint;
 use crate::rigid::{RigidBodySystem, RigidState};
 use crate::so3;
 
-/// Solve (M) for `(P, h)` and return `(Ψ, exp(Ψ))`.
+/// Solve (M) for `(P, h)` and return `(Ψ, exp(Ψ))`; errors name the step `(t, step)` that
+/// was being taken.
 #[inline]
 fn midpoint_rotation(
     method: &'static str,
     inertia: &crate::inertia::Inertia,
     p: Vec3,
     h: f64,
-    t: f64,
+    (t, step): (f64, f64),
 ) -> Result<(Vec3, Mat3)> {
     let (psi, _) =
-        midpoint::solve(inertia, p, h).map_err(|e| newton_error(method, "midpoint equation (M)", t, h, e))?;
+        midpoint::solve(inertia, p, h).map_err(|e| newton_error(method, "midpoint equation (M)", t, step, e))?;
     Ok((psi, so3::exp(psi)))
 }
 
@@ -66,7 +67,7 @@ impl RotationIntegrator for LieMidpointE2 {
         let t = state.t;
         let torque = self.cache.torque(system, &state.rotation, t);
         let p = state.pi + torque * h;
-        let (_, q) = midpoint_rotation(self.name(), system.inertia(), p, h, t)?;
+        let (_, q) = midpoint_rotation(self.name(), system.inertia(), p, h, (t, h))?;
         let next = RigidState::new(t + h, q.tr_mul_vec(p), state.rotation * q);
         commit(self.name(), state, h, next)
     }
@@ -86,17 +87,15 @@ impl RotationIntegrator for LieMidpointE2 {
 /// The end impulse acts in the end configuration, so it is added after the rotation of the
 /// momentum (the paper prints `exp(−Ψ)(Π_n + h T_{n+1})`, which is first order too but
 /// neither the adjoint of E2 nor momentum conserving). First order, symplectic, same
-/// invariants as E2. The end torque is cached, so a run costs one evaluation per step.
+/// invariants as E2. One torque evaluation per step (at the end).
 #[derive(Clone, Debug, Default)]
-pub struct LieMidpointE1 {
-    cache: TorqueCache,
-}
+pub struct LieMidpointE1;
 
 impl LieMidpointE1 {
     /// A new integrator.
     #[must_use]
     pub fn new() -> Self {
-        Self::default()
+        Self
     }
 }
 
@@ -110,16 +109,12 @@ impl RotationIntegrator for LieMidpointE1 {
     fn step<S: RigidBodySystem + ?Sized>(&mut self, system: &S, state: &mut RigidState, h: f64) -> Result<()> {
         check_step(h)?;
         let t = state.t;
-        let (_, q) = midpoint_rotation(self.name(), system.inertia(), state.pi, h, t)?;
+        let (_, q) = midpoint_rotation(self.name(), system.inertia(), state.pi, h, (t, h))?;
         let rotation = state.rotation * q;
         let t1 = t + h;
-        let torque = self.cache.torque(system, &rotation, t1);
-        self.cache.store(system, &rotation, t1, torque);
+        let torque = system.torque(&rotation, t1);
         let next = RigidState::new(t1, q.tr_mul_vec(state.pi) + torque * h, rotation);
         commit(self.name(), state, h, next)
-    }
-    fn reset(&mut self) {
-        self.cache.clear();
     }
 }
 
@@ -163,9 +158,9 @@ impl RotationIntegrator for LieMidpointAlternating {
         let inertia = system.inertia();
         let torque0 = self.cache.torque(system, &state.rotation, t);
         let p = state.pi + torque0 * hh;
-        let (_, q1) = midpoint_rotation(self.name(), inertia, p, hh, t)?;
+        let (_, q1) = midpoint_rotation(self.name(), inertia, p, hh, (t, h))?;
         let pi_half = q1.tr_mul_vec(p);
-        let (_, q2) = midpoint_rotation(self.name(), inertia, pi_half, hh, t + hh)?;
+        let (_, q2) = midpoint_rotation(self.name(), inertia, pi_half, hh, (t, h))?;
         let rotation = state.rotation * (q1 * q2);
         let t1 = t + h;
         let torque1 = system.torque(&rotation, t1);

@@ -51,13 +51,16 @@ pub(crate) fn check_step(h: f64) -> Result<()> {
 
 /// Map a failed Newton solve to the library's error.
 pub(crate) fn newton_error(method: &'static str, equation: &'static str, t: f64, h: f64, e: NotConverged) -> Error {
-    Error::NewtonDidNotConverge {
-        method,
-        equation,
-        t,
-        h,
-        residual: e.residual,
-        iterations: e.iterations,
+    match e {
+        NotConverged::Iterations { residual, iterations } => Error::NewtonDidNotConverge {
+            method,
+            equation,
+            t,
+            h,
+            residual,
+            iterations,
+        },
+        NotConverged::IncrementTooLarge { angle } => Error::StepTooLarge { method, t, h, angle },
     }
 }
 

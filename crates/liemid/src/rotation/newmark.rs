@@ -75,7 +75,7 @@ impl RotationIntegrator for KryslEndresNewmark {
         }
         if !converged {
             let scale = base.norm() + f64::MIN_POSITIVE;
-            let e = NotConverged {
+            let e = NotConverged::Iterations {
                 residual: residual / scale,
                 iterations: MAX_ITERATIONS,
             };

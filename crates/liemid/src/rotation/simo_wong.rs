@@ -7,7 +7,7 @@
 use super::{check_step, commit, newton_error, RotationIntegrator};
 use crate::error::Result;
 use crate::linalg::{Mat3, Vec3};
-use crate::midpoint::{NewtonStop, NotConverged, MAX_ITERATIONS};
+use crate::midpoint::{NewtonStop, NotConverged, MAX_INCREMENT_ANGLE, MAX_ITERATIONS};
 use crate::rigid::{RigidBodySystem, RigidState};
 use crate::so3;
 
@@ -87,10 +87,15 @@ impl RotationIntegrator for SimoWong {
         }
         if !converged {
             let scale = (w0 * h).norm() + f64::MIN_POSITIVE;
-            let e = NotConverged {
+            let e = NotConverged::Iterations {
                 residual: residual / scale,
                 iterations: MAX_ITERATIONS,
             };
+            return Err(newton_error(self.name(), "energy-momentum equation", t, h, e));
+        }
+        let angle = theta.norm();
+        if angle > MAX_INCREMENT_ANGLE {
+            let e = NotConverged::IncrementTooLarge { angle };
             return Err(newton_error(self.name(), "energy-momentum equation", t, h, e));
         }
         let (pi1, _, full, _) = end_momentum(system, &r0, pi0, theta, tm, h);

@@ -1,0 +1,104 @@
+//! Helpers shared by the integration tests: error norms, observed orders, references and a
+//! torque-counting wrapper.
+#![allow(dead_code)]
+
+use std::cell::Cell;
+
+use liemid::{
+    integrate_to, Inertia, Mat3, RigidBodySystem, RigidState, RotationIntegrator, RungeKutta4Quaternion, Vec3,
+};
+
+/// Least-squares slope of `log(err)` against `log(h)`.
+pub fn observed_order(hs: &[f64], errs: &[f64]) -> f64 {
+    assert_eq!(hs.len(), errs.len());
+    let n = hs.len() as f64;
+    let x: Vec<f64> = hs.iter().map(|h| h.ln()).collect();
+    let y: Vec<f64> = errs.iter().map(|e| e.ln()).collect();
+    let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+    let sxy: f64 = x.iter().zip(&y).map(|(a, b)| (a - mx) * (b - my)).sum();
+    let sxx: f64 = x.iter().map(|a| (a - mx) * (a - mx)).sum();
+    sxy / sxx
+}
+
+/// `h0, h0/2, …` (`n` steps).
+pub fn halvings(h0: f64, n: usize) -> Vec<f64> {
+    (0..n).map(|k| h0 / f64::from(1u32 << k)).collect()
+}
+
+/// Momentum error `|Π − Π_ref| / |Π_ref|` and attitude error `‖R − R_ref‖_F`.
+pub fn errors(state: &RigidState, reference: &RigidState) -> (f64, f64) {
+    (
+        (state.pi - reference.pi).norm() / reference.pi.norm(),
+        (state.rotation - reference.rotation).norm_frobenius(),
+    )
+}
+
+/// A reference solution: RK4 on quaternions at the small step `h`.
+pub fn reference<S: RigidBodySystem>(system: &S, initial: RigidState, t_end: f64, h: f64) -> RigidState {
+    integrate_to(&mut RungeKutta4Quaternion::new(), system, initial, t_end, h)
+        .unwrap()
+        .state
+}
+
+/// The end state of `method` from `initial` to `t_end` with step `h`.
+pub fn run<M: RotationIntegrator, S: RigidBodySystem>(
+    method: &mut M,
+    system: &S,
+    initial: RigidState,
+    t_end: f64,
+    h: f64,
+) -> RigidState {
+    integrate_to(method, system, initial, t_end, h).unwrap().state
+}
+
+/// The shipped reference of the fast top at `t`, from `tests/data/fast_top_reference.json`
+/// (adaptive 8th-order Runge-Kutta, rtol 1e-13).
+pub fn shipped_fast_top_reference(t: f64) -> RigidState {
+    let text = include_str!("../data/fast_top_reference.json");
+    let json: serde_json::Value = serde_json::from_str(text).unwrap();
+    let state = json["states"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|s| (s["t"].as_f64().unwrap() - t).abs() < 1e-12)
+        .expect("a shipped state at t");
+    let v = |key: &str| -> Vec<f64> {
+        state[key]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect()
+    };
+    let pi = v("body_angular_momentum");
+    let r: [f64; 9] = v("rotation_matrix_row_major").try_into().unwrap();
+    RigidState::new(t, Vec3::new(pi[0], pi[1], pi[2]), Mat3::from_row_major(r))
+}
+
+/// Wraps a system and counts its torque evaluations.
+pub struct CountingTorque<S> {
+    pub inner: S,
+    pub count: Cell<u64>,
+}
+
+impl<S> CountingTorque<S> {
+    pub fn new(inner: S) -> Self {
+        CountingTorque {
+            inner,
+            count: Cell::new(0),
+        }
+    }
+}
+
+impl<S: RigidBodySystem> RigidBodySystem for CountingTorque<S> {
+    fn inertia(&self) -> &Inertia {
+        self.inner.inertia()
+    }
+    fn torque(&self, rotation: &Mat3, t: f64) -> Vec3 {
+        self.count.set(self.count.get() + 1);
+        self.inner.torque(rotation, t)
+    }
+    fn potential_energy(&self, rotation: &Mat3, t: f64) -> f64 {
+        self.inner.potential_energy(rotation, t)
+    }
+}

@@ -1,0 +1,168 @@
+//! Observed orders of accuracy from step-halving sequences against tight references, and
+//! the paper's fast-top comparison (`heavy-top.md`).
+
+mod common;
+
+use common::{errors, halvings, observed_order, reference, run, shipped_fast_top_reference};
+use liemid::{problems, RotationMethod};
+
+/// Orders from momentum and attitude errors over a halving sequence.
+fn orders(
+    method: RotationMethod,
+    problem: &problems::RigidProblem<liemid::HeavyTop>,
+    hs: &[f64],
+) -> (f64, f64, Vec<(f64, f64)>) {
+    let reference = reference(&problem.system, problem.initial, problem.t_end, 1e-5);
+    let errs: Vec<(f64, f64)> = hs
+        .iter()
+        .map(|&h| {
+            errors(
+                &run(
+                    &mut method.integrator(),
+                    &problem.system,
+                    problem.initial,
+                    problem.t_end,
+                    h,
+                ),
+                &reference,
+            )
+        })
+        .collect();
+    let pm: Vec<f64> = errs.iter().map(|e| e.0).collect();
+    let pr: Vec<f64> = errs.iter().map(|e| e.1).collect();
+    (observed_order(hs, &pm), observed_order(hs, &pr), errs)
+}
+
+#[test]
+fn observed_orders_on_the_torque_dominated_top() {
+    let top = problems::torque_dominated_top();
+    for method in RotationMethod::ALL {
+        let hs = if method == RotationMethod::RungeKutta4 {
+            halvings(2e-2, 5)
+        } else {
+            halvings(1e-2, 5)
+        };
+        let (om, or, errs) = orders(method, &top, &hs);
+        println!(
+            "{:<12} momentum order {om:.3}, attitude order {or:.3}, errors {errs:?}",
+            method.name()
+        );
+        let expected = f64::from(method.order());
+        assert!(
+            (om - expected).abs() < 0.1,
+            "{}: momentum order {om:.3}, expected {expected}",
+            method.name()
+        );
+        assert!(
+            (or - expected).abs() < 0.1,
+            "{}: attitude order {or:.3}, expected {expected}",
+            method.name()
+        );
+    }
+}
+
+/// The fast top's own reference: RK4 at h = 1e-6 (its error, scaled by h⁴ from the
+/// h = 1.25e-4 run, is below 1e-12).
+fn fast_top_reference() -> liemid::RigidState {
+    let top = problems::fast_top();
+    reference(&top.system, top.initial, top.t_end, 1e-6)
+}
+
+#[test]
+fn own_fast_top_reference_agrees_with_the_shipped_one() {
+    let top = problems::fast_top();
+    for t in [0.1, 0.8] {
+        let own = reference(&top.system, top.initial, t, 1e-6);
+        let (dp, dr) = errors(&own, &shipped_fast_top_reference(t));
+        println!("t = {t}: own vs shipped reference: momentum {dp:.2e}, attitude {dr:.2e}");
+        // The shipped solution is good to about 1e-11 in Π and 1e-9 in R.
+        assert!(dp < 1e-11 && dr < 1e-9, "t = {t}: {dp:e} {dr:e}");
+    }
+}
+
+#[test]
+fn fast_top_ea_reproduces_the_paper_table_and_leads_the_line_up() {
+    let top = problems::fast_top();
+    let reference = fast_top_reference();
+    // (h, momentum error, attitude error) from heavy-top.md.
+    let table = [
+        (1e-3, 8.2e-4, 1.2e-3),
+        (2.5e-4, 5.1e-5, 7.5e-5),
+        (1.25e-4, 1.3e-5, 1.9e-5),
+    ];
+    for (h, pm, pr) in table {
+        let ea = run(
+            &mut liemid::LieMidpointAlternating::new(),
+            &top.system,
+            top.initial,
+            top.t_end,
+            h,
+        );
+        let (em, er) = errors(&ea, &reference);
+        println!("EA h = {h:e}: momentum {em:.3e} (table {pm:e}), attitude {er:.3e} (table {pr:e})");
+        assert!(
+            em / pm < 1.5 && pm / em < 1.5,
+            "h = {h}: momentum error {em:e} vs {pm:e}"
+        );
+        assert!(
+            er / pr < 1.5 && pr / er < 1.5,
+            "h = {h}: attitude error {er:e} vs {pr:e}"
+        );
+    }
+    let h = 2.5e-4;
+    let ea = errors(
+        &run(
+            &mut liemid::LieMidpointAlternating::new(),
+            &top.system,
+            top.initial,
+            top.t_end,
+            h,
+        ),
+        &reference,
+    );
+    for method in RotationMethod::ALL
+        .into_iter()
+        .filter(|m| m.order() == 2 && *m != RotationMethod::LieMidpointAlternating)
+    {
+        let other = errors(
+            &run(&mut method.integrator(), &top.system, top.initial, top.t_end, h),
+            &reference,
+        );
+        println!(
+            "{:<12} h = {h:e}: momentum {:.3e}, attitude {:.3e}",
+            method.name(),
+            other.0,
+            other.1
+        );
+        assert!(
+            ea.0 < other.0 && ea.1 < other.1,
+            "EA {ea:?} is not ahead of {} {other:?}",
+            method.name()
+        );
+    }
+}
+
+#[test]
+fn ea_is_second_order_on_the_fast_top() {
+    let top = problems::fast_top();
+    let reference = fast_top_reference();
+    let hs = halvings(1e-3, 4);
+    let errs: Vec<(f64, f64)> = hs
+        .iter()
+        .map(|&h| {
+            errors(
+                &run(
+                    &mut liemid::LieMidpointAlternating::new(),
+                    &top.system,
+                    top.initial,
+                    top.t_end,
+                    h,
+                ),
+                &reference,
+            )
+        })
+        .collect();
+    let om = observed_order(&hs, &errs.iter().map(|e| e.0).collect::<Vec<_>>());
+    let or = observed_order(&hs, &errs.iter().map(|e| e.1).collect::<Vec<_>>());
+    assert!((om - 2.0).abs() < 0.1 && (or - 2.0).abs() < 0.1, "orders {om} {or}");
+}
