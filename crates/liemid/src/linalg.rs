@@ -293,10 +293,11 @@ impl Mat3 {
             a.swap(k, p);
             r.swap(k, p);
             let inv = 1.0 / a[k][k];
+            let pivot_row = a[k];
             for i in (k + 1)..3 {
                 let f = a[i][k] * inv;
-                for j in k..3 {
-                    a[i][j] -= f * a[k][j];
+                for (aij, akj) in a[i].iter_mut().zip(pivot_row.iter()).skip(k) {
+                    *aij -= f * akj;
                 }
                 r[i] -= f * r[k];
             }
