@@ -1,0 +1,228 @@
+//! The convergence study of the paper's Figure 1: every method's momentum and attitude
+//! errors at `t_end` against a reference computed here, for a sequence of steps.
+
+use liemid::{integrate_to, RigidState, RotationIntegrator, RotationMethod, RungeKutta4Quaternion};
+use serde::Serialize;
+
+use crate::scenario::Scenario;
+
+/// One method's errors.
+#[derive(Clone, Debug, Serialize)]
+pub struct MethodErrors {
+    /// The short name, e.g. `liemid-ea`.
+    pub name: String,
+    /// The name in the literature, e.g. `LIEMID[EA]`.
+    pub label: String,
+    /// The classical order.
+    pub order: u32,
+    /// Step sizes.
+    pub steps: Vec<f64>,
+    /// `|Π − Π_ref| / |Π_ref|` per step (null where the run failed).
+    pub momentum_error: Vec<Option<f64>>,
+    /// `‖R − R_ref‖_F` per step (null where the run failed).
+    pub attitude_error: Vec<Option<f64>>,
+    /// Why a run failed, per step (null where it succeeded).
+    pub failure: Vec<Option<String>>,
+    /// Least-squares slope of the momentum error over the three smallest steps.
+    pub observed_order_momentum: Option<f64>,
+    /// Least-squares slope of the attitude error over the three smallest steps.
+    pub observed_order_attitude: Option<f64>,
+}
+
+/// The reference solution.
+#[derive(Clone, Debug, Serialize)]
+pub struct Reference {
+    /// `Π(t_end)`.
+    pub pi: [f64; 3],
+    /// `R(t_end)`, row-major.
+    pub rotation: [f64; 9],
+    /// How it was computed.
+    pub method: String,
+    /// Its step.
+    pub step: f64,
+    /// Estimated error (Richardson: difference to the run at twice the step, divided by 15).
+    pub estimated_error: f64,
+}
+
+/// The whole study, as written by `--json`.
+#[derive(Clone, Debug, Serialize)]
+pub struct Study {
+    /// Problem or scenario name.
+    pub problem: String,
+    /// End time.
+    pub t_end: f64,
+    /// The reference solution.
+    pub reference: Reference,
+    /// Per-method errors.
+    pub methods: Vec<MethodErrors>,
+}
+
+/// Least-squares slope of `log y` against `log x`; `None` with fewer than two points.
+pub fn slope(x: &[f64], y: &[f64]) -> Option<f64> {
+    if x.len() < 2 || x.len() != y.len() {
+        return None;
+    }
+    let n = x.len() as f64;
+    let lx: Vec<f64> = x.iter().map(|v| v.ln()).collect();
+    let ly: Vec<f64> = y.iter().map(|v| v.ln()).collect();
+    let (mx, my) = (lx.iter().sum::<f64>() / n, ly.iter().sum::<f64>() / n);
+    let sxy: f64 = lx.iter().zip(&ly).map(|(a, b)| (a - mx) * (b - my)).sum();
+    let sxx: f64 = lx.iter().map(|a| (a - mx) * (a - mx)).sum();
+    Some(sxy / sxx)
+}
+
+/// Order over the three smallest steps that all succeeded.
+fn order_of(steps: &[f64], errors: &[Option<f64>]) -> Option<f64> {
+    let mut pairs: Vec<(f64, f64)> = steps
+        .iter()
+        .zip(errors)
+        .filter_map(|(h, e)| e.filter(|e| *e > 0.0).map(|e| (*h, e)))
+        .collect();
+    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    pairs.truncate(3);
+    if pairs.len() < 3 {
+        return None;
+    }
+    let (x, y): (Vec<f64>, Vec<f64>) = pairs.into_iter().unzip();
+    slope(&x, &y)
+}
+
+fn errors(state: &RigidState, reference: &RigidState) -> (f64, f64) {
+    (
+        (state.pi - reference.pi).norm() / reference.pi.norm(),
+        (state.rotation - reference.rotation).norm_frobenius(),
+    )
+}
+
+/// The reference: RK4 on quaternions at `h_min / 64` (at most 4·10⁷ steps), with a
+/// Richardson estimate of its own error.
+pub fn reference(scenario: &Scenario, t_end: f64, h_min: f64) -> Result<(RigidState, Reference), liemid::Error> {
+    let span = t_end - scenario.initial.t;
+    let mut h = h_min / 64.0;
+    if span / h > 4e7 {
+        h = span / 4e7;
+    }
+    let run = |h: f64| {
+        integrate_to(
+            &mut RungeKutta4Quaternion::new(),
+            &scenario.system,
+            scenario.initial,
+            t_end,
+            h,
+        )
+    };
+    let fine = run(h)?.state;
+    let coarse = run(2.0 * h)?.state;
+    let (dp, dr) = errors(&coarse, &fine);
+    let reference = Reference {
+        pi: fine.pi.to_array(),
+        rotation: fine.rotation.to_row_major(),
+        method: "classical RK4 on (Pi, unit quaternion)".into(),
+        step: h,
+        estimated_error: dp.max(dr) / 15.0,
+    };
+    Ok((fine, reference))
+}
+
+/// Run the study; methods run in parallel threads, results in the order given.
+pub fn study(
+    scenario: &Scenario,
+    methods: &[RotationMethod],
+    steps: &[f64],
+    t_end: f64,
+) -> Result<Study, liemid::Error> {
+    let h_min = steps.iter().copied().fold(f64::INFINITY, f64::min);
+    let (ref_state, reference) = reference(scenario, t_end, h_min)?;
+    let results: Vec<MethodErrors> = std::thread::scope(|scope| {
+        let handles: Vec<_> = methods
+            .iter()
+            .map(|&method| {
+                let ref_state = &ref_state;
+                scope.spawn(move || {
+                    let mut momentum = Vec::new();
+                    let mut attitude = Vec::new();
+                    let mut failure = Vec::new();
+                    for &h in steps {
+                        let mut integrator = method.integrator();
+                        match integrate_to(&mut integrator, &scenario.system, scenario.initial, t_end, h) {
+                            Ok(run) => {
+                                let (dp, dr) = errors(&run.state, ref_state);
+                                momentum.push(Some(dp));
+                                attitude.push(Some(dr));
+                                failure.push(None);
+                            }
+                            Err(e) => {
+                                momentum.push(None);
+                                attitude.push(None);
+                                failure.push(Some(e.to_string()));
+                            }
+                        }
+                    }
+                    MethodErrors {
+                        name: method.key().into(),
+                        label: method.integrator().name().into(),
+                        order: method.order(),
+                        steps: steps.to_vec(),
+                        observed_order_momentum: order_of(steps, &momentum),
+                        observed_order_attitude: order_of(steps, &attitude),
+                        momentum_error: momentum,
+                        attitude_error: attitude,
+                        failure,
+                    }
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("a convergence thread panicked"))
+            .collect()
+    });
+    Ok(Study {
+        problem: scenario.name.clone(),
+        t_end,
+        reference,
+        methods: results,
+    })
+}
+
+/// The study as a text table.
+pub fn table(study: &Study) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let r = &study.reference;
+    let _ = writeln!(
+        s,
+        "{} to t = {}; reference: {} at h = {:.3e} (estimated error {:.1e})",
+        study.problem, study.t_end, r.method, r.step, r.estimated_error
+    );
+    let _ = writeln!(
+        s,
+        "{:<12} {:>10}  {:>14}  {:>14}",
+        "method", "h", "momentum err", "attitude err"
+    );
+    let fmt = |e: Option<f64>| e.map_or_else(|| "failed".to_string(), |e| format!("{e:.3e}"));
+    for m in &study.methods {
+        for (k, h) in m.steps.iter().enumerate() {
+            let _ = writeln!(
+                s,
+                "{:<12} {h:>10.3e}  {:>14}  {:>14}",
+                m.label,
+                fmt(m.momentum_error[k]),
+                fmt(m.attitude_error[k])
+            );
+        }
+        let o = |x: Option<f64>| x.map_or_else(|| "n/a".to_string(), |x| format!("{x:.2}"));
+        let _ = writeln!(
+            s,
+            "{:<12} observed order (3 smallest steps): momentum {}, attitude {} (theory {})",
+            m.label,
+            o(m.observed_order_momentum),
+            o(m.observed_order_attitude),
+            m.order
+        );
+        for f in m.failure.iter().flatten().take(1) {
+            let _ = writeln!(s, "{:<12} note: {f}", m.label);
+        }
+    }
+    s
+}

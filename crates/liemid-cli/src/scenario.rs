@@ -1,0 +1,624 @@
+//! Scenario files (TOML) and the built-in problems, turned into a system, an initial state
+//! and the integrator settings.
+//!
+//! Every key is checked: unknown sections and keys are errors that name them, and values
+//! of the wrong type or out of range name their section and key.
+
+use std::path::Path;
+
+use liemid::{
+    problems, so3, ConstantTorque, FreeBody, HeavyTop, Inertia, Mat3, RigidBodySystem, RigidState, RotationMethod, Vec3,
+};
+use toml::{Table, Value};
+
+/// The torque models a scenario can use, dispatched statically.
+#[derive(Clone, Debug)]
+pub enum ScenarioSystem {
+    /// `kind = "none"`.
+    Free(FreeBody),
+    /// `kind = "gravity"`.
+    Gravity(HeavyTop),
+    /// `kind = "constant"`.
+    Constant(ConstantTorque),
+}
+
+impl RigidBodySystem for ScenarioSystem {
+    fn inertia(&self) -> &Inertia {
+        match self {
+            ScenarioSystem::Free(s) => s.inertia(),
+            ScenarioSystem::Gravity(s) => s.inertia(),
+            ScenarioSystem::Constant(s) => s.inertia(),
+        }
+    }
+    #[inline]
+    fn torque(&self, rotation: &Mat3, t: f64) -> Vec3 {
+        match self {
+            ScenarioSystem::Free(s) => s.torque(rotation, t),
+            ScenarioSystem::Gravity(s) => s.torque(rotation, t),
+            ScenarioSystem::Constant(s) => s.torque(rotation, t),
+        }
+    }
+    fn potential_energy(&self, rotation: &Mat3, t: f64) -> f64 {
+        match self {
+            ScenarioSystem::Free(s) => s.potential_energy(rotation, t),
+            ScenarioSystem::Gravity(s) => s.potential_energy(rotation, t),
+            ScenarioSystem::Constant(s) => s.potential_energy(rotation, t),
+        }
+    }
+}
+
+/// Trajectory file format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Format {
+    /// Comma-separated values with a header line.
+    Csv,
+    /// NumPy `.npy`, a little-endian f64 matrix.
+    Npy,
+}
+
+/// The `[output]` section.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct OutputSpec {
+    /// Trajectory path.
+    pub path: Option<String>,
+    /// Write every `every`-th step.
+    pub every: Option<u64>,
+    /// File format.
+    pub format: Option<Format>,
+}
+
+/// A complete scenario.
+#[derive(Clone, Debug)]
+pub struct Scenario {
+    /// Where it came from: a file path or a built-in problem name.
+    pub name: String,
+    /// The system.
+    pub system: ScenarioSystem,
+    /// The initial state.
+    pub initial: RigidState,
+    /// The integrator.
+    pub method: RotationMethod,
+    /// The step size.
+    pub step: f64,
+    /// The end time.
+    pub t_end: f64,
+    /// Output settings from the file.
+    pub output: OutputSpec,
+}
+
+/// The built-in problem names.
+pub const PROBLEMS: [&str; 4] = ["fast-top", "slow-top", "free-body", "torque-top"];
+
+/// A built-in problem as a scenario (LIEMID[EA], h = 1e-4 for the tops).
+pub fn builtin(name: &str) -> Result<Scenario, String> {
+    let (system, initial, t_end, description, step) = match name {
+        "fast-top" => {
+            let p = problems::fast_top();
+            (
+                ScenarioSystem::Gravity(p.system),
+                p.initial,
+                p.t_end,
+                p.description,
+                1e-4,
+            )
+        }
+        "slow-top" => {
+            let p = problems::slow_top();
+            (
+                ScenarioSystem::Gravity(p.system),
+                p.initial,
+                p.t_end,
+                p.description,
+                1e-4,
+            )
+        }
+        "torque-top" => {
+            let p = problems::torque_dominated_top();
+            (
+                ScenarioSystem::Gravity(p.system),
+                p.initial,
+                p.t_end,
+                p.description,
+                1e-3,
+            )
+        }
+        "free-body" => {
+            let p = problems::free_body();
+            (ScenarioSystem::Free(p.system), p.initial, p.t_end, p.description, 1e-3)
+        }
+        other => {
+            return Err(format!("unknown problem `{other}` (known: {})", PROBLEMS.join(", ")));
+        }
+    };
+    let _ = description;
+    Ok(Scenario {
+        name: name.to_string(),
+        system,
+        initial,
+        method: RotationMethod::LieMidpointAlternating,
+        step,
+        t_end,
+        output: OutputSpec::default(),
+    })
+}
+
+/// One line describing a built-in problem.
+pub fn describe(name: &str) -> &'static str {
+    match name {
+        "fast-top" => problems::fast_top().description,
+        "slow-top" => problems::slow_top().description,
+        "torque-top" => problems::torque_dominated_top().description,
+        "free-body" => problems::free_body().description,
+        _ => "",
+    }
+}
+
+/// A section of the file with the keys it allows; reports unknown keys and bad values.
+struct Section<'a> {
+    name: &'static str,
+    table: &'a Table,
+}
+
+impl<'a> Section<'a> {
+    fn new(root: &'a Table, name: &'static str, allowed: &[&str], required: bool) -> Result<Option<Self>, String> {
+        let Some(value) = root.get(name) else {
+            return if required {
+                Err(format!("missing section [{name}]"))
+            } else {
+                Ok(None)
+            };
+        };
+        let Value::Table(table) = value else {
+            return Err(format!(
+                "`{name}` must be a section [{name}], found {}",
+                value.type_str()
+            ));
+        };
+        for key in table.keys() {
+            if !allowed.contains(&key.as_str()) {
+                return Err(format!(
+                    "[{name}] unknown key `{key}` (allowed: {})",
+                    allowed.join(", ")
+                ));
+            }
+        }
+        Ok(Some(Section { name, table }))
+    }
+
+    fn err(&self, key: &str, what: impl std::fmt::Display) -> String {
+        format!("[{}] {key}: {what}", self.name)
+    }
+
+    fn has(&self, key: &str) -> bool {
+        self.table.contains_key(key)
+    }
+
+    fn number_of(&self, key: &str, v: &Value) -> Result<f64, String> {
+        let x = match v {
+            Value::Float(x) => *x,
+            Value::Integer(i) => *i as f64,
+            other => return Err(self.err(key, format!("expected a number, found {}", other.type_str()))),
+        };
+        if !x.is_finite() {
+            return Err(self.err(key, format!("must be finite, found {x}")));
+        }
+        Ok(x)
+    }
+
+    fn number(&self, key: &str) -> Result<Option<f64>, String> {
+        self.table.get(key).map(|v| self.number_of(key, v)).transpose()
+    }
+
+    fn required_number(&self, key: &str) -> Result<f64, String> {
+        self.number(key)?.ok_or_else(|| self.err(key, "is required"))
+    }
+
+    fn array_of<'v>(&self, key: &str, v: &'v Value, len: usize) -> Result<&'v Vec<Value>, String> {
+        match v {
+            Value::Array(a) if a.len() == len => Ok(a),
+            Value::Array(a) => Err(self.err(key, format!("expected {len} entries, found {}", a.len()))),
+            other => Err(self.err(key, format!("expected an array of {len}, found {}", other.type_str()))),
+        }
+    }
+
+    fn vec3_of(&self, key: &str, v: &Value) -> Result<Vec3, String> {
+        let a = self.array_of(key, v, 3)?;
+        Ok(Vec3::new(
+            self.number_of(key, &a[0])?,
+            self.number_of(key, &a[1])?,
+            self.number_of(key, &a[2])?,
+        ))
+    }
+
+    fn vec3(&self, key: &str) -> Result<Option<Vec3>, String> {
+        self.table.get(key).map(|v| self.vec3_of(key, v)).transpose()
+    }
+
+    fn mat3_of(&self, key: &str, v: &Value) -> Result<[[f64; 3]; 3], String> {
+        let rows = self.array_of(key, v, 3)?;
+        let mut m = [[0.0; 3]; 3];
+        for (i, row) in rows.iter().enumerate() {
+            m[i] = self
+                .vec3_of(key, row)
+                .map_err(|e| format!("{e} (row {})", i + 1))?
+                .to_array();
+        }
+        Ok(m)
+    }
+
+    fn string(&self, key: &str) -> Result<Option<&'a str>, String> {
+        match self.table.get(key) {
+            None => Ok(None),
+            Some(Value::String(s)) => Ok(Some(s.as_str())),
+            Some(other) => Err(self.err(key, format!("expected a string, found {}", other.type_str()))),
+        }
+    }
+
+    fn count(&self, key: &str) -> Result<Option<u64>, String> {
+        match self.table.get(key) {
+            None => Ok(None),
+            Some(Value::Integer(i)) if *i >= 1 => Ok(Some(*i as u64)),
+            Some(other) => Err(self.err(key, format!("expected a whole number of at least 1, found {other}"))),
+        }
+    }
+
+    /// Exactly one of `keys` (or none when `optional`).
+    fn one_of(&self, keys: &[&'static str], optional: bool) -> Result<Option<&'static str>, String> {
+        let given: Vec<&'static str> = keys.iter().copied().filter(|k| self.has(k)).collect();
+        match given.len() {
+            0 if optional => Ok(None),
+            0 => Err(format!("[{}] needs one of: {}", self.name, keys.join(", "))),
+            1 => Ok(Some(given[0])),
+            _ => Err(format!(
+                "[{}] gives both `{}` and `{}`; use only one",
+                self.name, given[0], given[1]
+            )),
+        }
+    }
+}
+
+/// Parse a scenario file; errors are one line naming the file, the key and the problem.
+pub fn load(path: &Path) -> Result<Scenario, String> {
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{file}: cannot read: {e}"))?;
+    parse(&text, &file).map_err(|e| format!("{file}: {e}"))
+}
+
+fn line_of(text: &str, offset: usize) -> usize {
+    text[..offset.min(text.len())].matches('\n').count() + 1
+}
+
+/// Parse scenario text (`name` labels the scenario).
+pub fn parse(text: &str, name: &str) -> Result<Scenario, String> {
+    let root: Table = toml::from_str(text).map_err(|e| {
+        let line = e
+            .span()
+            .map(|s| format!("line {}: ", line_of(text, s.start)))
+            .unwrap_or_default();
+        format!("{line}{}", e.message().lines().next().unwrap_or("invalid TOML"))
+    })?;
+    for key in root.keys() {
+        if !["body", "initial", "torque", "integrator", "output"].contains(&key.as_str()) {
+            return Err(format!(
+                "unknown section or key `{key}` (sections: body, initial, torque, integrator, output)"
+            ));
+        }
+    }
+
+    let body = Section::new(&root, "body", &["inertia"], true)?.expect("required");
+    let inertia_value = body
+        .table
+        .get("inertia")
+        .ok_or_else(|| body.err("inertia", "is required"))?;
+    let inertia = match inertia_value {
+        Value::Array(a) if a.first().is_some_and(|v| v.is_array()) => {
+            Inertia::from_matrix(body.mat3_of("inertia", inertia_value)?)
+        }
+        _ => Inertia::principal(body.vec3_of("inertia", inertia_value)?.to_array()),
+    }
+    .map_err(|e| body.err("inertia", e))?;
+
+    let initial = Section::new(
+        &root,
+        "initial",
+        &[
+            "rotation_vector",
+            "quaternion",
+            "matrix",
+            "angular_velocity",
+            "angular_momentum",
+            "time",
+        ],
+        true,
+    )?
+    .expect("required");
+    let rotation = match initial.one_of(&["rotation_vector", "quaternion", "matrix"], true)? {
+        None => Mat3::IDENTITY,
+        Some("rotation_vector") => so3::exp(initial.vec3("rotation_vector")?.expect("present")),
+        Some("quaternion") => {
+            let a = initial.array_of("quaternion", &initial.table["quaternion"], 4)?;
+            let c: Vec<f64> = a
+                .iter()
+                .map(|v| initial.number_of("quaternion", v))
+                .collect::<Result<_, _>>()?;
+            let q = so3::Quaternion::new(c[0], c[1], c[2], c[3]);
+            let n = q.norm();
+            if !(n > 0.0) || (n - 1.0).abs() > 1e-6 {
+                return Err(initial.err(
+                    "quaternion",
+                    format!("must be a unit quaternion [w, x, y, z], norm is {n}"),
+                ));
+            }
+            q.normalized().to_matrix()
+        }
+        Some(_) => {
+            let m = Mat3::from_rows(initial.mat3_of("matrix", &initial.table["matrix"])?);
+            let defect = so3::orthogonality_defect(&m);
+            if defect > 1e-6 || m.determinant() <= 0.0 {
+                return Err(initial.err(
+                    "matrix",
+                    format!(
+                        "must be a rotation (orthogonality defect {defect:.1e}, determinant {:.3})",
+                        m.determinant()
+                    ),
+                ));
+            }
+            so3::orthonormalize(&m).expect("checked")
+        }
+    };
+    let t0 = initial.number("time")?.unwrap_or(0.0);
+    let pi = match initial.one_of(&["angular_velocity", "angular_momentum"], false)? {
+        Some("angular_velocity") => inertia.apply(initial.vec3("angular_velocity")?.expect("present")),
+        _ => initial.vec3("angular_momentum")?.expect("present"),
+    };
+
+    let torque = Section::new(
+        &root,
+        "torque",
+        &["kind", "mass", "gravity", "center_of_mass", "body", "spatial"],
+        false,
+    )?;
+    let system = match &torque {
+        None => ScenarioSystem::Free(FreeBody::new(inertia)),
+        Some(t) => {
+            let kind = t
+                .string("kind")?
+                .ok_or_else(|| t.err("kind", "is required (\"none\", \"gravity\" or \"constant\")"))?;
+            let allowed: &[&str] = match kind {
+                "none" => &["kind"],
+                "gravity" => &["kind", "mass", "gravity", "center_of_mass"],
+                "constant" => &["kind", "body", "spatial"],
+                other => {
+                    return Err(t.err(
+                        "kind",
+                        format!("unknown kind \"{other}\" (use \"none\", \"gravity\" or \"constant\")"),
+                    ))
+                }
+            };
+            if let Some(k) = t.table.keys().find(|k| !allowed.contains(&k.as_str())) {
+                return Err(t.err(k, format!("is not used by kind = \"{kind}\"")));
+            }
+            match kind {
+                "none" => ScenarioSystem::Free(FreeBody::new(inertia)),
+                "gravity" => {
+                    let mass = t.required_number("mass")?;
+                    if mass <= 0.0 {
+                        return Err(t.err("mass", format!("must be positive, found {mass}")));
+                    }
+                    let gravity = t.vec3("gravity")?.unwrap_or(Vec3::new(0.0, 0.0, -9.81));
+                    let com = t
+                        .vec3("center_of_mass")?
+                        .ok_or_else(|| t.err("center_of_mass", "is required"))?;
+                    ScenarioSystem::Gravity(
+                        HeavyTop::new(inertia, mass, com, gravity).map_err(|e| t.err("gravity", e))?,
+                    )
+                }
+                _ => {
+                    if !t.has("body") && !t.has("spatial") {
+                        return Err(format!("[torque] kind = \"constant\" needs `body` and/or `spatial`"));
+                    }
+                    let b = t.vec3("body")?.unwrap_or(Vec3::ZERO);
+                    let s = t.vec3("spatial")?.unwrap_or(Vec3::ZERO);
+                    ScenarioSystem::Constant(ConstantTorque::new(inertia, b, s).map_err(|e| t.err("body", e))?)
+                }
+            }
+        }
+    };
+
+    let integ = Section::new(&root, "integrator", &["method", "step", "t_end"], true)?.expect("required");
+    let method_name = integ.string("method")?.unwrap_or("liemid-ea");
+    let method = RotationMethod::from_key(method_name).ok_or_else(|| {
+        let known: Vec<&str> = RotationMethod::ALL.iter().map(|m| m.key()).collect();
+        integ.err(
+            "method",
+            format!("unknown method \"{method_name}\" (known: {})", known.join(", ")),
+        )
+    })?;
+    let step = integ.required_number("step")?;
+    if step <= 0.0 {
+        return Err(integ.err("step", format!("must be positive, found {step}")));
+    }
+    let t_end = integ.required_number("t_end")?;
+    if t_end < t0 {
+        return Err(integ.err("t_end", format!("{t_end} is before the start time {t0}")));
+    }
+
+    let mut output = OutputSpec::default();
+    if let Some(out) = Section::new(&root, "output", &["path", "every", "format"], false)? {
+        output.path = out.string("path")?.map(str::to_string);
+        output.every = out.count("every")?;
+        output.format = match out.string("format")? {
+            None => None,
+            Some("csv") => Some(Format::Csv),
+            Some("npy") => Some(Format::Npy),
+            Some(other) => {
+                return Err(out.err("format", format!("unknown format \"{other}\" (use \"csv\" or \"npy\")")))
+            }
+        };
+    }
+
+    Ok(Scenario {
+        name: name.to_string(),
+        system,
+        initial: RigidState::new(t0, pi, rotation),
+        method,
+        step,
+        t_end,
+        output,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const FAST_TOP: &str = r#"
+[body]
+inertia = [0.0454896, 0.0454896, 0.00139968]
+[initial]
+rotation_vector = [0.05, 0.0, 0.0]
+angular_velocity = [0.0, 0.0, 983.3185]
+[torque]
+kind = "gravity"
+mass = 2.3328
+gravity = [0.0, 0.0, -9.81]
+center_of_mass = [0.0, 0.0, 0.12]
+[integrator]
+method = "liemid-ea"
+step = 1e-4
+t_end = 0.8
+[output]
+path = "trajectory.csv"
+every = 10
+"#;
+
+    #[test]
+    fn parses_every_key() {
+        let s = parse(FAST_TOP, "t").unwrap();
+        assert_eq!(s.method, RotationMethod::LieMidpointAlternating);
+        assert_eq!((s.step, s.t_end), (1e-4, 0.8));
+        assert_eq!(s.output.path.as_deref(), Some("trajectory.csv"));
+        assert_eq!(s.output.every, Some(10));
+        assert!((s.initial.pi.z - 0.00139968 * 983.3185).abs() < 1e-15);
+        assert!((s.initial.rotation - so3::exp(Vec3::new(0.05, 0.0, 0.0))).max_abs() == 0.0);
+        let ScenarioSystem::Gravity(top) = &s.system else {
+            panic!("gravity")
+        };
+        assert_eq!(top.mass, 2.3328);
+        assert_eq!(top.center_of_mass, Vec3::new(0.0, 0.0, 0.12));
+        // Same body as the built-in problem.
+        let builtin = builtin("fast-top").unwrap();
+        let torque_a = s.system.torque(&s.initial.rotation, 0.0);
+        let torque_b = builtin.system.torque(&s.initial.rotation, 0.0);
+        assert!((torque_a - torque_b).max_abs() < 1e-12);
+    }
+
+    #[test]
+    fn alternative_forms() {
+        let text = r#"
+[body]
+inertia = [[2.0, 0.1, 0.0], [0.1, 3.0, 0.0], [0.0, 0.0, 4.0]]
+[initial]
+quaternion = [0.0, 1.0, 0.0, 0.0]
+angular_momentum = [1.0, 2.0, 3.0]
+time = 1.5
+[torque]
+kind = "constant"
+spatial = [0.0, 0.0, 1.0]
+[integrator]
+method = "rk4"
+step = 0.01
+t_end = 2.0
+[output]
+format = "npy"
+"#;
+        let s = parse(text, "t").unwrap();
+        assert_eq!(s.initial.pi, Vec3::new(1.0, 2.0, 3.0));
+        assert_eq!(s.initial.t, 1.5);
+        assert!((s.initial.rotation - Mat3::from_diagonal(Vec3::new(1.0, -1.0, -1.0))).max_abs() < 1e-15);
+        assert_eq!(s.method, RotationMethod::RungeKutta4);
+        assert_eq!(s.output.format, Some(Format::Npy));
+        let torque = s.system.torque(&s.initial.rotation, 0.0);
+        assert!((torque - Vec3::new(0.0, 0.0, -1.0)).max_abs() < 1e-15);
+        let m = text.replace(
+            "quaternion = [0.0, 1.0, 0.0, 0.0]",
+            "matrix = [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]]",
+        );
+        let s2 = parse(&m, "t").unwrap();
+        assert!((s2.initial.rotation - s.initial.rotation).max_abs() < 1e-15);
+        let none = text.replace("kind = \"constant\"\nspatial = [0.0, 0.0, 1.0]", "kind = \"none\"");
+        assert!(matches!(parse(&none, "t").unwrap().system, ScenarioSystem::Free(_)));
+    }
+
+    #[test]
+    fn errors_name_the_key() {
+        let cases = [
+            (
+                "inertia = [0.0454896",
+                "inertiaa = [0.0454896",
+                "[body] unknown key `inertiaa`",
+            ),
+            ("[output]", "[outputs]", "unknown section or key `outputs`"),
+            ("mass = 2.3328", "mass = -1.0", "[torque] mass: must be positive"),
+            (
+                "mass = 2.3328",
+                "mass = \"heavy\"",
+                "[torque] mass: expected a number, found string",
+            ),
+            ("step = 1e-4", "step = 0.0", "[integrator] step: must be positive"),
+            (
+                "t_end = 0.8",
+                "t_end = -1.0",
+                "[integrator] t_end: -1 is before the start time 0",
+            ),
+            (
+                "\"liemid-ea\"",
+                "\"euler\"",
+                "[integrator] method: unknown method \"euler\"",
+            ),
+            (
+                "kind = \"gravity\"",
+                "kind = \"magnetic\"",
+                "[torque] kind: unknown kind \"magnetic\"",
+            ),
+            (
+                "every = 10",
+                "every = 0",
+                "[output] every: expected a whole number of at least 1",
+            ),
+            (
+                "[0.0454896, 0.0454896, 0.00139968]",
+                "[0.0454896, -0.1, 0.00139968]",
+                "[body] inertia: inertia tensor is not symmetric positive definite: principal moment I2 = -0.1",
+            ),
+            (
+                "rotation_vector = [0.05, 0.0, 0.0]",
+                "rotation_vector = [0.05, 0.0]",
+                "[initial] rotation_vector: expected 3 entries, found 2",
+            ),
+            (
+                "angular_velocity = [0.0, 0.0, 983.3185]",
+                "",
+                "[initial] needs one of: angular_velocity, angular_momentum",
+            ),
+            (
+                "rotation_vector = [0.05, 0.0, 0.0]",
+                "rotation_vector = [0.05, 0.0, 0.0]\nquaternion = [1.0, 0.0, 0.0, 0.0]",
+                "gives both `rotation_vector` and `quaternion`",
+            ),
+            (
+                "center_of_mass = [0.0, 0.0, 0.12]",
+                "center_of_mass = [0.0, 0.0, 0.12]\nbody = [1.0, 0.0, 0.0]",
+                "[torque] body: is not used by kind = \"gravity\"",
+            ),
+            ("[integrator]", "[integrator\n", "line "),
+        ];
+        for (from, to, expected) in cases {
+            assert!(FAST_TOP.contains(from), "{from}");
+            let text = FAST_TOP.replacen(from, to, 1);
+            let e = parse(&text, "t").unwrap_err();
+            assert!(e.contains(expected), "{to}: got `{e}`, expected `{expected}`");
+            assert!(!e.contains('\n'), "multi-line error: {e}");
+        }
+    }
+}
