@@ -91,46 +91,27 @@ pub const PROBLEMS: [&str; 4] = ["fast-top", "slow-top", "free-body", "torque-to
 
 /// A built-in problem as a scenario (LIEMID[EA], h = 1e-4 for the tops).
 pub fn builtin(name: &str) -> Result<Scenario, String> {
-    let (system, initial, t_end, description, step) = match name {
+    let (system, initial, t_end, step) = match name {
         "fast-top" => {
             let p = problems::fast_top();
-            (
-                ScenarioSystem::Gravity(p.system),
-                p.initial,
-                p.t_end,
-                p.description,
-                1e-4,
-            )
+            (ScenarioSystem::Gravity(p.system), p.initial, p.t_end, 1e-4)
         }
         "slow-top" => {
             let p = problems::slow_top();
-            (
-                ScenarioSystem::Gravity(p.system),
-                p.initial,
-                p.t_end,
-                p.description,
-                1e-4,
-            )
+            (ScenarioSystem::Gravity(p.system), p.initial, p.t_end, 1e-4)
         }
         "torque-top" => {
             let p = problems::torque_dominated_top();
-            (
-                ScenarioSystem::Gravity(p.system),
-                p.initial,
-                p.t_end,
-                p.description,
-                1e-3,
-            )
+            (ScenarioSystem::Gravity(p.system), p.initial, p.t_end, 1e-3)
         }
         "free-body" => {
             let p = problems::free_body();
-            (ScenarioSystem::Free(p.system), p.initial, p.t_end, p.description, 1e-3)
+            (ScenarioSystem::Free(p.system), p.initial, p.t_end, 1e-3)
         }
         other => {
             return Err(format!("unknown problem `{other}` (known: {})", PROBLEMS.join(", ")));
         }
     };
-    let _ = description;
     Ok(Scenario {
         name: name.to_string(),
         system,
@@ -343,7 +324,7 @@ pub fn parse(text: &str, name: &str) -> Result<Scenario, String> {
                 .collect::<Result<_, _>>()?;
             let q = so3::Quaternion::new(c[0], c[1], c[2], c[3]);
             let n = q.norm();
-            if !(n > 0.0) || (n - 1.0).abs() > 1e-6 {
+            if n.is_nan() || (n - 1.0).abs() > 1e-6 {
                 return Err(initial.err(
                     "quaternion",
                     format!("must be a unit quaternion [w, x, y, z], norm is {n}"),
@@ -415,7 +396,7 @@ pub fn parse(text: &str, name: &str) -> Result<Scenario, String> {
                 }
                 _ => {
                     if !t.has("body") && !t.has("spatial") {
-                        return Err(format!("[torque] kind = \"constant\" needs `body` and/or `spatial`"));
+                        return Err("[torque] kind = \"constant\" needs `body` and/or `spatial`".to_string());
                     }
                     let b = t.vec3("body")?.unwrap_or(Vec3::ZERO);
                     let s = t.vec3("spatial")?.unwrap_or(Vec3::ZERO);

@@ -124,7 +124,9 @@ where
     observer(0, &state, &first).map_err(|r| fail(t0, r))?;
     for k in 1..=steps {
         let target = if k == steps { t_end } else { t0 + k as f64 * h };
-        let dt = target - state.t;
+        // The nominal step, except for the last one, which lands on t_end; the time is then
+        // reset to t0 + k h so that it does not accumulate round-off.
+        let dt = if k == steps { target - state.t } else { h };
         method.step(system, &mut state, dt)?;
         state.t = target;
         last = Diagnostics::of(system, &state);

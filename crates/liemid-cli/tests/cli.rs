@@ -1,0 +1,376 @@
+//! End-to-end tests of the `liemid` binary.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn liemid() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_liemid"))
+}
+
+/// A fresh, empty directory for one test.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("liemid-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn examples() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples")
+}
+
+fn run_in(dir: &Path, args: &[&str]) -> Output {
+    liemid().current_dir(dir).args(args).output().unwrap()
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn json(text: &str) -> serde_json::Value {
+    serde_json::from_str(text).unwrap_or_else(|e| panic!("not JSON ({e}): {text}"))
+}
+
+/// Parse a CSV trajectory: header and rows of 17 numbers.
+fn read_csv(path: &Path) -> Vec<Vec<f64>> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap();
+    assert_eq!(
+        header,
+        "t,pi1,pi2,pi3,r11,r12,r13,r21,r22,r23,r31,r32,r33,energy,pix,piy,piz"
+    );
+    lines
+        .map(|l| {
+            let row: Vec<f64> = l.split(',').map(|v| v.parse::<f64>().unwrap()).collect();
+            assert_eq!(row.len(), 17, "{l}");
+            row
+        })
+        .collect()
+}
+
+/// Read a `.npy` trajectory of f64 with 17 columns.
+fn read_npy(path: &Path) -> Vec<Vec<f64>> {
+    let bytes = std::fs::read(path).unwrap();
+    assert_eq!(&bytes[..6], b"\x93NUMPY");
+    let hlen = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
+    let header = std::str::from_utf8(&bytes[10..10 + hlen]).unwrap();
+    assert!(
+        header.contains("'descr': '<f8'") && header.contains("'fortran_order': False"),
+        "{header}"
+    );
+    let shape = &header[header.find("'shape': (").unwrap() + 10..];
+    let rows: usize = shape[..shape.find(',').unwrap()].trim().parse().unwrap();
+    let data = &bytes[10 + hlen..];
+    assert_eq!(data.len(), rows * 17 * 8, "npy data size");
+    data.chunks(17 * 8)
+        .map(|r| r.chunks(8).map(|b| f64::from_le_bytes(b.try_into().unwrap())).collect())
+        .collect()
+}
+
+#[test]
+fn run_without_a_file_runs_the_fast_top() {
+    let dir = scratch("default");
+    let o = run_in(&dir, &["run"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(
+        out.contains("LIEMID[EA]") && out.contains("steps                          8000"),
+        "{out}"
+    );
+    assert!(
+        out.contains("max relative energy error") && out.contains("wall time"),
+        "{out}"
+    );
+    let rows = read_csv(&dir.join("trajectory.csv"));
+    assert_eq!(rows.len(), 8001);
+    let last = rows.last().unwrap();
+    assert_eq!(last[0], 0.8);
+    // Against the shipped reference at t = 0.8 (heavy-top.md): EA at h = 1e-4 is within
+    // its error of about 1e-5.
+    assert!((last[1] - 0.001294760157741989).abs() < 2e-5 && (last[2] - 0.008576777914107317).abs() < 2e-5);
+    // The vertical spatial momentum column is constant to round-off.
+    let piz0 = rows[0][16];
+    assert!(rows.iter().all(|r| (r[16] - piz0).abs() < 1e-13));
+    assert!(!dir.join("trajectory.csv.partial").exists());
+}
+
+#[test]
+fn every_example_scenario_runs_and_writes_a_complete_trajectory() {
+    let dir = scratch("examples");
+    for (file, steps, every, out) in [
+        ("fast_top.toml", 8000u64, 10u64, "fast_top.csv"),
+        ("slow_top.toml", 4000, 10, "slow_top.csv"),
+        ("tennis_racket.toml", 10000, 5, "tennis_racket.npy"),
+    ] {
+        let path = examples().join(file);
+        let o = run_in(&dir, &["run", path.to_str().unwrap(), "--json"]);
+        assert!(o.status.success(), "{file}: {}", stderr(&o));
+        let summary = json(&stdout(&o));
+        for key in [
+            "t",
+            "pi",
+            "rotation",
+            "steps",
+            "max_energy_error",
+            "max_spatial_momentum_change",
+            "max_orthogonality_defect",
+        ] {
+            assert!(summary.get(key).is_some(), "{file}: summary lacks {key}");
+        }
+        assert_eq!(summary["steps"], steps);
+        assert_eq!(summary["rotation"].as_array().unwrap().len(), 9);
+        let rows = if out.ends_with(".npy") {
+            read_npy(&dir.join(out))
+        } else {
+            read_csv(&dir.join(out))
+        };
+        assert_eq!(rows.len() as u64, steps / every + 1, "{file}");
+        assert_eq!(summary["trajectory"]["rows"], rows.len());
+        // Rows are every `every` steps apart.
+        let h = summary["step"].as_f64().unwrap();
+        assert!((rows[1][0] - rows[0][0] - every as f64 * h).abs() < 1e-12);
+        // The summary's final state is the last row.
+        let pi = summary["pi"].as_array().unwrap();
+        assert_eq!(rows.last().unwrap()[1], pi[0].as_f64().unwrap());
+    }
+    // The free body keeps its spatial momentum (columns pix, piy, piz) to round-off.
+    let rows = read_npy(&dir.join("tennis_racket.npy"));
+    for r in &rows {
+        for c in 14..17 {
+            assert!((r[c] - rows[0][c]).abs() < 1e-12 * 20.0, "spatial momentum drifted");
+        }
+    }
+}
+
+#[test]
+fn command_line_overrides_and_npy_output() {
+    let dir = scratch("overrides");
+    let o = run_in(
+        &dir,
+        &[
+            "run",
+            "--problem",
+            "slow-top",
+            "--method",
+            "rk4",
+            "--step",
+            "2e-4",
+            "--t-end",
+            "0.1",
+            "--out",
+            "x.npy",
+            "--every",
+            "7",
+            "--json",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = json(&stdout(&o));
+    assert_eq!(s["method"], "rk4");
+    assert_eq!(s["steps"], 500);
+    assert_eq!(s["t"], 0.1);
+    // 500 steps, every 7th plus the first and the last: 0, 7, …, 497, 500.
+    let rows = read_npy(&dir.join("x.npy"));
+    assert_eq!(rows.len(), 500 / 7 + 2);
+    assert_eq!(rows.last().unwrap()[0], 0.1);
+    let o = run_in(&dir, &["run", "--no-output", "--t-end", "0.01"]);
+    assert!(o.status.success());
+    assert!(!dir.join("trajectory.csv").exists());
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+const GOOD: &str = "[body]\ninertia = [1.0, 2.0, 3.0]\n[initial]\nangular_velocity = [3.0, 10.0, 2.5]\n\
+                    [integrator]\nmethod = \"liemid-ea\"\nstep = 1e-3\nt_end = 1.0\n";
+
+#[test]
+fn bad_input_is_one_line_naming_file_and_key_with_exit_code_2() {
+    let dir = scratch("bad");
+    let cases = [
+        (
+            "unknown.toml",
+            GOOD.replace("step =", "stepp = 1.0\nstep ="),
+            "[integrator] unknown key `stepp`",
+        ),
+        (
+            "inertia.toml",
+            GOOD.replace("[1.0, 2.0, 3.0]", "[1.0, 0.0, 3.0]"),
+            "[body] inertia",
+        ),
+        ("syntax.toml", GOOD.replace("[integrator]", "[integrator"), "line 5"),
+        (
+            "method.toml",
+            GOOD.replace("liemid-ea", "verlet"),
+            "unknown method \"verlet\"",
+        ),
+    ];
+    for (name, text, expected) in cases {
+        let p = write(&dir, name, &text);
+        let o = run_in(&dir, &["run", p.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(2), "{name}");
+        let err = stderr(&o);
+        assert_eq!(err.trim_end().lines().count(), 1, "{name}: {err}");
+        assert!(err.contains(name) && err.contains(expected), "{name}: {err}");
+        assert!(!dir.join("trajectory.csv").exists());
+    }
+    let o = run_in(&dir, &["run", "missing.toml"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("missing.toml: cannot read"));
+    let o = run_in(&dir, &["run", "--step=-1"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--step must be a positive number"));
+    let o = run_in(&dir, &["run", "--every", "0"]);
+    assert_eq!(o.status.code(), Some(2));
+    let o = run_in(&dir, &["converge", "--methods", "liemid-ea,nope", "--no-plot"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("unknown method `nope`"));
+}
+
+#[test]
+fn a_numerical_failure_exits_1_and_keeps_the_partial_trajectory() {
+    let dir = scratch("numerical");
+    // The step is fine at first; the torque spins the body up until one step turns it by
+    // more than half a turn.
+    let text = "[body]\ninertia = [1.0, 2.0, 3.0]\n[initial]\nangular_velocity = [0.0, 1.0, 0.0]\n\
+                [torque]\nkind = \"constant\"\nbody = [500.0, 1000.0, 200.0]\n\
+                [integrator]\nstep = 0.01\nt_end = 10.0\n[output]\npath = \"spin.csv\"\n";
+    let p = write(&dir, "spinup.toml", text);
+    let o = run_in(&dir, &["run", p.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(
+        err.contains("LIEMID[EA]") && err.contains("h = 0.01") && err.contains("t = "),
+        "{err}"
+    );
+    assert!(
+        !dir.join("spin.csv").exists(),
+        "a failed run left a complete-looking file"
+    );
+    let rows = read_csv(&dir.join("spin.csv.partial"));
+    assert!(rows.len() > 10, "the rows written before the failure are kept");
+}
+
+#[test]
+fn converge_reproduces_the_papers_table_and_writes_both_plots() {
+    let dir = scratch("converge");
+    let o = run_in(&dir, &["converge", "--json", "study.json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(out.contains("reference: classical RK4"), "{out}");
+    assert!(out.contains("observed order"), "{out}");
+    for img in ["convergence.svg", "convergence.png"] {
+        let meta = std::fs::metadata(dir.join(img)).unwrap();
+        assert!(meta.len() > 10_000, "{img} is {} bytes", meta.len());
+    }
+    let svg = std::fs::read_to_string(dir.join("convergence.svg")).unwrap();
+    assert!(svg.contains("LIEMID[EA]") && svg.contains("step h (s)") && svg.contains("slope 2"));
+    let png = std::fs::read(dir.join("convergence.png")).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+
+    let study = json(&std::fs::read_to_string(dir.join("study.json")).unwrap());
+    assert_eq!(study["problem"], "fast-top");
+    assert_eq!(study["t_end"], 0.8);
+    assert_eq!(study["reference"]["pi"].as_array().unwrap().len(), 3);
+    assert_eq!(study["reference"]["rotation"].as_array().unwrap().len(), 9);
+    let methods = study["methods"].as_array().unwrap();
+    assert_eq!(methods.len(), 8);
+    let ea = methods.iter().find(|m| m["name"] == "liemid-ea").unwrap();
+    let steps: Vec<f64> = ea["steps"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert_eq!(steps.len(), 6);
+    // heavy-top.md: EA at 1e-3, 2.5e-4, 1.25e-4.
+    for (h, pm, pr) in [
+        (1e-3, 8.2e-4, 1.2e-3),
+        (2.5e-4, 5.1e-5, 7.5e-5),
+        (1.25e-4, 1.3e-5, 1.9e-5),
+    ] {
+        let k = steps.iter().position(|s| (s - h).abs() < 1e-12).unwrap();
+        let em = ea["momentum_error"][k].as_f64().unwrap();
+        let er = ea["attitude_error"][k].as_f64().unwrap();
+        assert!(em / pm < 1.5 && pm / em < 1.5, "h = {h}: momentum {em}");
+        assert!(er / pr < 1.5 && pr / er < 1.5, "h = {h}: attitude {er}");
+    }
+    let order = ea["observed_order_attitude"].as_f64().unwrap();
+    assert!((order - 2.0).abs() < 0.1, "EA order {order}");
+    // The reference agrees with the shipped DOP853 solution (heavy-top.md) to 1e-9.
+    let r = study["reference"]["rotation"].as_array().unwrap();
+    assert!((r[0].as_f64().unwrap() - 0.30596975078721866).abs() < 1e-9);
+}
+
+#[test]
+fn converge_json_to_stdout_and_a_single_plot() {
+    let dir = scratch("converge-stdout");
+    let o = run_in(
+        &dir,
+        &[
+            "converge",
+            "--problem",
+            "torque-top",
+            "--methods",
+            "liemid-e1,liemid-e2",
+            "--steps",
+            "1e-2,5e-3,2.5e-3,1.25e-3",
+            "--t-end",
+            "1",
+            "--json",
+            "-",
+            "--plot",
+            "orders.svg",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let study = json(&stdout(&o));
+    for m in study["methods"].as_array().unwrap() {
+        let order = m["observed_order_attitude"].as_f64().unwrap();
+        assert!((order - 1.0).abs() < 0.1, "{}: order {order}", m["name"]);
+    }
+    assert!(stderr(&o).contains("observed order"));
+    assert!(dir.join("orders.svg").exists() && !dir.join("orders.png").exists());
+}
+
+#[test]
+fn listings_and_help() {
+    let o = liemid().arg("methods").output().unwrap();
+    let out = stdout(&o);
+    for key in [
+        "liemid-e1",
+        "liemid-e2",
+        "liemid-ea",
+        "liemid-i",
+        "akw",
+        "simo-wong",
+        "nmb",
+        "rk4",
+    ] {
+        assert!(out.lines().any(|l| l.starts_with(key)), "methods lacks {key}");
+    }
+    let o = liemid().arg("problems").output().unwrap();
+    for p in ["fast-top", "slow-top", "free-body"] {
+        assert!(stdout(&o).contains(p));
+    }
+    for sub in [
+        &["--help"][..],
+        &["run", "--help"],
+        &["converge", "--help"],
+        &["methods", "--help"],
+    ] {
+        let o = liemid().args(sub).output().unwrap();
+        assert!(o.status.success() && stdout(&o).contains("Usage"), "{sub:?}");
+    }
+    let o = liemid().arg("frobnicate").output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+}
