@@ -13,6 +13,7 @@ pub struct Inertia {
     matrix: Mat3,
     inverse: Mat3,
     principal: Option<(Vec3, Vec3)>,
+    inverse_norm: f64,
 }
 
 impl Inertia {
@@ -32,6 +33,7 @@ impl Inertia {
             matrix: Mat3::from_diagonal(d),
             inverse: Mat3::from_diagonal(inv),
             principal: Some((d, inv)),
+            inverse_norm: inv.max_abs(),
         })
     }
 
@@ -78,10 +80,12 @@ impl Inertia {
         let inverse = s.inverse().ok_or_else(|| Error::InvalidInertia {
             reason: "singular".into(),
         })?;
+        let inverse = (inverse + inverse.transpose()) * 0.5;
         Ok(Inertia {
             matrix: s,
-            inverse: (inverse + inverse.transpose()) * 0.5,
+            inverse,
             principal: None,
+            inverse_norm: inverse.norm_frobenius(),
         })
     }
 
@@ -95,6 +99,13 @@ impl Inertia {
     #[must_use]
     pub fn inverse(&self) -> &Mat3 {
         &self.inverse
+    }
+
+    /// An upper bound of `‖I⁻¹‖₂ = 1/λ_min` (exact for principal tensors, `‖I⁻¹‖_F`
+    /// otherwise).
+    #[must_use]
+    pub fn inverse_norm_bound(&self) -> f64 {
+        self.inverse_norm
     }
 
     /// The principal moments, when the tensor is diagonal.

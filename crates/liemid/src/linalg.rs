@@ -274,6 +274,21 @@ impl Mat3 {
         Some(Mat3::from_rows([[c0.x, c1.x, c2.x], [c0.y, c1.y, c2.y], [c0.z, c1.z, c2.z]]) * inv_det)
     }
 
+    /// Solve `A x = b` by the adjugate (Cramer's rule): branch-free and fast for the
+    /// well-conditioned matrices of Newton iterations; `None` when `A` is singular.
+    #[must_use]
+    #[inline]
+    pub fn solve_adjugate(&self, b: Vec3) -> Option<Vec3> {
+        let (r0, r1, r2) = (self.row(0), self.row(1), self.row(2));
+        let c0 = r1.cross(r2);
+        let det = r0.dot(c0);
+        if det == 0.0 || !det.is_finite() {
+            return None;
+        }
+        let x = c0 * b.x + r2.cross(r0) * b.y + r0.cross(r1) * b.z;
+        Some(x * (1.0 / det))
+    }
+
     /// Solve `A x = b` by Gaussian elimination with partial pivoting; `None` when `A` is
     /// singular to working precision.
     #[must_use]
@@ -420,6 +435,8 @@ mod tests {
         let x = a.solve(b).unwrap();
         assert!((a * x - b).max_abs() < 1e-15);
         assert!((inv * b - x).max_abs() < 1e-15);
+        assert!((a.solve_adjugate(b).unwrap() - x).max_abs() < 1e-15);
+        assert!(Mat3::ZERO.solve_adjugate(b).is_none());
         assert!(Mat3::ZERO.inverse().is_none());
         assert!(Mat3::ZERO.solve(b).is_none());
     }

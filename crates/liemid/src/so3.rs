@@ -13,12 +13,33 @@
 
 use crate::linalg::{Mat3, Vec3};
 
-/// Below this angle the Rodrigues coefficients use their Taylor series (truncation error
-/// `θ⁶/5040 < 1e-16` relative).
-const EXP_SERIES_ANGLE: f64 = 1e-2;
-/// Below this angle the Jacobian coefficients use their Taylor series up to `θ⁸`
-/// (truncation error below `1e-19` relative at the switch).
+/// Below this angle (squared: 0.01) all coefficients use their Taylor series up to `θ⁸`,
+/// whose truncation error is below `3e-17` relative at the switch; above it the closed
+/// forms are accurate, since every coefficient multiplies a power of `hat(v)` that scales
+/// its own round-off down to a few ulps of the result.
+const SERIES_ANGLE_SQUARED: f64 = 0.01;
+#[cfg(test)]
+const EXP_SERIES_ANGLE: f64 = 0.1;
+/// Below this angle the inverse-Jacobian coefficient uses its Taylor series.
 const JAC_SERIES_ANGLE: f64 = 0.1;
+
+/// The coefficients `(sin θ/θ, (1 − cos θ)/θ², (θ − sin θ)/θ³)` of Rodrigues' formula and
+/// of the Jacobians, from `θ²`: one `sin_cos` above the series range, none below it.
+#[inline]
+pub(crate) fn coefficients(t2: f64) -> (f64, f64, f64) {
+    if t2 < SERIES_ANGLE_SQUARED {
+        // Horner forms with constant coefficients: no division on the hot path.
+        let t = t2;
+        let a = 1.0 + t * (-1.0 / 6.0 + t * (1.0 / 120.0 + t * (-1.0 / 5040.0 + t * (1.0 / 362_880.0))));
+        let b = 0.5 + t * (-1.0 / 24.0 + t * (1.0 / 720.0 + t * (-1.0 / 40_320.0 + t * (1.0 / 3_628_800.0))));
+        let c = 1.0 / 6.0 + t * (-1.0 / 120.0 + t * (1.0 / 5040.0 + t * (-1.0 / 362_880.0 + t * (1.0 / 39_916_800.0))));
+        (a, b, c)
+    } else {
+        let theta = t2.sqrt();
+        let (s, co) = theta.sin_cos();
+        (s / theta, (1.0 - co) / t2, (theta - s) / (theta * t2))
+    }
+}
 
 /// `hat(a)`: the skew-symmetric matrix with `hat(a) b = a × b`.
 #[must_use]
@@ -40,22 +61,15 @@ pub fn vee(a: &Mat3) -> Vec3 {
 }
 
 /// The Rodrigues coefficients `(sin θ/θ, (1 − cos θ)/θ²)` as functions of `θ`.
-#[inline]
+#[cfg(test)]
 fn rodrigues_coefficients(theta: f64) -> (f64, f64) {
-    if theta < EXP_SERIES_ANGLE {
-        let t2 = theta * theta;
-        (1.0 - t2 / 6.0 * (1.0 - t2 / 20.0), 0.5 - t2 / 24.0 * (1.0 - t2 / 30.0))
-    } else {
-        let (s, _) = theta.sin_cos();
-        // 1 − cos θ = 2 sin²(θ/2): no cancellation.
-        let sh = (0.5 * theta).sin();
-        (s / theta, 2.0 * sh * sh / (theta * theta))
-    }
+    let (a, b, _) = coefficients(theta * theta);
+    (a, b)
 }
 
 /// `I + a hat(v) + b hat(v)²`, written out with `hat(v)² = v vᵀ − |v|² I`.
 #[inline]
-fn i_plus_hat_plus_hat2(v: Vec3, a: f64, b: f64) -> Mat3 {
+pub(crate) fn i_plus_hat_plus_hat2(v: Vec3, a: f64, b: f64) -> Mat3 {
     let t2 = v.norm_squared();
     let d = 1.0 - b * t2;
     let (x, y, z) = (v.x, v.y, v.z);
@@ -71,8 +85,17 @@ fn i_plus_hat_plus_hat2(v: Vec3, a: f64, b: f64) -> Mat3 {
 #[must_use]
 #[inline]
 pub fn exp(v: Vec3) -> Mat3 {
-    let (a, b) = rodrigues_coefficients(v.norm());
+    let (a, b, _) = coefficients(v.norm_squared());
     i_plus_hat_plus_hat2(v, a, b)
+}
+
+/// `exp(v) x` without forming the matrix: `x + a v × x + b v × (v × x)`.
+#[must_use]
+#[inline]
+pub fn exp_apply(v: Vec3, x: Vec3) -> Vec3 {
+    let (a, b, _) = coefficients(v.norm_squared());
+    let vx = v.cross(x);
+    x + vx * a + v.cross(vx) * b
 }
 
 /// The logarithm map: the rotation vector `v` with `|v| ≤ π` and `exp(v) = R`.
@@ -121,14 +144,9 @@ pub fn log(r: &Mat3) -> Vec3 {
 }
 
 /// The coefficient `(θ − sin θ)/θ³` of `hat²` in the Jacobians of `exp`.
-#[inline]
+#[cfg(test)]
 fn jacobian_b(theta: f64) -> f64 {
-    if theta < JAC_SERIES_ANGLE {
-        let t2 = theta * theta;
-        1.0 / 6.0 - t2 / 120.0 + t2 * t2 / 5040.0 - t2 * t2 * t2 / 362_880.0 + t2 * t2 * t2 * t2 / 39_916_800.0
-    } else {
-        (theta - theta.sin()) / (theta * theta * theta)
-    }
+    coefficients(theta * theta).2
 }
 
 /// The coefficient `1/θ² − (1 + cos θ)/(2 θ sin θ)` of `hat²` in the inverse Jacobians.
@@ -147,9 +165,8 @@ fn jacobian_inv_c(theta: f64) -> f64 {
 /// Then `exp(v + δ) = exp(v) exp(Jr(v) δ) + O(δ²)`.
 #[must_use]
 pub fn right_jacobian(v: Vec3) -> Mat3 {
-    let theta = v.norm();
-    let (_, a) = rodrigues_coefficients(theta);
-    i_plus_hat_plus_hat2(v, -a, jacobian_b(theta))
+    let (_, a, b) = coefficients(v.norm_squared());
+    i_plus_hat_plus_hat2(v, -a, b)
 }
 
 /// Left Jacobian of `exp`: `Jl(v) = Jr(−v)`, with `exp(v + δ) = exp(Jl(v) δ) exp(v) + O(δ²)`.
@@ -389,6 +406,13 @@ mod tests {
         let (a, b) = rodrigues_coefficients(t * (1.0 - 1e-15));
         let (a2, b2) = (t.sin() / t, 2.0 * (0.5 * t).sin().powi(2) / (t * t));
         assert!((a - a2).abs() < 4e-16 && (b - b2).abs() < 4e-16, "{a} {a2} {b} {b2}");
+        let (a3, b3) = rodrigues_coefficients(t * (1.0 + 1e-15));
+        // The closed form of (1 − cos θ)/θ² loses u/θ² ≈ 2e-14 relative at the switch; it
+        // multiplies hat(v)², of size θ², so exp keeps a few ulps.
+        assert!(
+            (a3 - a2).abs() < 4e-16 && (b3 - b2).abs() < 2.5e-14,
+            "{a3} {a2} {b3} {b2}"
+        );
         let t = JAC_SERIES_ANGLE;
         let b_direct = (t - t.sin()) / (t * t * t);
         let c_direct = 1.0 / (t * t) - (1.0 + t.cos()) / (2.0 * t * t.sin());
