@@ -393,7 +393,7 @@ fn plot_paths(base: &Path) -> Vec<PathBuf> {
 fn converge_cmd(args: ConvergeArgs) -> CmdResult {
     let sc = load_scenario(args.scenario.as_deref(), &args.problem)?;
     let methods: Vec<RotationMethod> = match &args.methods {
-        None => RotationMethod::ALL.to_vec(),
+        None => RotationMethod::PAPER.to_vec(),
         Some(list) => list.iter().map(|m| parse_method(m.trim())).collect::<Result<_, _>>()?,
     };
     let steps: Vec<f64> = match &args.steps {

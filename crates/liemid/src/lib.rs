@@ -10,6 +10,8 @@
 //! - [`rotation`]: one type per method ([`LieMidpointAlternating`], …) behind
 //!   [`RotationIntegrator`], and [`RotationMethod`] for selection by name.
 //! - [`midpoint`]: the midpoint equation `(1/h) I Ψ = exp(−Ψ/2) P` and its Newton solver.
+//! - [`composition`]: symmetric compositions (Suzuki, Yoshida, Kahan-Li) of EA or Verlet
+//!   up to eighth order.
 //! - [`vector`]: symplectic Euler, its adjoint, Verlet and explicit Newmark on `ℝⁿ`.
 //! - [`driver`]: [`integrate`] from `t0` to `t_end` with an observer and diagnostics.
 //! - [`problems`]: the fast and slow Lagrangian tops, a torque-dominated top, a free body,
@@ -30,6 +32,7 @@
 #![warn(missing_docs)]
 #![allow(non_snake_case)]
 
+pub mod composition;
 pub mod driver;
 pub mod error;
 pub mod inertia;
@@ -42,6 +45,7 @@ pub mod rotation;
 pub mod so3;
 pub mod vector;
 
+pub use composition::{Composition, Scheme};
 pub use driver::{integrate, integrate_to, step_count, RunSummary};
 pub use error::{Error, Result};
 pub use inertia::Inertia;

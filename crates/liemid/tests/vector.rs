@@ -9,7 +9,7 @@ use liemid::vector::{
     ExplicitNewmark, MassMatrix, MechanicalSystem, PhaseState, SymplecticEuler, SymplecticEulerAdjoint,
     VectorIntegrator, Verlet,
 };
-use liemid::Error;
+use liemid::{Composition, Error, Scheme};
 
 fn run<M: VectorIntegrator, S: MechanicalSystem>(
     mut m: M,
@@ -254,4 +254,29 @@ fn dense_mass_matrix_and_bad_input() {
         ExplicitNewmark::new(f64::NAN),
         Err(Error::InvalidParameter { .. })
     ));
+}
+
+#[test]
+fn verlet_compositions_reach_their_orders() {
+    // Kepler e = 0.5 at an unremarkable time, against the exact solution.
+    let kepler = Kepler::default();
+    let s0 = Kepler::initial(0.5);
+    let t_end = 2.0;
+    let exact = Kepler::exact(0.5, t_end);
+    for (scheme, h0, n) in [
+        (Scheme::SUZUKI4, t_end / 50.0, 5),
+        (Scheme::YOSHIDA4, t_end / 50.0, 5),
+        (Scheme::KAHAN_LI6, t_end / 20.0, 4),
+        (Scheme::KAHAN_LI8, t_end / 10.0, 3),
+    ] {
+        let hs = halvings(h0, n);
+        let make = || Composition::new(Verlet::default(), scheme, "composed Verlet");
+        let order = order_of(make, &kepler, &s0, t_end, &exact, &hs);
+        println!("Verlet composed by {}: order {order:.3}", scheme.name);
+        assert!(
+            (order - f64::from(scheme.order)).abs() < 0.1,
+            "{}: order {order}",
+            scheme.name
+        );
+    }
 }

@@ -16,6 +16,7 @@ pub use newmark::KryslEndresNewmark;
 pub use rk4::RungeKutta4Quaternion;
 pub use simo_wong::SimoWong;
 
+use crate::composition::{Composition, Scheme};
 use crate::error::{Error, Result};
 use crate::linalg::{Mat3, Vec3};
 use crate::midpoint::NotConverged;
@@ -135,11 +136,35 @@ pub enum RotationMethod {
     KryslEndresNewmark,
     /// [`RungeKutta4Quaternion`].
     RungeKutta4,
+    /// EA composed by Suzuki's 5-stage scheme: fourth order.
+    LieMidpointAlternating4,
+    /// EA composed by Yoshida's triple jump: fourth order.
+    LieMidpointAlternating4Yoshida,
+    /// EA composed by Kahan and Li's 9-stage scheme: sixth order.
+    LieMidpointAlternating6,
+    /// EA composed by Kahan and Li's 17-stage scheme: eighth order.
+    LieMidpointAlternating8,
 }
 
 impl RotationMethod {
-    /// All methods, in the order of the paper's line-up, then the baseline.
-    pub const ALL: [RotationMethod; 8] = [
+    /// Every method: the paper's line-up, the RK4 baseline and the EA compositions.
+    pub const ALL: [RotationMethod; 12] = [
+        RotationMethod::LieMidpointE1,
+        RotationMethod::LieMidpointE2,
+        RotationMethod::LieMidpointAlternating,
+        RotationMethod::LieMidpointImplicit,
+        RotationMethod::AustinKrishnaprasadWang,
+        RotationMethod::SimoWong,
+        RotationMethod::KryslEndresNewmark,
+        RotationMethod::RungeKutta4,
+        RotationMethod::LieMidpointAlternating4,
+        RotationMethod::LieMidpointAlternating4Yoshida,
+        RotationMethod::LieMidpointAlternating6,
+        RotationMethod::LieMidpointAlternating8,
+    ];
+
+    /// The paper's Figure 1 line-up plus the RK4 baseline.
+    pub const PAPER: [RotationMethod; 8] = [
         RotationMethod::LieMidpointE1,
         RotationMethod::LieMidpointE2,
         RotationMethod::LieMidpointAlternating,
@@ -162,6 +187,10 @@ impl RotationMethod {
             RotationMethod::SimoWong => "simo-wong",
             RotationMethod::KryslEndresNewmark => "nmb",
             RotationMethod::RungeKutta4 => "rk4",
+            RotationMethod::LieMidpointAlternating4 => "liemid-ea4",
+            RotationMethod::LieMidpointAlternating4Yoshida => "liemid-ea4y",
+            RotationMethod::LieMidpointAlternating6 => "liemid-ea6",
+            RotationMethod::LieMidpointAlternating8 => "liemid-ea8",
         }
     }
 
@@ -195,6 +224,10 @@ impl RotationMethod {
             | RotationMethod::AustinKrishnaprasadWang
             | RotationMethod::SimoWong => "1 per Newton iteration",
             RotationMethod::RungeKutta4 => "4",
+            RotationMethod::LieMidpointAlternating4 => "5",
+            RotationMethod::LieMidpointAlternating4Yoshida => "3",
+            RotationMethod::LieMidpointAlternating6 => "9",
+            RotationMethod::LieMidpointAlternating8 => "17",
         }
     }
 
@@ -224,6 +257,10 @@ impl RotationMethod {
             RotationMethod::RungeKutta4 => {
                 "classical RK4 on (Pi, unit quaternion), renormalised each step; conserves nothing exactly"
             }
+            RotationMethod::LieMidpointAlternating4 => "EA composed by Suzuki's 5-stage scheme; keeps what EA keeps",
+            RotationMethod::LieMidpointAlternating4Yoshida => "EA composed by Yoshida's triple jump; keeps what EA keeps",
+            RotationMethod::LieMidpointAlternating6 => "EA composed by Kahan-Li's 9-stage scheme; keeps what EA keeps",
+            RotationMethod::LieMidpointAlternating8 => "EA composed by Kahan-Li's 17-stage scheme; keeps what EA keeps",
         }
     }
 
@@ -239,8 +276,16 @@ impl RotationMethod {
             RotationMethod::SimoWong => AnyRotationIntegrator::Sw(SimoWong::new()),
             RotationMethod::KryslEndresNewmark => AnyRotationIntegrator::Nmb(KryslEndresNewmark::new()),
             RotationMethod::RungeKutta4 => AnyRotationIntegrator::Rk4(RungeKutta4Quaternion::new()),
+            RotationMethod::LieMidpointAlternating4 => ea_composition(Scheme::SUZUKI4, "LIEMID[EA]4"),
+            RotationMethod::LieMidpointAlternating4Yoshida => ea_composition(Scheme::YOSHIDA4, "LIEMID[EA]4Y"),
+            RotationMethod::LieMidpointAlternating6 => ea_composition(Scheme::KAHAN_LI6, "LIEMID[EA]6"),
+            RotationMethod::LieMidpointAlternating8 => ea_composition(Scheme::KAHAN_LI8, "LIEMID[EA]8"),
         }
     }
+}
+
+fn ea_composition(scheme: Scheme, name: &'static str) -> AnyRotationIntegrator {
+    AnyRotationIntegrator::Composed(Composition::new(LieMidpointAlternating::new(), scheme, name))
 }
 
 /// Any of the crate's rotation integrators, chosen at run time.
@@ -262,6 +307,8 @@ pub enum AnyRotationIntegrator {
     Nmb(KryslEndresNewmark),
     /// RK4 on quaternions.
     Rk4(RungeKutta4Quaternion),
+    /// A symmetric composition of EA.
+    Composed(Composition<LieMidpointAlternating>),
 }
 
 macro_rules! dispatch {
@@ -275,6 +322,7 @@ macro_rules! dispatch {
             AnyRotationIntegrator::Sw($m) => $e,
             AnyRotationIntegrator::Nmb($m) => $e,
             AnyRotationIntegrator::Rk4($m) => $e,
+            AnyRotationIntegrator::Composed($m) => $e,
         }
     };
 }
