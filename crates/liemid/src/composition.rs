@@ -30,6 +30,8 @@ pub struct Scheme {
     stages: usize,
 }
 
+// The constants are written with the digits the papers publish.
+#[allow(clippy::excessive_precision)]
 impl Scheme {
     /// The coefficient of stage `i` (0-based).
     #[must_use]
