@@ -1,0 +1,76 @@
+//! Stepping allocates nothing: a counting global allocator watches every method's steps.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+
+use liemid::vector::{PhaseState, VectorIntegrator, Verlet};
+use liemid::{integrate_to, problems, Composition, RotationIntegrator, RotationMethod, Scheme};
+
+struct Counting;
+
+thread_local! {
+    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.with(|c| c.set(c.get() + 1));
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.with(|c| c.set(c.get() + 1));
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn allocations() -> u64 {
+    ALLOCATIONS.with(|c| c.get())
+}
+
+#[test]
+fn the_counter_sees_allocations() {
+    let before = allocations();
+    let v = std::hint::black_box(vec![1u8; 16]);
+    assert!(allocations() > before && v.len() == 16);
+}
+
+#[test]
+fn rotation_steps_and_the_driver_allocate_nothing() {
+    let top = problems::fast_top();
+    for method in RotationMethod::ALL {
+        let mut integrator = method.integrator();
+        let mut state = top.initial;
+        integrator.step(&top.system, &mut state, 1e-4).unwrap(); // warm-up
+        let before = allocations();
+        for _ in 0..1000 {
+            integrator.step(&top.system, &mut state, 1e-4).unwrap();
+        }
+        assert_eq!(allocations() - before, 0, "{} allocates per step", method.name());
+        let before = allocations();
+        let run = integrate_to(&mut integrator, &top.system, top.initial, 0.05, 1e-4).unwrap();
+        assert_eq!(run.steps, 500);
+        assert_eq!(allocations() - before, 0, "{}: the driver allocates", method.name());
+    }
+}
+
+#[test]
+fn vector_steps_allocate_nothing_after_the_first() {
+    let kepler = problems::Kepler::default();
+    let mut state: PhaseState = problems::Kepler::initial(0.5);
+    let mut verlet = Verlet::default();
+    let mut composed = Composition::new(Verlet::default(), Scheme::KAHAN_LI8, "Verlet8");
+    verlet.step(&kepler, &mut state, 1e-3).unwrap(); // sizes the scratch space
+    composed.step(&kepler, &mut state, 1e-3).unwrap();
+    let before = allocations();
+    for _ in 0..1000 {
+        verlet.step(&kepler, &mut state, 1e-3).unwrap();
+        composed.step(&kepler, &mut state, 1e-3).unwrap();
+    }
+    assert_eq!(allocations() - before, 0);
+}
