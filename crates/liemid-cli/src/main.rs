@@ -1,10 +1,12 @@
 //! `liemid`: run rigid-body scenarios, write trajectories, and reproduce the convergence
 //! study of the explicit midpoint Lie paper.
 
+mod baseline;
 mod converge;
 mod output;
 mod plot;
 mod scenario;
+mod work_precision;
 
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
@@ -50,6 +52,12 @@ enum Command {
         liemid converge --scenario examples/fast_top.toml --methods liemid-ea,rk4 --json study.json"
     )]
     Converge(ConvergeArgs),
+    /// CPU time against accuracy for every method and the DOP853 and RK4 baselines.
+    #[command(
+        after_help = "Examples:\n  liemid work-precision\n  liemid work-precision --t-end 100 --plot long\n  \
+        liemid work-precision --methods liemid-ea,liemid-ea8,rk4,dop853 --json wp.json"
+    )]
+    WorkPrecision(WorkPrecisionArgs),
     /// List the integrators: name, order, torque evaluations, what they conserve.
     Methods,
     /// List the built-in problems.
@@ -118,6 +126,43 @@ struct ConvergeArgs {
     json: Option<String>,
 }
 
+#[derive(Args, Debug)]
+struct WorkPrecisionArgs {
+    /// Built-in problem.
+    #[arg(long, default_value = "fast-top")]
+    problem: String,
+    /// Scenario file (TOML) instead of a built-in problem.
+    #[arg(long, conflicts_with = "problem")]
+    scenario: Option<PathBuf>,
+    /// End time [default: the problem's].
+    #[arg(long)]
+    t_end: Option<f64>,
+    /// Comma-separated methods, `dop853` for the adaptive baseline [default: all].
+    #[arg(long, value_delimiter = ',')]
+    methods: Option<Vec<String>>,
+    /// Timed repetitions per point; the median is reported (at least 5).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(5..))]
+    repetitions: u64,
+    /// Stop a method's sequence once one run takes longer than this many seconds.
+    #[arg(long, default_value_t = 0.5)]
+    budget: f64,
+    /// Stop a method's sequence once its attitude error is below this.
+    #[arg(long, default_value_t = 1e-11)]
+    min_error: f64,
+    /// At most this many points per method.
+    #[arg(long, default_value_t = 16)]
+    max_points: usize,
+    /// Plot file: NAME writes NAME.svg and NAME.png; NAME.svg or NAME.png writes one.
+    #[arg(long, default_value = "work-precision")]
+    plot: PathBuf,
+    /// Write no plot.
+    #[arg(long)]
+    no_plot: bool,
+    /// Write the study as JSON to FILE, or to standard output with `-`.
+    #[arg(long)]
+    json: Option<String>,
+}
+
 /// How a command failed: bad input (exit 2) or a failed run (exit 1).
 enum Failure {
     Input(String),
@@ -135,6 +180,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Run(args) => run(args),
         Command::Converge(args) => converge_cmd(args),
+        Command::WorkPrecision(args) => work_precision_cmd(args),
         Command::Methods => {
             methods();
             Ok(())
@@ -426,7 +472,7 @@ fn converge_cmd(args: ConvergeArgs) -> CmdResult {
     }
     if !args.no_plot {
         for p in plot_paths(&args.plot) {
-            plot::write(&p, &study).map_err(Failure::Run)?;
+            plot::write(&p, &plot::Figure::Convergence(&study)).map_err(Failure::Run)?;
             let msg = format!("wrote {}", p.display());
             if json_to_stdout {
                 eprintln!("{msg}");
@@ -436,16 +482,79 @@ fn converge_cmd(args: ConvergeArgs) -> CmdResult {
         }
     }
     if let Some(target) = &args.json {
-        let text = serde_json::to_string_pretty(&study).map_err(|e| Failure::Run(e.to_string()))?;
-        if json_to_stdout {
-            println!("{text}");
-        } else {
-            let partial = output::partial_path(Path::new(target));
-            std::fs::write(&partial, text + "\n")
-                .and_then(|()| std::fs::rename(&partial, target))
-                .map_err(|e| Failure::Run(format!("{target}: cannot write: {e}")))?;
-            println!("wrote {target}");
+        write_json(target, &study)?;
+    }
+    Ok(())
+}
+
+/// Write `value` as JSON to `target` (`-` for standard output), atomically for files.
+fn write_json<T: serde::Serialize>(target: &str, value: &T) -> CmdResult {
+    let text = serde_json::to_string_pretty(value).map_err(|e| Failure::Run(e.to_string()))?;
+    if target == "-" {
+        println!("{text}");
+    } else {
+        let partial = output::partial_path(Path::new(target));
+        std::fs::write(&partial, text + "\n")
+            .and_then(|()| std::fs::rename(&partial, target))
+            .map_err(|e| Failure::Run(format!("{target}: cannot write: {e}")))?;
+        println!("wrote {target}");
+    }
+    Ok(())
+}
+
+fn work_precision_cmd(args: WorkPrecisionArgs) -> CmdResult {
+    let sc = load_scenario(args.scenario.as_deref(), &args.problem)?;
+    let entries: Vec<work_precision::Entry> = match &args.methods {
+        None => work_precision::Entry::all(),
+        Some(list) => list
+            .iter()
+            .map(|m| {
+                work_precision::Entry::from_key(m.trim()).ok_or_else(|| {
+                    Failure::Input(format!(
+                        "unknown method `{}` (see `liemid methods`, or dop853)",
+                        m.trim()
+                    ))
+                })
+            })
+            .collect::<Result<_, _>>()?,
+    };
+    let t_end = match args.t_end {
+        Some(t) if t.is_finite() && t > sc.initial.t => t,
+        Some(t) => {
+            return Err(Failure::Input(format!(
+                "--t-end {t} must be after the start time {}",
+                sc.initial.t
+            )))
         }
+        None => sc.t_end,
+    };
+    let options = work_precision::Options {
+        entries,
+        repetitions: args.repetitions as usize,
+        budget: check_positive("budget", args.budget)?,
+        min_error: check_positive("min-error", args.min_error)?,
+        max_points: args.max_points.max(1),
+    };
+    let study = work_precision::study(&sc, t_end, &options).map_err(Failure::Run)?;
+    let table = work_precision::table(&study);
+    let to_stdout = args.json.as_deref() == Some("-");
+    if to_stdout {
+        eprint!("{table}");
+    } else {
+        print!("{table}");
+    }
+    if !args.no_plot {
+        for p in plot_paths(&args.plot) {
+            plot::write(&p, &plot::Figure::WorkPrecision(&study)).map_err(Failure::Run)?;
+            if to_stdout {
+                eprintln!("wrote {}", p.display());
+            } else {
+                println!("wrote {}", p.display());
+            }
+        }
+    }
+    if let Some(target) = &args.json {
+        write_json(target, &study)?;
     }
     Ok(())
 }

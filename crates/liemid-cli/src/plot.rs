@@ -8,6 +8,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::converge::Study;
+use crate::work_precision::Study as WorkStudy;
 
 static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
 static REGISTER: Once = Once::new();
@@ -51,12 +52,16 @@ fn nice_label(v: &f64) -> String {
 /// The series of one panel: label, points.
 type Series = (String, Vec<(f64, f64)>);
 
-fn panel<DB: DrawingBackend>(
-    area: &DrawingArea<DB, Shift>,
-    title: &str,
-    y_desc: &str,
-    series: &[Series],
-) -> Result<(), String> {
+/// Axis names and options of one panel.
+struct Axes<'a> {
+    title: &'a str,
+    x_desc: &'a str,
+    y_desc: &'a str,
+    /// Draw reference slopes 1 and 2.
+    slopes: bool,
+}
+
+fn panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, axes: &Axes, series: &[Series]) -> Result<(), String> {
     let all: Vec<(f64, f64)> = series.iter().flat_map(|s| s.1.iter().copied()).collect();
     if all.is_empty() {
         return Ok(());
@@ -72,7 +77,8 @@ fn panel<DB: DrawingBackend>(
         .filter(|p| p.0 == xmin)
         .fold(f64::INFINITY, |a, p| a.min(p.1))
         / 3.0;
-    let slopes: Vec<(f64, Vec<(f64, f64)>)> = [1.0, 2.0]
+    let powers: &[f64] = if axes.slopes { &[1.0, 2.0] } else { &[] };
+    let slopes: Vec<(f64, Vec<(f64, f64)>)> = powers
         .iter()
         .map(|&p| (p, vec![(xmin, anchor), (xmax, anchor * (xmax / xmin).powf(p))]))
         .collect();
@@ -80,7 +86,7 @@ fn panel<DB: DrawingBackend>(
     let ymax = ymax_data.max(slopes.iter().map(|s| s.1[1].1).fold(0.0, f64::max)) * 2.0;
 
     let mut chart = ChartBuilder::on(area)
-        .caption(title, ("sans-serif", 22))
+        .caption(axes.title, ("sans-serif", 22))
         .margin(12)
         .x_label_area_size(48)
         .y_label_area_size(72)
@@ -88,8 +94,8 @@ fn panel<DB: DrawingBackend>(
         .map_err(e)?;
     chart
         .configure_mesh()
-        .x_desc("step h (s)")
-        .y_desc(y_desc)
+        .x_desc(axes.x_desc)
+        .y_desc(axes.y_desc)
         .x_labels(12)
         .x_label_formatter(&nice_label)
         .y_label_formatter(&|v| format!("{v:.0e}"))
@@ -168,24 +174,83 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, study: &Study) -> Resu
     };
     let momentum = collect(&|m, k| m.momentum_error[k]);
     let attitude = collect(&|m, k| m.attitude_error[k]);
+    let axes = |title, y_desc| Axes {
+        title,
+        x_desc: "step h (s)",
+        y_desc,
+        slopes: true,
+    };
     panel(
         &panels[0],
-        "body angular momentum",
-        "|Pi - Pi_ref| / |Pi_ref|",
+        &axes("body angular momentum", "|Pi - Pi_ref| / |Pi_ref|"),
         &momentum,
     )?;
-    panel(&panels[1], "attitude", "||R - R_ref||_F", &attitude)?;
+    panel(&panels[1], &axes("attitude", "||R - R_ref||_F"), &attitude)?;
     root.present().map_err(e)?;
     Ok(())
 }
 
+fn draw_work<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, study: &WorkStudy) -> Result<(), String> {
+    root.fill(&WHITE).map_err(e)?;
+    let title = format!("{}: work-precision to t = {} s", study.problem, study.t_end);
+    let root = root.titled(&title, ("sans-serif", 24)).map_err(e)?;
+    let panels = root.split_evenly((1, 2));
+    let series = |f: &dyn Fn(&crate::work_precision::Point) -> f64| -> Vec<Series> {
+        study
+            .methods
+            .iter()
+            .map(|c| {
+                let pts = c
+                    .points
+                    .iter()
+                    .map(|p| (p.seconds, f(p)))
+                    .filter(|p| p.0 > 0.0 && p.1 > 0.0);
+                (c.label.clone(), pts.collect())
+            })
+            .collect()
+    };
+    let axes = |title, y_desc| Axes {
+        title,
+        x_desc: "CPU time (s), median of repeated runs",
+        y_desc,
+        slopes: false,
+    };
+    panel(
+        &panels[0],
+        &axes("attitude error at t_end", "||R - R_ref||_F"),
+        &series(&|p| p.attitude_error),
+    )?;
+    panel(
+        &panels[1],
+        &axes("largest energy error along the run", "max |E - E0| / |E0|"),
+        &series(&|p| p.max_energy_error),
+    )?;
+    root.present().map_err(e)?;
+    Ok(())
+}
+
+/// A figure the tool can draw.
+pub enum Figure<'a> {
+    /// The convergence study.
+    Convergence(&'a Study),
+    /// The work-precision study.
+    WorkPrecision(&'a WorkStudy),
+}
+
+fn render<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, figure: &Figure) -> Result<(), String> {
+    match figure {
+        Figure::Convergence(s) => draw(root, s),
+        Figure::WorkPrecision(s) => draw_work(root, s),
+    }
+}
+
 /// Write the plot as SVG or PNG, chosen by the extension of `path`.
-pub fn write(path: &Path, study: &Study) -> Result<(), String> {
+pub fn write(path: &Path, figure: &Figure) -> Result<(), String> {
     register_font();
     let size = (1400, 620);
     match path.extension().and_then(|x| x.to_str()) {
-        Some("svg") => draw(SVGBackend::new(path, size).into_drawing_area(), study),
-        Some("png") => draw(BitMapBackend::new(path, size).into_drawing_area(), study),
+        Some("svg") => render(SVGBackend::new(path, size).into_drawing_area(), figure),
+        Some("png") => render(BitMapBackend::new(path, size).into_drawing_area(), figure),
         _ => Err(format!("plot: {}: use a .svg or .png file name", path.display())),
     }
 }

@@ -46,7 +46,7 @@ pub mod so3;
 pub mod vector;
 
 pub use composition::{Composition, Scheme};
-pub use driver::{integrate, integrate_to, step_count, RunSummary};
+pub use driver::{advance, integrate, integrate_to, step_count, RunSummary};
 pub use error::{Error, Result};
 pub use inertia::Inertia;
 pub use linalg::{Mat3, Vec3};

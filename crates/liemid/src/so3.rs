@@ -89,7 +89,33 @@ pub fn exp(v: Vec3) -> Mat3 {
     i_plus_hat_plus_hat2(v, a, b)
 }
 
-/// `exp(v) x` without forming the matrix: `x + a v × x + b v × (v × x)`.
+/// `exp(v) − I = a hat(v) + b hat(v)²`: the increment of a rotation, accurate to a few
+/// ulps of itself (not of the identity), so that updates `R + R (exp(v) − I)` round
+/// relative to the change and not to `R`.
+#[must_use]
+#[inline]
+pub fn exp_increment(v: Vec3) -> Mat3 {
+    let (a, b, _) = coefficients(v.norm_squared());
+    let (x, y, z) = (v.x, v.y, v.z);
+    let (xx, yy, zz) = (x * x, y * y, z * z);
+    Mat3::from_rows([
+        [-b * (yy + zz), b * x * y - a * z, b * x * z + a * y],
+        [b * x * y + a * z, -b * (xx + zz), b * y * z - a * x],
+        [b * x * z - a * y, b * y * z + a * x, -b * (xx + yy)],
+    ])
+}
+
+/// `R exp(v)`, computed as `R + R (exp(v) − I)`: for the small increments of a time step
+/// this rounds relative to the increment, so the attitude does not pick up a systematic
+/// phase drift of an ulp of `R` per step.
+#[must_use]
+#[inline]
+pub fn rotate_right(r: &Mat3, v: Vec3) -> Mat3 {
+    *r + *r * exp_increment(v)
+}
+
+/// `exp(v) x` without forming the matrix: `x + a v × x + b v × (v × x)`; like
+/// [`rotate_right`], it rounds relative to the change of `x`.
 #[must_use]
 #[inline]
 pub fn exp_apply(v: Vec3, x: Vec3) -> Vec3 {
@@ -398,6 +424,11 @@ mod tests {
         // Second-order Taylor expansion at tiny angles, where it is exact to round-off.
         let v = Vec3::new(3e-6, -2e-6, 1e-6);
         let k = hat(v);
+        assert!((exp_increment(v) - (k + k * k * 0.5)).max_abs() < 1e-17);
+        let r = rng.rotation();
+        assert!((rotate_right(&r, v) - r * exp(v)).max_abs() < 4e-16);
+        let x = rng.unit_vector();
+        assert!((exp_apply(v, x) - exp(v) * x).max_abs() < 4e-16);
         let taylor = Mat3::IDENTITY + k + k * k * 0.5;
         assert!((exp(v) - taylor).max_abs() < 3e-16);
         assert_eq!(exp(Vec3::ZERO), Mat3::IDENTITY);

@@ -11,13 +11,13 @@
 
 use super::{check_step, commit, newton_error, RotationIntegrator, TorqueCache};
 use crate::error::Result;
-use crate::linalg::{Mat3, Vec3};
+use crate::linalg::Vec3;
 use crate::midpoint;
 use crate::rigid::{RigidBodySystem, RigidState};
 use crate::so3;
 
-/// Solve (M) for `(P, h)` and return `(Ψ, exp(Ψ))`; errors name the step `(t, step)` that
-/// was being taken.
+/// Solve (M) for `(P, h)` and return `Ψ`; errors name the step `(t, step)` that was being
+/// taken.
 #[inline]
 fn midpoint_rotation(
     method: &'static str,
@@ -25,10 +25,10 @@ fn midpoint_rotation(
     p: Vec3,
     h: f64,
     (t, step): (f64, f64),
-) -> Result<(Vec3, Mat3)> {
+) -> Result<Vec3> {
     let (psi, _) =
         midpoint::solve(inertia, p, h).map_err(|e| newton_error(method, "midpoint equation (M)", t, step, e))?;
-    Ok((psi, so3::exp(psi)))
+    Ok(psi)
 }
 
 /// LIEMID[E2]: explicit midpoint Lie with the torque impulse at the start of the step
@@ -67,8 +67,8 @@ impl RotationIntegrator for LieMidpointE2 {
         let t = state.t;
         let torque = self.cache.torque(system, &state.rotation, t);
         let p = state.pi + torque * h;
-        let (_, q) = midpoint_rotation(self.name(), system.inertia(), p, h, (t, h))?;
-        let next = RigidState::new(t + h, q.tr_mul_vec(p), state.rotation * q);
+        let psi = midpoint_rotation(self.name(), system.inertia(), p, h, (t, h))?;
+        let next = RigidState::new(t + h, so3::exp_apply(-psi, p), so3::rotate_right(&state.rotation, psi));
         commit(self.name(), state, h, next)
     }
     fn reset(&mut self) {
@@ -109,11 +109,11 @@ impl RotationIntegrator for LieMidpointE1 {
     fn step<S: RigidBodySystem + ?Sized>(&mut self, system: &S, state: &mut RigidState, h: f64) -> Result<()> {
         check_step(h)?;
         let t = state.t;
-        let (_, q) = midpoint_rotation(self.name(), system.inertia(), state.pi, h, (t, h))?;
-        let rotation = state.rotation * q;
+        let psi = midpoint_rotation(self.name(), system.inertia(), state.pi, h, (t, h))?;
+        let rotation = so3::rotate_right(&state.rotation, psi);
         let t1 = t + h;
         let torque = system.torque(&rotation, t1);
-        let next = RigidState::new(t1, q.tr_mul_vec(state.pi) + torque * h, rotation);
+        let next = RigidState::new(t1, so3::exp_apply(-psi, state.pi) + torque * h, rotation);
         commit(self.name(), state, h, next)
     }
 }
@@ -158,13 +158,13 @@ impl RotationIntegrator for LieMidpointAlternating {
         let inertia = system.inertia();
         let torque0 = self.cache.torque(system, &state.rotation, t);
         let p = state.pi + torque0 * hh;
-        let (_, q1) = midpoint_rotation(self.name(), inertia, p, hh, (t, h))?;
-        let pi_half = q1.tr_mul_vec(p);
-        let (_, q2) = midpoint_rotation(self.name(), inertia, pi_half, hh, (t, h))?;
-        let rotation = state.rotation * (q1 * q2);
+        let psi1 = midpoint_rotation(self.name(), inertia, p, hh, (t, h))?;
+        let pi_half = so3::exp_apply(-psi1, p);
+        let psi2 = midpoint_rotation(self.name(), inertia, pi_half, hh, (t, h))?;
+        let rotation = so3::rotate_right(&so3::rotate_right(&state.rotation, psi1), psi2);
         let t1 = t + h;
         let torque1 = system.torque(&rotation, t1);
-        let next = RigidState::new(t1, q2.tr_mul_vec(pi_half) + torque1 * hh, rotation);
+        let next = RigidState::new(t1, so3::exp_apply(-psi2, pi_half) + torque1 * hh, rotation);
         commit(self.name(), state, h, next)?;
         self.cache.store(system, &rotation, t1, torque1);
         Ok(())
