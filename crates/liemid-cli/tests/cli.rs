@@ -376,3 +376,60 @@ fn listings_and_help() {
     let o = liemid().arg("frobnicate").output().unwrap();
     assert_eq!(o.status.code(), Some(2));
 }
+
+#[test]
+fn work_precision_reports_errors_times_and_torque_counts() {
+    let dir = scratch("work-precision");
+    let o = run_in(
+        &dir,
+        &[
+            "work-precision",
+            "--methods",
+            "liemid-ea,rk4,dop853",
+            "--max-points",
+            "2",
+            "--budget",
+            "0.05",
+            "--json",
+            "-",
+            "--plot",
+            "wp.svg",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let study = json(&stdout(&o));
+    assert_eq!(study["problem"], "fast-top");
+    assert_eq!(study["repetitions"], 5);
+    let methods = study["methods"].as_array().unwrap();
+    assert_eq!(methods.len(), 3);
+    for m in methods {
+        let points = m["points"].as_array().unwrap();
+        assert_eq!(points.len(), 2, "{}", m["name"]);
+        for p in points {
+            for key in [
+                "attitude_error",
+                "momentum_error",
+                "seconds",
+                "torque_evaluations",
+                "max_energy_error",
+            ] {
+                assert!(p[key].as_f64().unwrap() > 0.0, "{} {key}", m["name"]);
+            }
+            let knob = if m["name"] == "dop853" { "tolerance" } else { "step" };
+            assert!(p[knob].as_f64().is_some(), "{} lacks {knob}", m["name"]);
+        }
+        // Halving the step (or tightening the tolerance) reduces the error.
+        assert!(points[1]["attitude_error"].as_f64() < points[0]["attitude_error"].as_f64());
+    }
+    // EA makes one torque evaluation per step (plus the first); RK4 four.
+    let ea = &methods[0]["points"][0];
+    let steps = liemid::step_count(0.0, 0.8, ea["step"].as_f64().unwrap()).unwrap();
+    assert_eq!(ea["torque_evaluations"].as_u64().unwrap(), steps + 1);
+    let rk4 = &methods[1]["points"][0];
+    let steps = liemid::step_count(0.0, 0.8, rk4["step"].as_f64().unwrap()).unwrap();
+    assert_eq!(rk4["torque_evaluations"].as_u64().unwrap(), 4 * steps);
+    assert_eq!(study["targets"].as_array().unwrap().len(), 3);
+    assert!(dir.join("wp.svg").exists());
+    let o = run_in(&dir, &["work-precision", "--repetitions", "3"]);
+    assert_eq!(o.status.code(), Some(2));
+}

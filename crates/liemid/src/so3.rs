@@ -96,6 +96,46 @@ pub fn exp(v: Vec3) -> Mat3 {
 #[inline]
 pub fn exp_increment(v: Vec3) -> Mat3 {
     let (a, b, _) = coefficients(v.norm_squared());
+    i_plus_hat_plus_hat2_minus_identity(v, a, b)
+}
+
+/// A rotation increment `exp(Ψ)` with its Rodrigues coefficients computed once, for the
+/// updates of a step: `R exp(Ψ)` and `exp(−Ψ) x`, both in increment form.
+#[derive(Clone, Copy, Debug)]
+pub struct Increment {
+    psi: Vec3,
+    a: f64,
+    b: f64,
+}
+
+impl Increment {
+    /// The increment `exp(Ψ)`.
+    #[must_use]
+    #[inline]
+    pub fn new(psi: Vec3) -> Self {
+        let (a, b, _) = coefficients(psi.norm_squared());
+        Increment { psi, a, b }
+    }
+
+    /// `R exp(Ψ) = R + R (exp(Ψ) − I)`.
+    #[must_use]
+    #[inline]
+    pub fn rotate(&self, r: &Mat3) -> Mat3 {
+        *r + *r * i_plus_hat_plus_hat2_minus_identity(self.psi, self.a, self.b)
+    }
+
+    /// `exp(−Ψ) x = x − a Ψ × x + b Ψ × (Ψ × x)`.
+    #[must_use]
+    #[inline]
+    pub fn inverse_apply(&self, x: Vec3) -> Vec3 {
+        let px = self.psi.cross(x);
+        x - px * self.a + self.psi.cross(px) * self.b
+    }
+}
+
+/// `a hat(v) + b hat(v)²`.
+#[inline]
+fn i_plus_hat_plus_hat2_minus_identity(v: Vec3, a: f64, b: f64) -> Mat3 {
     let (x, y, z) = (v.x, v.y, v.z);
     let (xx, yy, zz) = (x * x, y * y, z * z);
     Mat3::from_rows([
@@ -429,6 +469,10 @@ mod tests {
         assert!((rotate_right(&r, v) - r * exp(v)).max_abs() < 4e-16);
         let x = rng.unit_vector();
         assert!((exp_apply(v, x) - exp(v) * x).max_abs() < 4e-16);
+        let w = rng.unit_vector() * 0.3;
+        let inc = Increment::new(w);
+        assert!((inc.rotate(&r) - r * exp(w)).max_abs() < 4e-16);
+        assert!((inc.inverse_apply(x) - exp(-w) * x).max_abs() < 4e-16);
         let taylor = Mat3::IDENTITY + k + k * k * 0.5;
         assert!((exp(v) - taylor).max_abs() < 3e-16);
         assert_eq!(exp(Vec3::ZERO), Mat3::IDENTITY);

@@ -67,8 +67,8 @@ impl RotationIntegrator for LieMidpointE2 {
         let t = state.t;
         let torque = self.cache.torque(system, &state.rotation, t);
         let p = state.pi + torque * h;
-        let psi = midpoint_rotation(self.name(), system.inertia(), p, h, (t, h))?;
-        let next = RigidState::new(t + h, so3::exp_apply(-psi, p), so3::rotate_right(&state.rotation, psi));
+        let inc = so3::Increment::new(midpoint_rotation(self.name(), system.inertia(), p, h, (t, h))?);
+        let next = RigidState::new(t + h, inc.inverse_apply(p), inc.rotate(&state.rotation));
         commit(self.name(), state, h, next)
     }
     fn reset(&mut self) {
@@ -109,11 +109,11 @@ impl RotationIntegrator for LieMidpointE1 {
     fn step<S: RigidBodySystem + ?Sized>(&mut self, system: &S, state: &mut RigidState, h: f64) -> Result<()> {
         check_step(h)?;
         let t = state.t;
-        let psi = midpoint_rotation(self.name(), system.inertia(), state.pi, h, (t, h))?;
-        let rotation = so3::rotate_right(&state.rotation, psi);
+        let inc = so3::Increment::new(midpoint_rotation(self.name(), system.inertia(), state.pi, h, (t, h))?);
+        let rotation = inc.rotate(&state.rotation);
         let t1 = t + h;
         let torque = system.torque(&rotation, t1);
-        let next = RigidState::new(t1, so3::exp_apply(-psi, state.pi) + torque * h, rotation);
+        let next = RigidState::new(t1, inc.inverse_apply(state.pi) + torque * h, rotation);
         commit(self.name(), state, h, next)
     }
 }
@@ -158,13 +158,13 @@ impl RotationIntegrator for LieMidpointAlternating {
         let inertia = system.inertia();
         let torque0 = self.cache.torque(system, &state.rotation, t);
         let p = state.pi + torque0 * hh;
-        let psi1 = midpoint_rotation(self.name(), inertia, p, hh, (t, h))?;
-        let pi_half = so3::exp_apply(-psi1, p);
-        let psi2 = midpoint_rotation(self.name(), inertia, pi_half, hh, (t, h))?;
-        let rotation = so3::rotate_right(&so3::rotate_right(&state.rotation, psi1), psi2);
+        let inc1 = so3::Increment::new(midpoint_rotation(self.name(), inertia, p, hh, (t, h))?);
+        let pi_half = inc1.inverse_apply(p);
+        let inc2 = so3::Increment::new(midpoint_rotation(self.name(), inertia, pi_half, hh, (t, h))?);
+        let rotation = inc2.rotate(&inc1.rotate(&state.rotation));
         let t1 = t + h;
         let torque1 = system.torque(&rotation, t1);
-        let next = RigidState::new(t1, so3::exp_apply(-psi2, pi_half) + torque1 * hh, rotation);
+        let next = RigidState::new(t1, inc2.inverse_apply(pi_half) + torque1 * hh, rotation);
         commit(self.name(), state, h, next)?;
         self.cache.store(system, &rotation, t1, torque1);
         Ok(())
