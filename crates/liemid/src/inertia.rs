@@ -163,3 +163,80 @@ mod tests {
         assert!((d.apply(v) - Vec3::new(1.4, -3.3, 9.2)).max_abs() < 1e-15);
     }
 }
+
+/// What the midpoint solver needs of an inertia tensor: `I v`, `I⁻¹ v`, `I + M` and a bound
+/// of `‖I⁻¹‖`. Implemented by [`Inertia`] and by the compact [`PrincipalInertia`] that
+/// many-body systems store per body.
+pub trait InertiaOperator {
+    /// `I v`.
+    fn apply(&self, v: Vec3) -> Vec3;
+    /// `I⁻¹ v`.
+    fn apply_inverse(&self, v: Vec3) -> Vec3;
+    /// `I + m`.
+    fn plus(&self, m: &Mat3) -> Mat3;
+    /// An upper bound of `‖I⁻¹‖₂`.
+    fn inverse_norm_bound(&self) -> f64;
+}
+
+impl InertiaOperator for Inertia {
+    #[inline]
+    fn apply(&self, v: Vec3) -> Vec3 {
+        Inertia::apply(self, v)
+    }
+    #[inline]
+    fn apply_inverse(&self, v: Vec3) -> Vec3 {
+        Inertia::apply_inverse(self, v)
+    }
+    #[inline]
+    fn plus(&self, m: &Mat3) -> Mat3 {
+        self.matrix + *m
+    }
+    #[inline]
+    fn inverse_norm_bound(&self) -> f64 {
+        self.inverse_norm
+    }
+}
+
+/// A principal inertia tensor stored as its moments and their reciprocals (48 bytes), for
+/// systems of many bodies. Not validated: build it from validated moments.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PrincipalInertia {
+    /// `(I₁, I₂, I₃)`.
+    pub moments: Vec3,
+    /// `(1/I₁, 1/I₂, 1/I₃)`.
+    pub inverse: Vec3,
+}
+
+impl PrincipalInertia {
+    /// From positive moments (checked by the caller).
+    #[must_use]
+    pub fn new(moments: Vec3) -> Self {
+        PrincipalInertia {
+            moments,
+            inverse: Vec3::new(1.0 / moments.x, 1.0 / moments.y, 1.0 / moments.z),
+        }
+    }
+}
+
+impl InertiaOperator for PrincipalInertia {
+    #[inline]
+    fn apply(&self, v: Vec3) -> Vec3 {
+        self.moments.component_mul(v)
+    }
+    #[inline]
+    fn apply_inverse(&self, v: Vec3) -> Vec3 {
+        self.inverse.component_mul(v)
+    }
+    #[inline]
+    fn plus(&self, m: &Mat3) -> Mat3 {
+        let mut r = *m;
+        r.m[0][0] += self.moments.x;
+        r.m[1][1] += self.moments.y;
+        r.m[2][2] += self.moments.z;
+        r
+    }
+    #[inline]
+    fn inverse_norm_bound(&self) -> f64 {
+        self.inverse.max_abs()
+    }
+}

@@ -13,6 +13,9 @@
 //! - [`composition`]: symmetric compositions (Suzuki, Yoshida, Kahan-Li) of EA or Verlet
 //!   up to eighth order.
 //! - [`vector`]: symplectic Euler, its adjoint, Verlet and explicit Newmark on `ℝⁿ`.
+//! - [`many`] and [`interactions`]: N interacting rigid bodies (independent heavy tops,
+//!   dipoles), stepped in parallel by the splitting integrator, identical for any thread
+//!   count.
 //! - [`driver`]: [`integrate`] from `t0` to `t_end` with an observer and diagnostics.
 //! - [`problems`]: the fast and slow Lagrangian tops, a torque-dominated top, a free body,
 //!   and vector-space test problems with exact solutions.
@@ -36,7 +39,9 @@ pub mod composition;
 pub mod driver;
 pub mod error;
 pub mod inertia;
+pub mod interactions;
 pub mod linalg;
+pub mod many;
 pub mod midpoint;
 pub mod problems;
 pub mod random;
@@ -48,7 +53,7 @@ pub mod vector;
 pub use composition::{Composition, Scheme};
 pub use driver::{advance, integrate, integrate_to, step_count, RunSummary};
 pub use error::{Error, Result};
-pub use inertia::Inertia;
+pub use inertia::{Inertia, InertiaOperator, PrincipalInertia};
 pub use linalg::{Mat3, Vec3};
 pub use rigid::{ConstantTorque, Diagnostics, FreeBody, HeavyTop, RigidBodySystem, RigidState, TorqueFn};
 pub use rotation::{

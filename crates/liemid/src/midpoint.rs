@@ -12,7 +12,7 @@
 //! quadratically in 2 to 4 iterations; the iteration stops when the Newton correction is
 //! a few ulps of `|Ψ|`.
 
-use crate::inertia::Inertia;
+use crate::inertia::{Inertia, InertiaOperator};
 use crate::linalg::{Mat3, Vec3};
 use crate::so3;
 
@@ -153,7 +153,7 @@ pub fn solve_with(
 ///
 /// Returns `Ψ` and the number of iterations.
 #[inline]
-pub fn solve(inertia: &Inertia, p: Vec3, h: f64) -> Result<(Vec3, u32), NotConverged> {
+pub fn solve<I: InertiaOperator + ?Sized>(inertia: &I, p: Vec3, h: f64) -> Result<(Vec3, u32), NotConverged> {
     let psi0 = inertia.apply_inverse(p) * h;
     let mut psi = inertia.apply_inverse(p + p.cross(psi0) * 0.5) * h;
     // The stopping rule h|P| |δ|² / λ_min ≤ u |Ψ|, squared to avoid square roots.
@@ -170,7 +170,11 @@ pub fn solve(inertia: &Inertia, p: Vec3, h: f64) -> Result<(Vec3, u32), NotConve
         let jl = so3::i_plus_hat_plus_hat2(v, b, c);
         let s = -0.5 * h;
         let (c0, c1, c2) = (q.cross(jl.col(0)) * s, q.cross(jl.col(1)) * s, q.cross(jl.col(2)) * s);
-        let j = *inertia.matrix() + Mat3::from_rows([[c0.x, c1.x, c2.x], [c0.y, c1.y, c2.y], [c0.z, c1.z, c2.z]]);
+        let j = inertia.plus(&Mat3::from_rows([
+            [c0.x, c1.x, c2.x],
+            [c0.y, c1.y, c2.y],
+            [c0.z, c1.z, c2.z],
+        ]));
         let Some(delta) = j.solve_adjugate(g) else {
             break;
         };

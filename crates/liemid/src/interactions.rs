@@ -1,0 +1,377 @@
+//! Built-in [`Interaction`]s for many-body systems: independent bodies in uniform gravity,
+//! and point dipoles with short-range repulsion.
+
+use std::sync::Mutex;
+
+use crate::linalg::{Mat3, Vec3};
+use crate::many::{Configuration, Interaction, CHUNK};
+
+/// Each body on its own: a free body feels `F = m g`; a rotor (fixed point) feels the
+/// gravity torque about its pivot `T = X × (Rᵀ m g)`, with `X` the centre of mass in the
+/// body frame. With `g = 0`, torque-free bodies.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Independent {
+    /// Gravity (spatial).
+    pub gravity: Vec3,
+    /// Centre of mass of the rotors in their body frame, from the pivot.
+    pub center_of_mass: Vec3,
+}
+
+impl Independent {
+    /// Torque-free bodies.
+    #[must_use]
+    pub fn torque_free() -> Self {
+        Independent {
+            gravity: Vec3::ZERO,
+            center_of_mass: Vec3::ZERO,
+        }
+    }
+}
+
+fn for_chunks(force: &mut [Vec3], torque: &mut [Vec3], f: impl Fn(usize, &mut Vec3, &mut Vec3) + Sync + Send) {
+    #[cfg(feature = "parallel")]
+    {
+        use rayon::prelude::*;
+        force
+            .par_chunks_mut(CHUNK)
+            .zip(torque.par_chunks_mut(CHUNK))
+            .enumerate()
+            .for_each(|(k, (fs, ts))| {
+                for (j, (fo, to)) in fs.iter_mut().zip(ts.iter_mut()).enumerate() {
+                    f(k * CHUNK + j, fo, to);
+                }
+            });
+    }
+    #[cfg(not(feature = "parallel"))]
+    for (i, (fo, to)) in force.iter_mut().zip(torque.iter_mut()).enumerate() {
+        f(i, fo, to);
+    }
+}
+
+impl Interaction for Independent {
+    fn compute(&self, c: Configuration<'_>, force: &mut [Vec3], torque: &mut [Vec3]) {
+        let (g, x) = (self.gravity, self.center_of_mass);
+        for_chunks(force, torque, |i, f, t| {
+            let w = g * c.mass[i];
+            if c.free[i] {
+                *f = w;
+                *t = Vec3::ZERO;
+            } else {
+                *f = Vec3::ZERO;
+                *t = x.cross(c.rotation[i].tr_mul_vec(w));
+            }
+        });
+    }
+    fn potential_energy(&self, c: Configuration<'_>) -> f64 {
+        (0..c.mass.len())
+            .map(|i| {
+                let w = self.gravity * c.mass[i];
+                if c.free[i] {
+                    -w.dot(c.position[i])
+                } else {
+                    -w.dot(c.rotation[i] * self.center_of_mass)
+                }
+            })
+            .sum()
+    }
+}
+
+/// Point dipoles fixed in the body frames, with the Weeks-Chandler-Andersen repulsion:
+///
+/// ```text
+/// U_dd = (μᵢ·μⱼ)/r³ − 3 (μᵢ·r)(μⱼ·r)/r⁵,   μᵢ = Rᵢ m
+/// U_wca = 4ε[(σ/r)¹² − (σ/r)⁶] + ε   for r < 2^{1/6} σ
+/// ```
+///
+/// (Gaussian units). Forces are gathered per body from its neighbours within the cutoff
+/// (all pairs without one), found with a cell list, optionally in a periodic cubic box
+/// (minimum image). The pair force is written symmetrically, so `F_ji = −F_ij` bit for bit
+/// and the total momentum is kept to round-off.
+#[derive(Debug)]
+pub struct Dipoles {
+    /// The dipole moment in the body frame.
+    pub moment: Vec3,
+    /// WCA diameter σ.
+    pub sigma: f64,
+    /// WCA energy ε.
+    pub epsilon: f64,
+    /// Interaction cutoff (none: all pairs).
+    pub cutoff: Option<f64>,
+    /// Side of the periodic box (none: open space).
+    pub box_length: Option<f64>,
+    scratch: Mutex<Scratch>,
+}
+
+#[derive(Debug, Default)]
+struct Scratch {
+    dipoles: Vec<Vec3>,
+    cell_start: Vec<usize>,
+    sorted: Vec<usize>,
+    cell_of: Vec<usize>,
+    fill: Vec<usize>,
+}
+
+/// A cell list over the bodies' bounding box (or the periodic box).
+struct Cells<'a> {
+    n: [usize; 3],
+    origin: Vec3,
+    size: f64,
+    periodic: bool,
+    start: &'a [usize],
+    sorted: &'a [usize],
+}
+
+impl Dipoles {
+    /// Dipoles `moment` (body frame) with WCA `(σ, ε)`, an optional cutoff and periodic box.
+    pub fn new(
+        moment: Vec3,
+        sigma: f64,
+        epsilon: f64,
+        cutoff: Option<f64>,
+        box_length: Option<f64>,
+    ) -> crate::Result<Self> {
+        for (name, v) in [("sigma", sigma), ("epsilon", epsilon)] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(crate::Error::InvalidParameter {
+                    name,
+                    value: v,
+                    reason: "must be finite and non-negative",
+                });
+            }
+        }
+        if let Some(c) = cutoff {
+            if !(c.is_finite() && c > 0.0) {
+                return Err(crate::Error::InvalidParameter {
+                    name: "cutoff",
+                    value: c,
+                    reason: "must be finite and positive",
+                });
+            }
+        }
+        if let Some(l) = box_length {
+            let c = cutoff.unwrap_or(f64::INFINITY);
+            if !(l.is_finite() && l > 0.0 && 2.0 * c <= l) {
+                return Err(crate::Error::InvalidParameter {
+                    name: "box_length",
+                    value: l,
+                    reason: "must be finite, positive and at least twice the cutoff (minimum image)",
+                });
+            }
+        }
+        Ok(Dipoles {
+            moment,
+            sigma,
+            epsilon,
+            cutoff,
+            box_length,
+            scratch: Mutex::new(Scratch::default()),
+        })
+    }
+
+    #[inline]
+    fn separation(&self, a: Vec3, b: Vec3) -> Vec3 {
+        let mut r = a - b;
+        if let Some(l) = self.box_length {
+            r = Vec3::new(
+                r.x - l * (r.x / l).round(),
+                r.y - l * (r.y / l).round(),
+                r.z - l * (r.z / l).round(),
+            );
+        }
+        r
+    }
+
+    /// Force on `i` from `j` (spatial), the field of `j` at `i`, and the pair energy, for
+    /// separation `r = xᵢ − xⱼ`; `None` beyond the cutoff.
+    #[inline]
+    fn pair(&self, r: Vec3, mi: Vec3, mj: Vec3) -> Option<(Vec3, Vec3, f64)> {
+        let r2 = r.norm_squared();
+        if let Some(c) = self.cutoff {
+            if r2 > c * c {
+                return None;
+            }
+        }
+        let inv2 = 1.0 / r2;
+        let inv = inv2.sqrt();
+        let inv3 = inv * inv2;
+        let inv5 = inv3 * inv2;
+        let (a, b, ab) = (mi.dot(r), mj.dot(r), mi.dot(mj));
+        let prod = a * b;
+        // Symmetric in (i, j): swapping them and negating r negates the force exactly.
+        let force = (r * (ab - 5.0 * prod * inv2) + (mj * a + mi * b)) * (3.0 * inv5);
+        let field = (r * (3.0 * b * inv2) - mj) * inv3;
+        let mut energy = ab * inv3 - 3.0 * prod * inv5;
+        let mut total = force;
+        let s2 = self.sigma * self.sigma * inv2;
+        if s2 > 2f64.powf(-1.0 / 3.0) {
+            let s6 = s2 * s2 * s2;
+            total += r * (24.0 * self.epsilon * (2.0 * s6 * s6 - s6) * inv2);
+            energy += 4.0 * self.epsilon * (s6 * s6 - s6) + self.epsilon;
+        }
+        Some((total, field, energy))
+    }
+
+    fn build_cells<'a>(&self, c: &Configuration<'_>, s: &'a mut Scratch) -> Option<Cells<'a>> {
+        let cutoff = self.cutoff?;
+        let n_bodies = c.position.len();
+        let (origin, extent, periodic) = match self.box_length {
+            Some(l) => (Vec3::ZERO, Vec3::new(l, l, l), true),
+            None => {
+                let mut lo = Vec3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY);
+                let mut hi = -lo;
+                for p in c.position {
+                    lo = Vec3::new(lo.x.min(p.x), lo.y.min(p.y), lo.z.min(p.z));
+                    hi = Vec3::new(hi.x.max(p.x), hi.y.max(p.y), hi.z.max(p.z));
+                }
+                (lo, hi - lo, false)
+            }
+        };
+        // Cells at least as wide as the cutoff, at most 64 a side.
+        let size = if periodic {
+            let k = ((extent.x / cutoff).floor() as usize).min(64);
+            if k < 3 {
+                return None;
+            }
+            extent.x / k as f64
+        } else {
+            cutoff.max(extent.max_abs() / 64.0)
+        };
+        let count = |e: f64| ((e / size).floor() as usize).clamp(1, 64);
+        let n = if periodic {
+            let k = (extent.x / size).round() as usize;
+            [k, k, k]
+        } else {
+            [count(extent.x), count(extent.y), count(extent.z)]
+        };
+        let ncells = n[0] * n[1] * n[2];
+        let cell = |p: Vec3| {
+            let q = p - origin;
+            let idx = |v: f64, k: usize| {
+                let v = if periodic {
+                    v - (v / (k as f64 * size)).floor() * (k as f64 * size)
+                } else {
+                    v
+                };
+                ((v / size) as usize).min(k - 1)
+            };
+            (idx(q.z, n[2]) * n[1] + idx(q.y, n[1])) * n[0] + idx(q.x, n[0])
+        };
+        s.cell_of.clear();
+        s.cell_of.extend(c.position.iter().map(|&p| cell(p)));
+        s.cell_start.clear();
+        s.cell_start.resize(ncells + 1, 0);
+        for &k in &s.cell_of {
+            s.cell_start[k + 1] += 1;
+        }
+        for k in 0..ncells {
+            s.cell_start[k + 1] += s.cell_start[k];
+        }
+        s.sorted.clear();
+        s.sorted.resize(n_bodies, 0);
+        s.fill.clear();
+        s.fill.extend_from_slice(&s.cell_start);
+        for (i, &k) in s.cell_of.iter().enumerate() {
+            s.sorted[s.fill[k]] = i;
+            s.fill[k] += 1;
+        }
+        Some(Cells {
+            n,
+            origin,
+            size,
+            periodic,
+            start: &s.cell_start,
+            sorted: &s.sorted,
+        })
+    }
+
+    /// Visit the neighbours `j ≠ i` of `i` in a fixed order.
+    fn for_neighbours(&self, i: usize, c: &Configuration<'_>, cells: Option<&Cells<'_>>, mut f: impl FnMut(usize)) {
+        let Some(cells) = cells else {
+            for j in 0..c.position.len() {
+                if j != i {
+                    f(j);
+                }
+            }
+            return;
+        };
+        let q = c.position[i] - cells.origin;
+        let n = cells.n;
+        let home = |v: f64, k: usize| {
+            let span = k as f64 * cells.size;
+            let v = if cells.periodic {
+                v - (v / span).floor() * span
+            } else {
+                v
+            };
+            ((v / cells.size) as isize).min(k as isize - 1)
+        };
+        let (cx, cy, cz) = (home(q.x, n[0]), home(q.y, n[1]), home(q.z, n[2]));
+        let wrap = |v: isize, k: usize| -> Option<usize> {
+            if cells.periodic {
+                Some(v.rem_euclid(k as isize) as usize)
+            } else if v < 0 || v >= k as isize {
+                None
+            } else {
+                Some(v as usize)
+            }
+        };
+        for dz in -1..=1 {
+            let Some(z) = wrap(cz + dz, n[2]) else { continue };
+            for dy in -1..=1 {
+                let Some(y) = wrap(cy + dy, n[1]) else { continue };
+                for dx in -1..=1 {
+                    let Some(x) = wrap(cx + dx, n[0]) else { continue };
+                    let k = (z * n[1] + y) * n[0] + x;
+                    for &j in &cells.sorted[cells.start[k]..cells.start[k + 1]] {
+                        if j != i {
+                            f(j);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+impl Interaction for Dipoles {
+    fn compute(&self, c: Configuration<'_>, force: &mut [Vec3], torque: &mut [Vec3]) {
+        let mut guard = self.scratch.lock().expect("not poisoned");
+        let s = &mut *guard;
+        s.dipoles.clear();
+        s.dipoles.extend(c.rotation.iter().map(|r: &Mat3| *r * self.moment));
+        let dipoles = std::mem::take(&mut s.dipoles);
+        let cells = self.build_cells(&c, s);
+        for_chunks(force, torque, |i, f, t| {
+            let mi = dipoles[i];
+            let (mut fi, mut bi) = (Vec3::ZERO, Vec3::ZERO);
+            self.for_neighbours(i, &c, cells.as_ref(), |j| {
+                let r = self.separation(c.position[i], c.position[j]);
+                if let Some((fij, field, _)) = self.pair(r, mi, dipoles[j]) {
+                    fi += fij;
+                    bi += field;
+                }
+            });
+            *f = fi;
+            *t = c.rotation[i].tr_mul_vec(mi.cross(bi));
+        });
+        s.dipoles = dipoles;
+    }
+
+    fn potential_energy(&self, c: Configuration<'_>) -> f64 {
+        let dipoles: Vec<Vec3> = c.rotation.iter().map(|r| *r * self.moment).collect();
+        let mut guard = self.scratch.lock().expect("not poisoned");
+        let cells = self.build_cells(&c, &mut guard);
+        let mut energy = 0.0;
+        for i in 0..c.position.len() {
+            self.for_neighbours(i, &c, cells.as_ref(), |j| {
+                if j > i {
+                    let r = self.separation(c.position[i], c.position[j]);
+                    if let Some((_, _, e)) = self.pair(r, dipoles[i], dipoles[j]) {
+                        energy += e;
+                    }
+                }
+            });
+        }
+        energy
+    }
+}

@@ -1,0 +1,192 @@
+//! Many-body systems: the splitting integrator against LIEMID[EA], momentum conservation
+//! of an isolated dipolar cluster, thread-count independence, and the dipole forces and
+//! torques against finite differences of the energy.
+
+use liemid::interactions::{Dipoles, Independent};
+use liemid::many::{Bodies, Interaction};
+use liemid::random::Rng;
+use liemid::{problems, so3, LieMidpointAlternating, Mat3, RotationIntegrator, Vec3};
+
+/// `n` free dipolar spheres on a jittered cubic lattice of spacing `a`, random attitudes,
+/// random momenta and spins.
+fn dipolar_cluster(side: usize, a: f64, seed: u64) -> Bodies {
+    let mut rng = Rng::new(seed);
+    let mut b = Bodies::new();
+    for i in 0..side * side * side {
+        let (x, y, z) = (i % side, (i / side) % side, i / (side * side));
+        let jitter = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 0.05;
+        let pos = Vec3::new(x as f64, y as f64, z as f64) * a + jitter;
+        let p = Vec3::new(rng.normal(), rng.normal(), rng.normal()) * 0.3;
+        let pi = Vec3::new(rng.normal(), rng.normal(), rng.normal()) * 0.05;
+        b.push(1.0, Vec3::new(0.1, 0.1, 0.1), true, pos, p, rng.rotation(), pi)
+            .unwrap();
+    }
+    b
+}
+
+#[test]
+fn splitting_for_one_body_is_liemid_ea() {
+    let top = problems::fast_top();
+    let mut bodies = Bodies::new();
+    let moments = top.system.inertia.principal_moments().unwrap();
+    bodies
+        .push(
+            top.system.mass,
+            moments,
+            false,
+            Vec3::ZERO,
+            Vec3::ZERO,
+            top.initial.rotation,
+            top.initial.pi,
+        )
+        .unwrap();
+    let gravity = Independent {
+        gravity: top.system.gravity,
+        center_of_mass: top.system.center_of_mass,
+    };
+    let mut ea = LieMidpointAlternating::new();
+    let mut state = top.initial;
+    for _ in 0..1000 {
+        bodies.step(&gravity, 1e-4).unwrap();
+        ea.step(&top.system, &mut state, 1e-4).unwrap();
+    }
+    let dp = (bodies.pi[0] - state.pi).max_abs() / state.pi.norm();
+    let dr = (bodies.rotation[0] - state.rotation).max_abs();
+    assert!(dp <= 1e-15 && dr <= 1e-15, "splitting vs EA: {dp:e} {dr:e}");
+}
+
+#[test]
+fn isolated_dipoles_keep_momenta_to_round_off_and_energy_bounded() {
+    let dipoles = Dipoles::new(Vec3::new(0.0, 0.0, 1.0), 1.0, 1.0, None, None).unwrap();
+    let mut b = dipolar_cluster(3, 1.3, 1);
+    b.evaluate(&dipoles);
+    let start = b.totals(&dipoles);
+    let p_scale: f64 = b.momentum.iter().map(|p| p.norm()).sum();
+    let l_scale: f64 = (0..b.len())
+        .map(|i| b.position[i].cross(b.momentum[i]).norm() + (b.rotation[i] * b.pi[i]).norm())
+        .sum();
+    let steps = 10_000;
+    let (mut first, mut last, mut dp, mut dl) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    for k in 0..steps {
+        b.step(&dipoles, 1e-3).unwrap();
+        let now = b.totals(&dipoles);
+        dp = dp.max((now.linear_momentum - start.linear_momentum).norm() / p_scale);
+        dl = dl.max((now.angular_momentum - start.angular_momentum).norm() / l_scale);
+        let de = ((now.energy - start.energy) / start.energy).abs();
+        if k < steps / 10 {
+            first = first.max(de);
+        } else if k >= steps - steps / 10 {
+            last = last.max(de);
+        }
+    }
+    println!("dipoles: |ΔP| {dp:.2e}, |ΔL| {dl:.2e}, energy error first tenth {first:.2e}, last {last:.2e}");
+    assert!(dp < 1e-12 && dl < 1e-12, "momenta drifted: {dp:e} {dl:e}");
+    // Symplectic: bounded energy error without drift (the cluster is chaotic, so allow
+    // the oscillation amplitude to vary by a factor 3 rather than demand equality).
+    assert!(last < 3.0 * first && last < 1e-4, "energy error {first:e} -> {last:e}");
+}
+
+fn run_with_threads(threads: usize) -> Bodies {
+    let dipoles = Dipoles::new(Vec3::new(0.0, 0.0, 1.0), 1.0, 1.0, Some(3.0), Some(9.1)).unwrap();
+    let mut b = Bodies::new();
+    let mut rng = Rng::new(7);
+    for i in 0..729 {
+        let (x, y, z) = (i % 9, (i / 9) % 9, i / 81);
+        let pos = Vec3::new(x as f64, y as f64, z as f64) * (9.1 / 9.0);
+        let p = Vec3::new(rng.normal(), rng.normal(), rng.normal()) * 0.5;
+        b.push(1.0, Vec3::new(0.1, 0.1, 0.1), true, pos, p, rng.rotation(), Vec3::ZERO)
+            .unwrap();
+    }
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+    pool.install(|| {
+        for _ in 0..20 {
+            b.step(&dipoles, 2e-3).unwrap();
+        }
+    });
+    b
+}
+
+#[test]
+fn results_are_identical_for_one_and_two_threads() {
+    let a = run_with_threads(1);
+    let b = run_with_threads(2);
+    assert!(a.len() > 2 * liemid::many::CHUNK);
+    assert!(
+        a.position == b.position && a.momentum == b.momentum,
+        "translation differs"
+    );
+    assert!(a.rotation == b.rotation && a.pi == b.pi, "rotation differs");
+    assert!(a.force == b.force && a.torque == b.torque, "forces differ");
+    // And the bodies did move.
+    assert!(a.position[0] != Vec3::ZERO);
+}
+
+#[test]
+fn dipole_forces_and_torques_are_the_gradients_of_the_energy() {
+    for (cutoff, box_length) in [(None, None), (Some(2.5), Some(5.2))] {
+        let dipoles = Dipoles::new(Vec3::new(0.3, -0.2, 1.0), 1.0, 1.0, cutoff, box_length).unwrap();
+        let mut b = dipolar_cluster(3, 1.15, 3);
+        b.evaluate(&dipoles);
+        let energy = |b: &Bodies| dipoles.potential_energy(b.configuration());
+        let eps = 1e-6;
+        let mut worst: f64 = 0.0;
+        for i in [0, 4, 13, 26] {
+            for k in 0..3 {
+                let mut e = [0.0; 3];
+                e[k] = eps;
+                let d = Vec3::from_array(e);
+                let (mut plus, mut minus) = (b.clone(), b.clone());
+                plus.position[i] += d;
+                minus.position[i] -= d;
+                let fd_force = -(energy(&plus) - energy(&minus)) / (2.0 * eps);
+                let (mut plus, mut minus) = (b.clone(), b.clone());
+                plus.rotation[i] = so3::rotate_right(&b.rotation[i], d);
+                minus.rotation[i] = so3::rotate_right(&b.rotation[i], -d);
+                let fd_torque = -(energy(&plus) - energy(&minus)) / (2.0 * eps);
+                let (f, t) = (b.force[i][k], b.torque[i][k]);
+                let scale = 1.0 + b.force[i].max_abs() + b.torque[i].max_abs();
+                worst = worst
+                    .max((fd_force - f).abs() / scale)
+                    .max((fd_torque - t).abs() / scale);
+            }
+        }
+        // Central differences: O(ε²) truncation and O(u |U| / ε) round-off, about 1e-8.
+        assert!(
+            worst < 1e-6,
+            "cutoff {cutoff:?}: finite differences differ by {worst:e}"
+        );
+    }
+}
+
+#[test]
+fn torque_free_bodies_keep_their_spin_magnitudes() {
+    let mut rng = Rng::new(5);
+    let mut b = Bodies::new();
+    for _ in 0..300 {
+        let moments = Vec3::new(1.0 + rng.uniform(), 2.0 + rng.uniform(), 3.0 + rng.uniform());
+        let pi = rng.unit_vector() * 10.0;
+        b.push(1.0, moments, false, Vec3::ZERO, Vec3::ZERO, rng.rotation(), pi)
+            .unwrap();
+    }
+    let free = Independent::torque_free();
+    let spatial: Vec<Vec3> = (0..b.len()).map(|i| b.rotation[i] * b.pi[i]).collect();
+    for _ in 0..1000 {
+        b.step(&free, 1e-2).unwrap();
+    }
+    for (i, s) in spatial.iter().enumerate() {
+        assert!(((b.pi[i].norm() - 10.0) / 10.0).abs() < 1e-13);
+        assert!((b.rotation[i] * b.pi[i] - *s).max_abs() < 1e-12);
+    }
+    let bad = b.step(&free, f64::NAN).unwrap_err();
+    assert!(matches!(bad, liemid::Error::InvalidStep { .. }));
+    let e = b.push(
+        -1.0,
+        Vec3::new(1.0, 1.0, 1.0),
+        true,
+        Vec3::ZERO,
+        Vec3::ZERO,
+        Mat3::IDENTITY,
+        Vec3::ZERO,
+    );
+    assert!(e.is_err());
+}
