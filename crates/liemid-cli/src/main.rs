@@ -3,6 +3,7 @@
 
 mod baseline;
 mod converge;
+mod many_cmd;
 mod output;
 mod plot;
 mod scenario;
@@ -58,6 +59,12 @@ enum Command {
         liemid work-precision --methods liemid-ea,liemid-ea8,rk4,dop853 --json wp.json"
     )]
     WorkPrecision(WorkPrecisionArgs),
+    /// Step N interacting rigid bodies in parallel; throughput and conservation.
+    #[command(
+        after_help = "Examples:\n  liemid many --model torque-free --bodies 1000000 --t-end 0.01\n  \
+        liemid many --model dipoles --bodies 4000 --t-end 1 --threads 2 --json -"
+    )]
+    Many(many_cmd::ManyArgs),
     /// List the integrators: name, order, torque evaluations, what they conserve.
     Methods,
     /// List the built-in problems.
@@ -181,6 +188,9 @@ fn main() -> ExitCode {
         Command::Run(args) => run(args),
         Command::Converge(args) => converge_cmd(args),
         Command::WorkPrecision(args) => work_precision_cmd(args),
+        Command::Many(args) => {
+            many_cmd::many(&args).map_err(|(code, m)| if code == 2 { Failure::Input(m) } else { Failure::Run(m) })
+        }
         Command::Methods => {
             methods();
             Ok(())

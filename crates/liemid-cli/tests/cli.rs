@@ -433,3 +433,57 @@ fn work_precision_reports_errors_times_and_torque_counts() {
     let o = run_in(&dir, &["work-precision", "--repetitions", "3"]);
     assert_eq!(o.status.code(), Some(2));
 }
+
+#[test]
+fn many_reports_throughput_and_conservation() {
+    let dir = scratch("many");
+    let o = run_in(
+        &dir,
+        &[
+            "many",
+            "--model",
+            "dipoles",
+            "--bodies",
+            "64",
+            "--density",
+            "0.5",
+            "--t-end",
+            "0.05",
+            "--threads",
+            "2",
+            "--json",
+            "-",
+            "--out",
+            "totals.csv",
+            "--every",
+            "5",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = json(&stdout(&o));
+    assert_eq!(s["bodies"], 64);
+    assert_eq!(s["steps"], 50);
+    assert_eq!(s["threads"], 2);
+    assert!(s["body_steps_per_second"].as_f64().unwrap() > 0.0);
+    assert!(s["bytes_per_body"].as_u64().unwrap() <= 256);
+    // 64 dipoles at this density live in open space (box below twice the cutoff): all
+    // pairs, so total linear and angular momentum are kept to round-off.
+    for key in ["linear_momentum_change", "angular_momentum_change"] {
+        for v in s[key].as_array().unwrap() {
+            assert!(v.as_f64().unwrap().abs() < 1e-11, "{key}: {v}");
+        }
+    }
+    let text = std::fs::read_to_string(dir.join("totals.csv")).unwrap();
+    assert_eq!(text.lines().count(), 1 + 50 / 5 + 1);
+    let o = run_in(
+        &dir,
+        &["many", "--model", "torque-free", "--bodies", "1000", "--t-end", "0.01"],
+    );
+    assert!(
+        o.status.success() && stdout(&o).contains("body-steps/s"),
+        "{}",
+        stderr(&o)
+    );
+    let o = run_in(&dir, &["many", "--step=-1"]);
+    assert_eq!(o.status.code(), Some(2));
+}

@@ -1,1 +1,65 @@
-fn main() {}
+//! Throughput of the many-body splitting integrator, in body-steps per second, with 1 and 2
+//! threads, against the memory-bandwidth floor of copying the state arrays once.
+//!
+//! `cargo bench -p liemid --bench many`
+
+use std::time::Duration;
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use liemid::many::Bodies;
+use liemid::problems;
+
+/// Copy every state array of `b` into `into`: the least any step must move through memory.
+fn copy_state(b: &Bodies, into: &mut Bodies) {
+    into.mass.copy_from_slice(&b.mass);
+    into.inertia.copy_from_slice(&b.inertia);
+    into.free.copy_from_slice(&b.free);
+    into.position.copy_from_slice(&b.position);
+    into.momentum.copy_from_slice(&b.momentum);
+    into.rotation.copy_from_slice(&b.rotation);
+    into.pi.copy_from_slice(&b.pi);
+    into.force.copy_from_slice(&b.force);
+    into.torque.copy_from_slice(&b.torque);
+}
+
+fn throughput(c: &mut Criterion) {
+    let mut group = c.benchmark_group("many");
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(3));
+    for n in [100usize, 10_000, 1_000_000] {
+        group.throughput(Throughput::Elements(n as u64));
+        let (bodies, free) = problems::torque_free_ensemble(n, 1);
+        let mut copy = bodies.clone();
+        group.bench_with_input(BenchmarkId::new("copy floor", n), &n, |b, _| {
+            b.iter(|| copy_state(&bodies, &mut copy))
+        });
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let mut state = bodies.clone();
+            group.bench_with_input(
+                BenchmarkId::new(format!("torque-free, {threads} threads"), n),
+                &n,
+                |b, _| b.iter(|| pool.install(|| state.step(&free, 1e-3).unwrap())),
+            );
+        }
+    }
+    for n in [1000usize, 10_000] {
+        group.throughput(Throughput::Elements(n as u64));
+        let (bodies, dipoles) = problems::dipolar_fluid(n, 0.3, 1).unwrap();
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let mut state = bodies.clone();
+            group.bench_with_input(
+                BenchmarkId::new(format!("dipoles, {threads} threads"), n),
+                &n,
+                |b, _| b.iter(|| pool.install(|| state.step(&dipoles, 1e-3).unwrap())),
+            );
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, throughput);
+criterion_main!(benches);

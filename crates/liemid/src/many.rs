@@ -1,9 +1,9 @@
 //! Many interacting rigid bodies, stepped in parallel with results independent of the
 //! thread count.
 //!
-//! [`Bodies`] stores N bodies structure-of-arrays (249 bytes per body: mass, principal
-//! inertia and its reciprocal, joint, position, linear momentum, attitude, body angular
-//! momentum, and the force and torque of the last evaluation). An [`Interaction`] computes
+//! [`Bodies`] stores N bodies structure-of-arrays ([`BYTES_PER_BODY`] = 249 bytes per body:
+//! mass, principal inertia and its reciprocal, joint, position, linear momentum, attitude,
+//! body angular momentum, and the force and torque of the last evaluation). An [`Interaction`] computes
 //! every force (spatial) and torque (body frame) from the positions and attitudes.
 //!
 //! [`Bodies::step`] is the splitting integrator built from the paper's pieces, with one
@@ -69,8 +69,7 @@ pub const BYTES_PER_BODY: usize = std::mem::size_of::<f64>()
     + std::mem::size_of::<PrincipalInertia>()
     + std::mem::size_of::<bool>()
     + 5 * std::mem::size_of::<Vec3>()
-    + std::mem::size_of::<Mat3>()
-    + std::mem::size_of::<Vec3>();
+    + std::mem::size_of::<Mat3>();
 
 /// Read-only view of a configuration, for interactions.
 #[derive(Clone, Copy, Debug)]
