@@ -23,12 +23,16 @@ pub enum Model {
 /// Arguments of `liemid many`.
 #[derive(clap::Args, Debug)]
 pub struct ManyArgs {
-    /// The interaction model.
-    #[arg(long, value_enum, default_value = "independent")]
-    pub model: Model,
-    /// Number of bodies.
-    #[arg(long, default_value_t = 1000, value_parser = clap::value_parser!(u64).range(1..))]
-    pub bodies: u64,
+    /// Scenario file (TOML) with `[system] model, bodies, seed, density`,
+    /// `[integrator] step, t_end` and `[output] path, every`; command-line options win.
+    #[arg(long)]
+    pub scenario: Option<PathBuf>,
+    /// The interaction model [default: independent].
+    #[arg(long, value_enum)]
+    pub model: Option<Model>,
+    /// Number of bodies [default: 1000].
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    pub bodies: Option<u64>,
     /// End time [default: 0.01 for tops, 0.1 torque-free, 1 for dipoles].
     #[arg(long)]
     pub t_end: Option<f64>,
@@ -38,25 +42,126 @@ pub struct ManyArgs {
     /// Threads [default: all cores]; results are identical for any count.
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     pub threads: Option<u64>,
-    /// Seed of the initial conditions.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Number density of the dipolar fluid.
-    #[arg(long, default_value_t = 0.3)]
-    pub density: f64,
+    /// Seed of the initial conditions [default: 1].
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Number density of the dipolar fluid [default: 0.3].
+    #[arg(long)]
+    pub density: Option<f64>,
     /// Write the summary as JSON to FILE, or to standard output with `-`.
     #[arg(long)]
     pub json: Option<String>,
     /// Write the totals (t, energy, P, L) every `--every` steps to this CSV file.
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Interval of the totals file, in steps.
-    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u64).range(1..))]
-    pub every: u64,
+    /// Interval of the totals file, in steps [default: 10].
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    pub every: Option<u64>,
+}
+
+/// The settings of a run, from the scenario file and the command line.
+struct Settings {
+    model: Model,
+    bodies: usize,
+    seed: u64,
+    density: f64,
+    step: Option<f64>,
+    t_end: Option<f64>,
+    out: Option<PathBuf>,
+    every: u64,
+}
+
+fn settings(args: &ManyArgs) -> Result<Settings, String> {
+    let mut s = Settings {
+        model: Model::Independent,
+        bodies: 1000,
+        seed: 1,
+        density: 0.3,
+        step: None,
+        t_end: None,
+        out: None,
+        every: 10,
+    };
+    if let Some(path) = &args.scenario {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| format!("{file}: cannot read: {e}"))?;
+        let mut parse = || -> Result<(), String> {
+            let root = crate::scenario::parse_table(&text)?;
+            for key in root.keys() {
+                if !["system", "integrator", "output"].contains(&key.as_str()) {
+                    return Err(format!(
+                        "unknown section or key `{key}` (sections: system, integrator, output)"
+                    ));
+                }
+            }
+            use crate::scenario::Section;
+            if let Some(sys) = Section::new(&root, "system", &["model", "bodies", "seed", "density"], true)? {
+                if let Some(m) = sys.string("model")? {
+                    s.model = match m {
+                        "independent" => Model::Independent,
+                        "torque-free" => Model::TorqueFree,
+                        "dipoles" => Model::Dipoles,
+                        other => {
+                            return Err(sys.err(
+                                "model",
+                                format!("unknown model \"{other}\" (independent, torque-free, dipoles)"),
+                            ))
+                        }
+                    };
+                }
+                if let Some(n) = sys.count("bodies")? {
+                    s.bodies = n as usize;
+                }
+                if let Some(n) = sys.count("seed")? {
+                    s.seed = n;
+                }
+                if let Some(d) = sys.number("density")? {
+                    s.density = d;
+                }
+            }
+            if let Some(integ) = Section::new(&root, "integrator", &["step", "t_end"], false)? {
+                s.step = integ.number("step")?;
+                s.t_end = integ.number("t_end")?;
+            }
+            if let Some(out) = Section::new(&root, "output", &["path", "every"], false)? {
+                s.out = out.string("path")?.map(PathBuf::from);
+                if let Some(e) = out.count("every")? {
+                    s.every = e;
+                }
+            }
+            Ok(())
+        };
+        parse().map_err(|e| format!("{file}: {e}"))?;
+    }
+    if let Some(m) = args.model {
+        s.model = m;
+    }
+    if let Some(n) = args.bodies {
+        s.bodies = n as usize;
+    }
+    if let Some(v) = args.seed {
+        s.seed = v;
+    }
+    if let Some(v) = args.density {
+        s.density = v;
+    }
+    if args.step.is_some() {
+        s.step = args.step;
+    }
+    if args.t_end.is_some() {
+        s.t_end = args.t_end;
+    }
+    if args.out.is_some() {
+        s.out = args.out.clone();
+    }
+    if let Some(e) = args.every {
+        s.every = e;
+    }
+    Ok(s)
 }
 
 fn run_model<I: Interaction>(
-    args: &ManyArgs,
+    args: &Settings,
     mut bodies: Bodies,
     model: &I,
     h: f64,
@@ -113,9 +218,10 @@ fn run_model<I: Interaction>(
 }
 
 /// Run `liemid many`; errors are (exit code, message).
-pub fn many(args: &ManyArgs) -> Result<(), (u8, String)> {
+pub fn many(cli: &ManyArgs) -> Result<(), (u8, String)> {
     let input = |m: String| (2u8, m);
-    let n = args.bodies as usize;
+    let args = &settings(cli).map_err(input)?;
+    let n = args.bodies;
     let (h_default, t_default) = match args.model {
         Model::Independent => (1e-4, 0.01),
         Model::TorqueFree => (1e-3, 0.1),
@@ -130,7 +236,7 @@ pub fn many(args: &ManyArgs) -> Result<(), (u8, String)> {
         return Err(input(format!("--t-end must be a non-negative number, found {t_end}")));
     }
     let mut builder = rayon::ThreadPoolBuilder::new();
-    if let Some(k) = args.threads {
+    if let Some(k) = cli.threads {
         builder = builder.num_threads(k as usize);
     }
     let pool = builder.build().map_err(|e| (1, format!("thread pool: {e}")))?;
@@ -169,7 +275,7 @@ pub fn many(args: &ManyArgs) -> Result<(), (u8, String)> {
         "linear_momentum_change": dp.to_array(),
         "angular_momentum_change": dl.to_array(),
     });
-    match args.json.as_deref() {
+    match cli.json.as_deref() {
         Some("-") => println!("{summary}"),
         Some(path) => {
             std::fs::write(path, summary.to_string() + "\n").map_err(|e| (1, format!("{path}: {e}")))?;
@@ -177,7 +283,7 @@ pub fn many(args: &ManyArgs) -> Result<(), (u8, String)> {
         }
         None => {}
     }
-    if args.json.as_deref() != Some("-") {
+    if cli.json.as_deref() != Some("-") {
         println!(
             "{:?}: {} bodies, {} steps of {h} on {threads} threads: {:.3} s stepping, {:.3e} body-steps/s",
             args.model,

@@ -135,13 +135,18 @@ pub fn describe(name: &str) -> &'static str {
 }
 
 /// A section of the file with the keys it allows; reports unknown keys and bad values.
-struct Section<'a> {
+pub(crate) struct Section<'a> {
     name: &'static str,
     table: &'a Table,
 }
 
 impl<'a> Section<'a> {
-    fn new(root: &'a Table, name: &'static str, allowed: &[&str], required: bool) -> Result<Option<Self>, String> {
+    pub(crate) fn new(
+        root: &'a Table,
+        name: &'static str,
+        allowed: &[&str],
+        required: bool,
+    ) -> Result<Option<Self>, String> {
         let Some(value) = root.get(name) else {
             return if required {
                 Err(format!("missing section [{name}]"))
@@ -166,7 +171,7 @@ impl<'a> Section<'a> {
         Ok(Some(Section { name, table }))
     }
 
-    fn err(&self, key: &str, what: impl std::fmt::Display) -> String {
+    pub(crate) fn err(&self, key: &str, what: impl std::fmt::Display) -> String {
         format!("[{}] {key}: {what}", self.name)
     }
 
@@ -186,7 +191,7 @@ impl<'a> Section<'a> {
         Ok(x)
     }
 
-    fn number(&self, key: &str) -> Result<Option<f64>, String> {
+    pub(crate) fn number(&self, key: &str) -> Result<Option<f64>, String> {
         self.table.get(key).map(|v| self.number_of(key, v)).transpose()
     }
 
@@ -227,7 +232,7 @@ impl<'a> Section<'a> {
         Ok(m)
     }
 
-    fn string(&self, key: &str) -> Result<Option<&'a str>, String> {
+    pub(crate) fn string(&self, key: &str) -> Result<Option<&'a str>, String> {
         match self.table.get(key) {
             None => Ok(None),
             Some(Value::String(s)) => Ok(Some(s.as_str())),
@@ -235,7 +240,7 @@ impl<'a> Section<'a> {
         }
     }
 
-    fn count(&self, key: &str) -> Result<Option<u64>, String> {
+    pub(crate) fn count(&self, key: &str) -> Result<Option<u64>, String> {
         match self.table.get(key) {
             None => Ok(None),
             Some(Value::Integer(i)) if *i >= 1 => Ok(Some(*i as u64)),
@@ -263,6 +268,17 @@ pub fn load(path: &Path) -> Result<Scenario, String> {
     let file = path.display().to_string();
     let text = std::fs::read_to_string(path).map_err(|e| format!("{file}: cannot read: {e}"))?;
     parse(&text, &file).map_err(|e| format!("{file}: {e}"))
+}
+
+/// Parse TOML text into a table; errors are one line with the line number.
+pub(crate) fn parse_table(text: &str) -> Result<Table, String> {
+    toml::from_str(text).map_err(|e: toml::de::Error| {
+        let line = e
+            .span()
+            .map(|s| format!("line {}: ", line_of(text, s.start)))
+            .unwrap_or_default();
+        format!("{line}{}", e.message().lines().next().unwrap_or("invalid TOML"))
+    })
 }
 
 fn line_of(text: &str, offset: usize) -> usize {

@@ -486,4 +486,39 @@ fn many_reports_throughput_and_conservation() {
     );
     let o = run_in(&dir, &["many", "--step=-1"]);
     assert_eq!(o.status.code(), Some(2));
+    // The scenario-file form, with a command-line override.
+    let example = examples().join("dipolar_fluid.toml");
+    let o = run_in(
+        &dir,
+        &[
+            "many",
+            "--scenario",
+            example.to_str().unwrap(),
+            "--t-end",
+            "0.01",
+            "--json",
+            "-",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = json(&stdout(&o));
+    assert_eq!(
+        (s["model"].as_str(), s["bodies"].as_u64(), s["steps"].as_u64()),
+        (Some("dipoles"), Some(1000), Some(10))
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join("dipolar_fluid_totals.csv"))
+            .unwrap()
+            .lines()
+            .count(),
+        3
+    );
+    let bad = write(&dir, "bad_many.toml", "[system]\nmodel = \"gas\"\n");
+    let o = run_in(&dir, &["many", "--scenario", bad.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("bad_many.toml: [system] model: unknown model"),
+        "{}",
+        stderr(&o)
+    );
 }
