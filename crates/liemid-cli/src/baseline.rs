@@ -2,8 +2,6 @@
 //! `(Π, q)` with `Π' = Π × W + T(R(q/|q|), t)`, `q' = ½ q ⊗ (0, W)`; the quaternion is
 //! renormalised only at output, as a user of a general ODE solver would do.
 
-use std::cell::Cell;
-
 use liemid::so3::Quaternion;
 use liemid::{Diagnostics, RigidBodySystem, RigidState, Vec3};
 use ode_solvers::{Dop853, OutputType, SVector, System};
@@ -18,15 +16,18 @@ pub struct AdaptiveRun {
     pub evaluations: u64,
 }
 
-/// The right-hand side; the solver owns it, so its counters live outside.
+/// The right-hand side on `(Π, q)`.
 struct RigidQuaternion<'a, S: ?Sized> {
     system: &'a S,
-    track: Option<f64>,
-    max_energy_error: &'a Cell<f64>,
 }
 
 fn unpack(y: &State) -> (Vec3, Quaternion) {
     (Vec3::new(y[0], y[1], y[2]), Quaternion::new(y[3], y[4], y[5], y[6]))
+}
+
+fn state_of(t: f64, y: &State) -> RigidState {
+    let (pi, q) = unpack(y);
+    RigidState::new(t, pi, q.normalized().to_matrix())
 }
 
 impl<S: RigidBodySystem + ?Sized> System<f64, State> for RigidQuaternion<'_, S> {
@@ -37,42 +38,24 @@ impl<S: RigidBodySystem + ?Sized> System<f64, State> for RigidQuaternion<'_, S> 
         let dq = q.mul(&Quaternion::new(0.0, 0.5 * w.x, 0.5 * w.y, 0.5 * w.z));
         *dy = State::from([dpi.x, dpi.y, dpi.z, dq.w, dq.x, dq.y, dq.z]);
     }
-
-    fn solout(&mut self, t: f64, y: &State, _dy: &State) -> bool {
-        if let Some(e0) = self.track {
-            let (pi, q) = unpack(y);
-            let d = Diagnostics::of(self.system, &RigidState::new(t, pi, q.normalized().to_matrix()));
-            let err = if e0 != 0.0 {
-                ((d.energy - e0) / e0).abs()
-            } else {
-                (d.energy - e0).abs()
-            };
-            self.max_energy_error.set(self.max_energy_error.get().max(err));
-        }
-        false
-    }
 }
 
-/// Integrate with Dop853 at relative tolerance `rtol` (absolute tolerance `rtol` times the
-/// initial momentum's size for `Π`, which makes both parts of the state O(1)-scaled).
-pub fn dop853<S: RigidBodySystem + ?Sized>(
-    system: &S,
+type Solver<'a, S> = Dop853<f64, State, RigidQuaternion<'a, S>>;
+
+/// Integrate at relative tolerance `rtol` (absolute `rtol/1000`), keeping every accepted
+/// step; returns the solver (with its outputs) and the number of evaluations.
+fn integrate<'a, S: RigidBodySystem + ?Sized>(
+    system: &'a S,
     initial: RigidState,
     t_end: f64,
     rtol: f64,
-) -> Result<AdaptiveRun, String> {
+) -> Result<(Solver<'a, S>, u64), String> {
     let q = Quaternion::from_matrix(&initial.rotation);
     let pi = initial.pi;
     let y0 = State::from([pi.x, pi.y, pi.z, q.w, q.x, q.y, q.z]);
-    let unused = Cell::new(0.0);
-    let rhs = RigidQuaternion {
-        system,
-        track: None,
-        max_energy_error: &unused,
-    };
     let span = t_end - initial.t;
     let mut solver = Dop853::from_param(
-        rhs,
+        RigidQuaternion { system },
         initial.t,
         t_end,
         span,
@@ -92,17 +75,26 @@ pub fn dop853<S: RigidBodySystem + ?Sized>(
     let stats = solver
         .integrate()
         .map_err(|e| format!("Dop853 at rtol {rtol:e}: {e}"))?;
+    Ok((solver, u64::from(stats.num_eval)))
+}
+
+/// Integrate with Dop853 at relative tolerance `rtol` to `t_end`.
+pub fn dop853<S: RigidBodySystem + ?Sized>(
+    system: &S,
+    initial: RigidState,
+    t_end: f64,
+    rtol: f64,
+) -> Result<AdaptiveRun, String> {
+    let (solver, evaluations) = integrate(system, initial, t_end, rtol)?;
     let y = solver.y_out().last().ok_or("Dop853 produced no output")?;
-    let (pi, q) = unpack(y);
-    let state = RigidState::new(t_end, pi, q.normalized().to_matrix());
     Ok(AdaptiveRun {
-        state,
-        evaluations: u64::from(stats.num_eval),
+        state: state_of(t_end, y),
+        evaluations,
     })
 }
 
-/// A Dop853 run that also tracks the largest relative energy error over the whole run, the
-/// first tenth and the last tenth: `(max, first tenth, last tenth)`.
+/// The largest relative energy error of a Dop853 run over all accepted steps, over the
+/// first tenth and over the last tenth of the run: `(max, first tenth, last tenth)`.
 pub fn dop853_tenths<S: RigidBodySystem + ?Sized>(
     system: &S,
     initial: RigidState,
@@ -111,45 +103,16 @@ pub fn dop853_tenths<S: RigidBodySystem + ?Sized>(
 ) -> Result<(f64, f64, f64), String> {
     let e0 = Diagnostics::of(system, &initial).energy;
     let span = t_end - initial.t;
-    let q = Quaternion::from_matrix(&initial.rotation);
-    let pi = initial.pi;
-    let y0 = State::from([pi.x, pi.y, pi.z, q.w, q.x, q.y, q.z]);
-    let max = Cell::new(0.0);
-    let rhs = RigidQuaternion {
-        system,
-        track: Some(e0),
-        max_energy_error: &max,
-    };
-    let mut solver = Dop853::from_param(
-        rhs,
-        initial.t,
-        t_end,
-        span,
-        y0,
-        rtol,
-        rtol * 1e-3,
-        0.9,
-        0.0,
-        0.333,
-        6.0,
-        span,
-        0.0,
-        u32::MAX,
-        1000,
-        OutputType::Sparse,
-    );
-    solver
-        .integrate()
-        .map_err(|e| format!("Dop853 at rtol {rtol:e}: {e}"))?;
-    let (mut first, mut last) = (0.0f64, 0.0f64);
+    let (solver, _) = integrate(system, initial, t_end, rtol)?;
+    let (mut max, mut first, mut last) = (0.0f64, 0.0f64, 0.0f64);
     for (t, y) in solver.x_out().iter().zip(solver.y_out()) {
-        let (pi, q) = unpack(y);
-        let d = Diagnostics::of(system, &RigidState::new(*t, pi, q.normalized().to_matrix()));
+        let d = Diagnostics::of(system, &state_of(*t, y));
         let e = if e0 != 0.0 {
             ((d.energy - e0) / e0).abs()
         } else {
             (d.energy - e0).abs()
         };
+        max = max.max(e);
         if *t <= initial.t + 0.1 * span {
             first = first.max(e);
         }
@@ -157,6 +120,5 @@ pub fn dop853_tenths<S: RigidBodySystem + ?Sized>(
             last = last.max(e);
         }
     }
-    drop(solver);
-    Ok((max.get(), first, last))
+    Ok((max, first, last))
 }

@@ -473,26 +473,43 @@ fn converge_cmd(args: ConvergeArgs) -> CmdResult {
         None => sc.t_end,
     };
     let study = converge::study(&sc, &methods, &steps, t_end).map_err(|e| Failure::Run(format!("reference: {e}")))?;
-    let table = converge::table(&study);
-    let json_to_stdout = args.json.as_deref() == Some("-");
-    if json_to_stdout {
-        eprint!("{table}");
-    } else {
-        print!("{table}");
-    }
-    if !args.no_plot {
-        for p in plot_paths(&args.plot) {
-            plot::write(&p, &plot::Figure::Convergence(&study)).map_err(Failure::Run)?;
-            let msg = format!("wrote {}", p.display());
-            if json_to_stdout {
-                eprintln!("{msg}");
-            } else {
-                println!("{msg}");
-            }
+    report(
+        &converge::table(&study),
+        &study,
+        plot::Figure::Convergence(&study),
+        &args.plot,
+        args.no_plot,
+        args.json.as_deref(),
+    )
+}
+
+/// Print a study's table, write its plots and its JSON. With JSON on standard output
+/// (`-`), the table and the messages go to standard error.
+fn report<T: serde::Serialize>(
+    table: &str,
+    study: &T,
+    figure: plot::Figure,
+    plot_base: &Path,
+    no_plot: bool,
+    json: Option<&str>,
+) -> CmdResult {
+    let to_stdout = json == Some("-");
+    let say = |m: &str| {
+        if to_stdout {
+            eprint!("{m}");
+        } else {
+            print!("{m}");
+        }
+    };
+    say(table);
+    if !no_plot {
+        for p in plot_paths(plot_base) {
+            plot::write(&p, &figure).map_err(Failure::Run)?;
+            say(&format!("wrote {}\n", p.display()));
         }
     }
-    if let Some(target) = &args.json {
-        write_json(target, &study)?;
+    if let Some(target) = json {
+        write_json(target, study)?;
     }
     Ok(())
 }
@@ -546,25 +563,12 @@ fn work_precision_cmd(args: WorkPrecisionArgs) -> CmdResult {
         max_points: args.max_points.max(1),
     };
     let study = work_precision::study(&sc, t_end, &options).map_err(Failure::Run)?;
-    let table = work_precision::table(&study);
-    let to_stdout = args.json.as_deref() == Some("-");
-    if to_stdout {
-        eprint!("{table}");
-    } else {
-        print!("{table}");
-    }
-    if !args.no_plot {
-        for p in plot_paths(&args.plot) {
-            plot::write(&p, &plot::Figure::WorkPrecision(&study)).map_err(Failure::Run)?;
-            if to_stdout {
-                eprintln!("wrote {}", p.display());
-            } else {
-                println!("wrote {}", p.display());
-            }
-        }
-    }
-    if let Some(target) = &args.json {
-        write_json(target, &study)?;
-    }
-    Ok(())
+    report(
+        &work_precision::table(&study),
+        &study,
+        plot::Figure::WorkPrecision(&study),
+        &args.plot,
+        args.no_plot,
+        args.json.as_deref(),
+    )
 }

@@ -2,10 +2,9 @@
 //! took (median of repeated runs in this process, after a warm-up), with the torque
 //! evaluations and the largest energy error along the run.
 
-use std::cell::Cell;
 use std::time::Instant;
 
-use liemid::{advance, Inertia, Mat3, RigidBodySystem, RigidState, RotationMethod, RunSummary, Vec3};
+use liemid::{advance, CountingTorque, RigidBodySystem, RigidState, RotationMethod, RunSummary};
 use serde::Serialize;
 
 use crate::baseline;
@@ -122,25 +121,6 @@ pub struct Options {
     pub max_points: usize,
 }
 
-/// Wraps a system and counts torque evaluations.
-struct Counting<'a, S: ?Sized> {
-    inner: &'a S,
-    count: Cell<u64>,
-}
-
-impl<S: RigidBodySystem + ?Sized> RigidBodySystem for Counting<'_, S> {
-    fn inertia(&self) -> &Inertia {
-        self.inner.inertia()
-    }
-    fn torque(&self, rotation: &Mat3, t: f64) -> Vec3 {
-        self.count.set(self.count.get() + 1);
-        self.inner.torque(rotation, t)
-    }
-    fn potential_energy(&self, rotation: &Mat3, t: f64) -> f64 {
-        self.inner.potential_energy(rotation, t)
-    }
-}
-
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     let n = v.len();
@@ -170,10 +150,7 @@ fn diagnostics_run(
     t_end: f64,
     h: f64,
 ) -> Result<(RunSummary, u64, f64, f64), String> {
-    let counting = Counting {
-        inner: &scenario.system,
-        count: Cell::new(0),
-    };
+    let counting = CountingTorque::new(&scenario.system);
     let t0 = scenario.initial.t;
     let span = t_end - t0;
     let e0 = liemid::Diagnostics::of(&scenario.system, &scenario.initial).energy;
@@ -201,7 +178,7 @@ fn diagnostics_run(
         },
     )
     .map_err(|e| e.to_string())?;
-    Ok((summary, counting.count.get(), first, last))
+    Ok((summary, counting.count(), first, last))
 }
 
 fn errors(state: &RigidState, reference: &RigidState) -> (f64, f64) {

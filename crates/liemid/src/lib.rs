@@ -55,7 +55,9 @@ pub use driver::{advance, integrate, integrate_to, step_count, RunSummary};
 pub use error::{Error, Result};
 pub use inertia::{Inertia, InertiaOperator, PrincipalInertia};
 pub use linalg::{Mat3, Vec3};
-pub use rigid::{ConstantTorque, Diagnostics, FreeBody, HeavyTop, RigidBodySystem, RigidState, TorqueFn};
+pub use rigid::{
+    ConstantTorque, CountingTorque, Diagnostics, FreeBody, HeavyTop, RigidBodySystem, RigidState, TorqueFn,
+};
 pub use rotation::{
     AnyRotationIntegrator, AustinKrishnaprasadWang, KryslEndresNewmark, LieMidpointAlternating, LieMidpointE1,
     LieMidpointE2, LieMidpointImplicit, RotationIntegrator, RotationMethod, RungeKutta4Quaternion, SimoWong,

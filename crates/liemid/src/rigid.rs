@@ -102,6 +102,43 @@ impl<S: RigidBodySystem + ?Sized> RigidBodySystem for Box<S> {
     }
 }
 
+/// Wraps a system and counts its torque evaluations (for cost accounting and tests).
+#[derive(Debug)]
+pub struct CountingTorque<S> {
+    /// The wrapped system.
+    pub inner: S,
+    count: std::cell::Cell<u64>,
+}
+
+impl<S> CountingTorque<S> {
+    /// Wrap `inner`, with the count at zero.
+    pub fn new(inner: S) -> Self {
+        CountingTorque {
+            inner,
+            count: std::cell::Cell::new(0),
+        }
+    }
+
+    /// Torque evaluations so far.
+    #[must_use]
+    pub fn count(&self) -> u64 {
+        self.count.get()
+    }
+}
+
+impl<S: RigidBodySystem> RigidBodySystem for CountingTorque<S> {
+    fn inertia(&self) -> &Inertia {
+        self.inner.inertia()
+    }
+    fn torque(&self, rotation: &Mat3, t: f64) -> Vec3 {
+        self.count.set(self.count.get() + 1);
+        self.inner.torque(rotation, t)
+    }
+    fn potential_energy(&self, rotation: &Mat3, t: f64) -> f64 {
+        self.inner.potential_energy(rotation, t)
+    }
+}
+
 /// A torque-free rigid body (Euler's equations). Keeps `|Π|`, the kinetic energy and the
 /// spatial momentum `π` exactly.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -3,10 +3,9 @@
 
 mod common;
 
-use common::CountingTorque;
 use liemid::{
-    integrate, integrate_to, problems, Error, Inertia, LieMidpointAlternating, LieMidpointE1, LieMidpointE2,
-    RigidState, RotationIntegrator, RotationMethod, Vec3,
+    integrate, integrate_to, problems, CountingTorque, Error, Inertia, LieMidpointAlternating, LieMidpointE1,
+    LieMidpointE2, RigidState, RotationIntegrator, RotationMethod, Vec3,
 };
 
 /// Relative momentum and absolute attitude distance.
@@ -124,7 +123,7 @@ fn torque_evaluations_per_step() {
         )
         .unwrap();
         assert_eq!(s.steps, steps);
-        assert_eq!(counting.count.get(), expected, "{}", method.name());
+        assert_eq!(counting.count(), expected, "{}", method.name());
     }
 }
 

@@ -2,11 +2,7 @@
 //! torque-counting wrapper.
 #![allow(dead_code)]
 
-use std::cell::Cell;
-
-use liemid::{
-    integrate_to, Inertia, Mat3, RigidBodySystem, RigidState, RotationIntegrator, RungeKutta4Quaternion, Vec3,
-};
+use liemid::{integrate_to, Mat3, RigidBodySystem, RigidState, RotationIntegrator, RungeKutta4Quaternion, Vec3};
 
 /// Least-squares slope of `log(err)` against `log(h)`.
 pub fn observed_order(hs: &[f64], errs: &[f64]) -> f64 {
@@ -73,32 +69,4 @@ pub fn shipped_fast_top_reference(t: f64) -> RigidState {
     let pi = v("body_angular_momentum");
     let r: [f64; 9] = v("rotation_matrix_row_major").try_into().unwrap();
     RigidState::new(t, Vec3::new(pi[0], pi[1], pi[2]), Mat3::from_row_major(r))
-}
-
-/// Wraps a system and counts its torque evaluations.
-pub struct CountingTorque<S> {
-    pub inner: S,
-    pub count: Cell<u64>,
-}
-
-impl<S> CountingTorque<S> {
-    pub fn new(inner: S) -> Self {
-        CountingTorque {
-            inner,
-            count: Cell::new(0),
-        }
-    }
-}
-
-impl<S: RigidBodySystem> RigidBodySystem for CountingTorque<S> {
-    fn inertia(&self) -> &Inertia {
-        self.inner.inertia()
-    }
-    fn torque(&self, rotation: &Mat3, t: f64) -> Vec3 {
-        self.count.set(self.count.get() + 1);
-        self.inner.torque(rotation, t)
-    }
-    fn potential_energy(&self, rotation: &Mat3, t: f64) -> f64 {
-        self.inner.potential_energy(rotation, t)
-    }
 }
