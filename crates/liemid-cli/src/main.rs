@@ -462,16 +462,7 @@ fn converge_cmd(args: ConvergeArgs) -> CmdResult {
     if steps.is_empty() || methods.is_empty() {
         return Err(Failure::Input("--steps and --methods must not be empty".into()));
     }
-    let t_end = match args.t_end {
-        Some(t) if t.is_finite() && t > sc.initial.t => t,
-        Some(t) => {
-            return Err(Failure::Input(format!(
-                "--t-end {t} must be after the start time {}",
-                sc.initial.t
-            )))
-        }
-        None => sc.t_end,
-    };
+    let t_end = study_end(&sc, args.t_end)?;
     let study = converge::study(&sc, &methods, &steps, t_end).map_err(|e| Failure::Run(format!("reference: {e}")))?;
     report(
         &converge::table(&study),
@@ -481,6 +472,18 @@ fn converge_cmd(args: ConvergeArgs) -> CmdResult {
         args.no_plot,
         args.json.as_deref(),
     )
+}
+
+/// The end time of a study: `--t-end` if given (after the start), else the scenario's.
+fn study_end(sc: &Scenario, t_end: Option<f64>) -> Result<f64, Failure> {
+    match t_end {
+        Some(t) if t.is_finite() && t > sc.initial.t => Ok(t),
+        Some(t) => Err(Failure::Input(format!(
+            "--t-end {t} must be after the start time {}",
+            sc.initial.t
+        ))),
+        None => Ok(sc.t_end),
+    }
 }
 
 /// Print a study's table, write its plots and its JSON. With JSON on standard output
@@ -545,16 +548,7 @@ fn work_precision_cmd(args: WorkPrecisionArgs) -> CmdResult {
             })
             .collect::<Result<_, _>>()?,
     };
-    let t_end = match args.t_end {
-        Some(t) if t.is_finite() && t > sc.initial.t => t,
-        Some(t) => {
-            return Err(Failure::Input(format!(
-                "--t-end {t} must be after the start time {}",
-                sc.initial.t
-            )))
-        }
-        None => sc.t_end,
-    };
+    let t_end = study_end(&sc, args.t_end)?;
     let options = work_precision::Options {
         entries,
         repetitions: args.repetitions as usize,
