@@ -4,7 +4,7 @@
 use std::sync::Mutex;
 
 use crate::linalg::{Mat3, Vec3};
-use crate::many::{Configuration, Interaction, CHUNK};
+use crate::many::{Configuration, Interaction};
 
 /// Each body on its own: a free body feels `F = m g`; a rotor (fixed point) feels the
 /// gravity torque about its pivot `T = X × (Rᵀ m g)`, with `X` the centre of mass in the
@@ -31,6 +31,7 @@ impl Independent {
 fn for_chunks(force: &mut [Vec3], torque: &mut [Vec3], f: impl Fn(usize, &mut Vec3, &mut Vec3) + Sync + Send) {
     #[cfg(feature = "parallel")]
     {
+        use crate::many::CHUNK;
         use rayon::prelude::*;
         force
             .par_chunks_mut(CHUNK)

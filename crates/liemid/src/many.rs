@@ -105,6 +105,19 @@ pub struct Totals {
     pub angular_momentum: Vec3,
 }
 
+/// Run `f(first_index, chunk)` over the chunks of a slice.
+fn chunks1<A: Send>(a: &mut [A], f: impl Fn(usize, &mut [A]) + Sync + Send) {
+    #[cfg(feature = "parallel")]
+    {
+        use rayon::prelude::*;
+        a.par_chunks_mut(CHUNK).enumerate().for_each(|(k, x)| f(k * CHUNK, x));
+    }
+    #[cfg(not(feature = "parallel"))]
+    for (k, x) in a.chunks_mut(CHUNK).enumerate() {
+        f(k * CHUNK, x);
+    }
+}
+
 /// Run `f(first_index, chunk_a, chunk_b)` over matching chunks of two slices.
 fn chunks2<A: Send, B: Send>(a: &mut [A], b: &mut [B], f: impl Fn(usize, &mut [A], &mut [B]) + Sync + Send) {
     #[cfg(feature = "parallel")]
@@ -244,7 +257,7 @@ impl Bodies {
         let (inertia, free, mass, momentum) = (&self.inertia, &self.free, &self.mass, &self.momentum);
         let failure_ref = &failure;
         // Drift of free bodies.
-        chunks2(&mut self.position, &mut self.pi, |start, x, _| {
+        chunks1(&mut self.position, |start, x| {
             for (k, x) in x.iter_mut().enumerate() {
                 let i = start + k;
                 if free[i] {
