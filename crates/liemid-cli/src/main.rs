@@ -28,6 +28,8 @@ Examples:
   liemid run --problem slow-top --method rk4 --step 1e-4 --json
   liemid converge                              the paper's Figure 1: table + convergence.svg/.png
   liemid converge --methods liemid-ea,liemid-i --steps 1e-3,5e-4,2.5e-4 --json -
+  liemid work-precision                        CPU time vs error, against DOP853 and RK4
+  liemid many --model dipoles --bodies 10000   a dipolar fluid on all cores
   liemid methods";
 
 /// Structure-preserving integration of rigid-body rotation with the explicit midpoint Lie
