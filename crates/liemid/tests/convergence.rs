@@ -161,24 +161,7 @@ fn fast_top_ea_reproduces_the_paper_table_and_leads_the_line_up() {
 #[test]
 fn ea_is_second_order_on_the_fast_top() {
     let top = problems::fast_top();
-    let reference = fast_top_reference();
     let hs = halvings(1e-3, 4);
-    let errs: Vec<(f64, f64)> = hs
-        .iter()
-        .map(|&h| {
-            errors(
-                &run(
-                    &mut liemid::LieMidpointAlternating::new(),
-                    &top.system,
-                    top.initial,
-                    top.t_end,
-                    h,
-                ),
-                &reference,
-            )
-        })
-        .collect();
-    let om = observed_order(&hs, &errs.iter().map(|e| e.0).collect::<Vec<_>>());
-    let or = observed_order(&hs, &errs.iter().map(|e| e.1).collect::<Vec<_>>());
+    let (om, or, _) = orders(RotationMethod::LieMidpointAlternating, &top, &fast_top_reference(), &hs);
     assert!((om - 2.0).abs() < 0.1 && (or - 2.0).abs() < 0.1, "orders {om} {or}");
 }
