@@ -57,20 +57,6 @@ pub struct Study {
     pub methods: Vec<MethodErrors>,
 }
 
-/// Least-squares slope of `log y` against `log x`; `None` with fewer than two points.
-pub fn slope(x: &[f64], y: &[f64]) -> Option<f64> {
-    if x.len() < 2 || x.len() != y.len() {
-        return None;
-    }
-    let n = x.len() as f64;
-    let lx: Vec<f64> = x.iter().map(|v| v.ln()).collect();
-    let ly: Vec<f64> = y.iter().map(|v| v.ln()).collect();
-    let (mx, my) = (lx.iter().sum::<f64>() / n, ly.iter().sum::<f64>() / n);
-    let sxy: f64 = lx.iter().zip(&ly).map(|(a, b)| (a - mx) * (b - my)).sum();
-    let sxx: f64 = lx.iter().map(|a| (a - mx) * (a - mx)).sum();
-    Some(sxy / sxx)
-}
-
 /// Order over the three smallest steps that all succeeded.
 fn order_of(steps: &[f64], errors: &[Option<f64>]) -> Option<f64> {
     let mut pairs: Vec<(f64, f64)> = steps
@@ -84,7 +70,7 @@ fn order_of(steps: &[f64], errors: &[Option<f64>]) -> Option<f64> {
         return None;
     }
     let (x, y): (Vec<f64>, Vec<f64>) = pairs.into_iter().unzip();
-    slope(&x, &y)
+    liemid::observed_order(&x, &y)
 }
 
 fn errors(state: &RigidState, reference: &RigidState) -> (f64, f64) {

@@ -26,6 +26,27 @@ pub fn step_count(t0: f64, t_end: f64, h: f64) -> Result<u64> {
     Ok(n as u64)
 }
 
+/// The observed order of accuracy: the least-squares slope of `log error` against
+/// `log h`. `None` with fewer than two points, different lengths, or equal steps.
+#[must_use]
+pub fn observed_order(steps: &[f64], errors: &[f64]) -> Option<f64> {
+    if steps.len() < 2 || steps.len() != errors.len() {
+        return None;
+    }
+    let n = steps.len() as f64;
+    let (mx, my) = (
+        steps.iter().map(|h| h.ln()).sum::<f64>() / n,
+        errors.iter().map(|e| e.ln()).sum::<f64>() / n,
+    );
+    let sxy: f64 = steps
+        .iter()
+        .zip(errors)
+        .map(|(h, e)| (h.ln() - mx) * (e.ln() - my))
+        .sum();
+    let sxx: f64 = steps.iter().map(|h| (h.ln() - mx).powi(2)).sum();
+    (sxx > 0.0).then(|| sxy / sxx)
+}
+
 /// What a run did: the final state and the extremes of the diagnostics over every step.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RunSummary {

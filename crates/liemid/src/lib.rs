@@ -51,7 +51,7 @@ pub mod so3;
 pub mod vector;
 
 pub use composition::{Composition, Scheme};
-pub use driver::{advance, integrate, integrate_to, step_count, RunSummary};
+pub use driver::{advance, integrate, integrate_to, observed_order, step_count, RunSummary};
 pub use error::{Error, Result};
 pub use inertia::{Inertia, InertiaOperator, PrincipalInertia};
 pub use linalg::{Mat3, Vec3};

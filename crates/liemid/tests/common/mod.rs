@@ -4,16 +4,9 @@
 
 use liemid::{integrate_to, Mat3, RigidBodySystem, RigidState, RotationIntegrator, RungeKutta4Quaternion, Vec3};
 
-/// Least-squares slope of `log(err)` against `log(h)`.
+/// Least-squares slope of `log(err)` against `log(h)` (the library's `observed_order`).
 pub fn observed_order(hs: &[f64], errs: &[f64]) -> f64 {
-    assert_eq!(hs.len(), errs.len());
-    let n = hs.len() as f64;
-    let x: Vec<f64> = hs.iter().map(|h| h.ln()).collect();
-    let y: Vec<f64> = errs.iter().map(|e| e.ln()).collect();
-    let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
-    let sxy: f64 = x.iter().zip(&y).map(|(a, b)| (a - mx) * (b - my)).sum();
-    let sxx: f64 = x.iter().map(|a| (a - mx) * (a - mx)).sum();
-    sxy / sxx
+    liemid::observed_order(hs, errs).expect("at least two distinct steps")
 }
 
 /// `h0, h0/2, …` (`n` steps).
