@@ -176,6 +176,9 @@ pub trait InertiaOperator {
     fn plus(&self, m: &Mat3) -> Mat3;
     /// An upper bound of `‖I⁻¹‖₂`.
     fn inverse_norm_bound(&self) -> f64;
+    /// `(I₁, I₂, I₃)` and their reciprocals when the tensor is diagonal (the fast path of
+    /// the midpoint solver).
+    fn diagonal(&self) -> Option<(Vec3, Vec3)>;
 }
 
 impl InertiaOperator for Inertia {
@@ -194,6 +197,10 @@ impl InertiaOperator for Inertia {
     #[inline]
     fn inverse_norm_bound(&self) -> f64 {
         self.inverse_norm
+    }
+    #[inline]
+    fn diagonal(&self) -> Option<(Vec3, Vec3)> {
+        self.principal
     }
 }
 
@@ -238,5 +245,9 @@ impl InertiaOperator for PrincipalInertia {
     #[inline]
     fn inverse_norm_bound(&self) -> f64 {
         self.inverse.max_abs()
+    }
+    #[inline]
+    fn diagonal(&self) -> Option<(Vec3, Vec3)> {
+        Some((self.moments, self.inverse))
     }
 }

@@ -78,8 +78,10 @@ impl Vec3 {
 
     /// True when every component is finite.
     #[must_use]
+    #[inline]
     pub fn is_finite(self) -> bool {
-        self.x.is_finite() && self.y.is_finite() && self.z.is_finite()
+        // `v − v` is 0 for a finite `v` and NaN otherwise: one branch for all components.
+        ((self.x - self.x) + (self.y - self.y) + (self.z - self.z)) == 0.0
     }
 
     /// Componentwise product.
@@ -337,8 +339,24 @@ impl Mat3 {
 
     /// True when every entry is finite.
     #[must_use]
+    #[inline]
     pub fn is_finite(&self) -> bool {
-        self.m.iter().flatten().all(|v| v.is_finite())
+        // `v − v` is 0 for a finite `v` and NaN otherwise: one branch for all entries.
+        self.m.iter().flatten().fold(0.0, |acc, v| acc + (v - v)) == 0.0
+    }
+
+    /// True when `self` and `other` are the same bit for bit (unlike `==`, which treats
+    /// `0.0` and `−0.0` as equal and NaN as unequal).
+    #[must_use]
+    #[inline]
+    pub fn bitwise_eq(&self, other: &Mat3) -> bool {
+        let diff = self
+            .m
+            .iter()
+            .flatten()
+            .zip(other.m.iter().flatten())
+            .fold(0u64, |acc, (a, b)| acc | (a.to_bits() ^ b.to_bits()));
+        diff == 0
     }
 }
 
@@ -424,6 +442,28 @@ impl Mul for Mat3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn finiteness_and_bitwise_equality() {
+        assert!(Vec3::new(1.0, -2.0, 1e308).is_finite());
+        assert!(Mat3::IDENTITY.is_finite());
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            for k in 0..3 {
+                let mut v = [1.0; 3];
+                v[k] = bad;
+                assert!(!Vec3::from_array(v).is_finite());
+            }
+            for k in 0..9 {
+                let mut m = Mat3::IDENTITY;
+                m.m[k / 3][k % 3] = bad;
+                assert!(!m.is_finite());
+            }
+        }
+        let mut m = Mat3::IDENTITY;
+        assert!(m.bitwise_eq(&Mat3::IDENTITY));
+        m.m[1][2] = -0.0;
+        assert!(!m.bitwise_eq(&Mat3::IDENTITY) && m == Mat3::IDENTITY);
+    }
 
     #[test]
     fn inverse_and_solve_agree() {

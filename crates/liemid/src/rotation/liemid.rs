@@ -18,7 +18,7 @@ use crate::so3;
 
 /// Solve (M) for `(P, h)` and return `Ψ`; errors name the step `(t, step)` that was being
 /// taken.
-#[inline]
+#[inline(always)]
 fn midpoint_rotation(
     method: &'static str,
     inertia: &crate::inertia::Inertia,

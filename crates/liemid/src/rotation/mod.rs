@@ -98,7 +98,7 @@ impl TorqueCache {
         if let Some((addr, tc, rc, torque)) = &self.entry {
             if *addr == Self::address(system)
                 && (t == *tc || (t - tc).abs() <= 1e-12 * t.abs().max(tc.abs()))
-                && rc == rotation
+                && rc.bitwise_eq(rotation)
             {
                 return *torque;
             }
