@@ -79,6 +79,7 @@ impl Vec3 {
     /// True when every component is finite.
     #[must_use]
     #[inline]
+    #[allow(clippy::eq_op)] // `v − v` is the point: 0 for finite `v`, NaN otherwise.
     pub fn is_finite(self) -> bool {
         // `v − v` is 0 for a finite `v` and NaN otherwise: one branch for all components.
         ((self.x - self.x) + (self.y - self.y) + (self.z - self.z)) == 0.0
@@ -340,6 +341,7 @@ impl Mat3 {
     /// True when every entry is finite.
     #[must_use]
     #[inline]
+    #[allow(clippy::eq_op)] // `v − v` is the point: 0 for finite `v`, NaN otherwise.
     pub fn is_finite(&self) -> bool {
         // `v − v` is 0 for a finite `v` and NaN otherwise: one branch for all entries.
         self.m.iter().flatten().fold(0.0, |acc, v| acc + (v - v)) == 0.0
