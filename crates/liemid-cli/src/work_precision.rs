@@ -195,7 +195,7 @@ fn first_step(method: RotationMethod, rate: f64) -> f64 {
     match method.order() {
         _ if method == RotationMethod::RungeKutta4 => 1.0 / rate,
         1 | 2 => 2.0 / rate,
-        _ => 4.0 / rate,
+        _ => 16.0 / rate,
     }
 }
 
@@ -226,7 +226,7 @@ fn curve_fixed(
             Err(e) => {
                 // Too large a step for this method: try the next one.
                 if points.is_empty() && h > 1e-9 {
-                    h *= 0.5;
+                    h *= std::f64::consts::FRAC_1_SQRT_2;
                     continue;
                 }
                 note = Some(e);
