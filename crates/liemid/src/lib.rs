@@ -40,6 +40,7 @@ pub mod driver;
 pub mod error;
 pub mod inertia;
 pub mod interactions;
+mod lanes;
 pub mod linalg;
 pub mod many;
 pub mod midpoint;

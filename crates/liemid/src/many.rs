@@ -29,7 +29,8 @@ use std::sync::Mutex;
 
 use crate::composition::Scheme;
 use crate::error::{Error, Result};
-use crate::inertia::PrincipalInertia;
+use crate::inertia::{InertiaOperator, PrincipalInertia};
+use crate::lanes::LANES;
 use crate::linalg::{Mat3, Vec3};
 use crate::midpoint;
 use crate::rotation::newton_error;
@@ -105,19 +106,6 @@ pub struct Totals {
     pub angular_momentum: Vec3,
 }
 
-/// Run `f(first_index, chunk)` over the chunks of a slice.
-fn chunks1<A: Send>(a: &mut [A], f: impl Fn(usize, &mut [A]) + Sync + Send) {
-    #[cfg(feature = "parallel")]
-    {
-        use rayon::prelude::*;
-        a.par_chunks_mut(CHUNK).enumerate().for_each(|(k, x)| f(k * CHUNK, x));
-    }
-    #[cfg(not(feature = "parallel"))]
-    for (k, x) in a.chunks_mut(CHUNK).enumerate() {
-        f(k * CHUNK, x);
-    }
-}
-
 /// Run `f(first_index, chunk_a, chunk_b)` over matching chunks of two slices.
 fn chunks2<A: Send, B: Send>(a: &mut [A], b: &mut [B], f: impl Fn(usize, &mut [A], &mut [B]) + Sync + Send) {
     #[cfg(feature = "parallel")]
@@ -132,6 +120,55 @@ fn chunks2<A: Send, B: Send>(a: &mut [A], b: &mut [B], f: impl Fn(usize, &mut [A
     for (k, (x, y)) in a.chunks_mut(CHUNK).zip(b.chunks_mut(CHUNK)).enumerate() {
         f(k * CHUNK, x, y);
     }
+}
+
+/// Run `f(first_index, chunk_a, chunk_b, chunk_c, chunk_d)` over matching chunks of four
+/// slices of the same length.
+fn chunks4<A: Send, B: Send, C: Send, D: Send>(
+    a: &mut [A],
+    b: &mut [B],
+    c: &mut [C],
+    d: &mut [D],
+    f: impl Fn(usize, &mut [A], &mut [B], &mut [C], &mut [D]) + Sync + Send,
+) {
+    #[cfg(feature = "parallel")]
+    {
+        use rayon::prelude::*;
+        a.par_chunks_mut(CHUNK)
+            .zip(b.par_chunks_mut(CHUNK))
+            .zip(c.par_chunks_mut(CHUNK))
+            .zip(d.par_chunks_mut(CHUNK))
+            .enumerate()
+            .for_each(|(k, (((a, b), c), d))| f(k * CHUNK, a, b, c, d));
+    }
+    #[cfg(not(feature = "parallel"))]
+    for (k, (((a, b), c), d)) in a
+        .chunks_mut(CHUNK)
+        .zip(b.chunks_mut(CHUNK))
+        .zip(c.chunks_mut(CHUNK))
+        .zip(d.chunks_mut(CHUNK))
+        .enumerate()
+    {
+        f(k * CHUNK, a, b, c, d);
+    }
+}
+
+/// The torque-free midpoint Lie rotation of one body: two half steps
+/// `solve (M) → Ψ; R ← R exp(Ψ); Π ← exp(−Ψ) Π`.
+#[inline]
+fn free_rotation(
+    inertia: &PrincipalInertia,
+    r: &mut Mat3,
+    pi: &mut Vec3,
+    hh: f64,
+) -> std::result::Result<(), midpoint::NotConverged> {
+    for _ in 0..2 {
+        let (psi, _) = midpoint::solve(inertia, *pi, hh)?;
+        let inc = so3::Increment::new(psi);
+        *r = inc.rotate(r);
+        *pi = inc.inverse_apply(*pi);
+    }
+    Ok(())
 }
 
 impl Bodies {
@@ -250,33 +287,58 @@ impl Bodies {
         if !self.forces_valid {
             self.evaluate(interaction);
         }
-        self.kick(h);
         let hh = 0.5 * h;
         let t = self.t;
         let failure: Mutex<Option<(usize, Error)>> = Mutex::new(None);
-        let (inertia, free, mass, momentum) = (&self.inertia, &self.free, &self.mass, &self.momentum);
         let failure_ref = &failure;
-        // Drift of free bodies.
-        chunks1(&mut self.position, |start, x| {
-            for (k, x) in x.iter_mut().enumerate() {
-                let i = start + k;
-                if free[i] {
-                    *x += momentum[i] * (h / mass[i]);
+        let (inertia, free, mass, force, torque) = (&self.inertia, &self.free, &self.mass, &self.force, &self.torque);
+        let avx = crate::lanes::use_avx();
+        // One pass over each chunk: the start impulse, the drift of free bodies, and the
+        // torque-free midpoint Lie rotation (two half steps as in EA), four bodies at a
+        // time in SIMD lanes where they take the common path.
+        chunks4(
+            &mut self.momentum,
+            &mut self.pi,
+            &mut self.position,
+            &mut self.rotation,
+            |start, p, pi, x, r| {
+                for k in 0..p.len() {
+                    let i = start + k;
+                    if free[i] {
+                        p[k] += force[i] * hh;
+                    }
+                    pi[k] += torque[i] * hh;
+                    if free[i] {
+                        x[k] += p[k] * (h / mass[i]);
+                    }
                 }
-            }
-        });
-        // Torque-free midpoint Lie rotation, two half steps as in EA.
-        chunks2(&mut self.rotation, &mut self.pi, |start, r, pi| {
-            for (k, (r, pi)) in r.iter_mut().zip(pi.iter_mut()).enumerate() {
-                let i = start + k;
-                for _ in 0..2 {
-                    match midpoint::solve(&inertia[i], *pi, hh) {
-                        Ok((psi, _)) => {
-                            let inc = so3::Increment::new(psi);
-                            *r = inc.rotate(r);
-                            *pi = inc.inverse_apply(*pi);
+                let mut k = 0;
+                while k < r.len() {
+                    let i = start + k;
+                    if cfg!(feature = "simd") && k + LANES <= r.len() {
+                        let group: [PrincipalInertia; LANES] = std::array::from_fn(|j| inertia[i + j]);
+                        let (rs, ps) = (
+                            <&mut [Mat3; LANES]>::try_from(&mut r[k..k + LANES]).expect("four"),
+                            <&mut [Vec3; LANES]>::try_from(&mut pi[k..k + LANES]).expect("four"),
+                        );
+                        if crate::lanes::free_rotation_x4(
+                            avx,
+                            group.map(|g| g.moments),
+                            group.map(|g| g.inverse),
+                            group.map(|g| g.inverse_norm_bound()),
+                            rs,
+                            ps,
+                            hh,
+                        ) {
+                            k += LANES;
+                            continue;
                         }
-                        Err(e) => {
+                    }
+                    // The scalar path: the rest of the chunk, and groups the lanes hand over.
+                    let end = (k + LANES).min(r.len());
+                    for k in k..end {
+                        let i = start + k;
+                        if let Err(e) = free_rotation(&inertia[i], &mut r[k], &mut pi[k], hh) {
                             let mut f = failure_ref.lock().expect("not poisoned");
                             let err = newton_error("many-body splitting", "midpoint equation (M)", t, h, e);
                             if f.as_ref().map_or(true, |(j, _)| i < *j) {
@@ -285,9 +347,10 @@ impl Bodies {
                             return;
                         }
                     }
+                    k = end;
                 }
-            }
-        });
+            },
+        );
         if let Some((_, e)) = failure.into_inner().expect("not poisoned") {
             self.forces_valid = false;
             return Err(e);
