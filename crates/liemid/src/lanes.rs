@@ -20,6 +20,7 @@ use std::ops::{Add, Mul, Neg, Sub};
 
 use crate::linalg::{Mat3, Vec3};
 use crate::midpoint::MAX_INCREMENT_ANGLE;
+use crate::so3::{short_series, SERIES_ANGLE_SQUARED};
 
 /// Bodies per kernel call.
 pub(crate) const LANES: usize = 4;
@@ -52,6 +53,13 @@ impl F {
     #[inline(always)]
     fn any(self, f: impl Fn(f64) -> bool) -> bool {
         f(self.0[0]) | f(self.0[1]) | f(self.0[2]) | f(self.0[3])
+    }
+}
+
+impl From<f64> for F {
+    #[inline(always)]
+    fn from(x: f64) -> F {
+        F::splat(x)
     }
 }
 
@@ -129,12 +137,16 @@ impl V {
         }
     }
     #[inline(always)]
-    fn component_mul(self, b: V) -> V {
+    fn zip(self, b: V, f: impl Fn(F, F) -> F) -> V {
         V {
-            x: self.x * b.x,
-            y: self.y * b.y,
-            z: self.z * b.z,
+            x: f(self.x, b.x),
+            y: f(self.y, b.y),
+            z: f(self.z, b.z),
         }
+    }
+    #[inline(always)]
+    fn component_mul(self, b: V) -> V {
+        self.zip(b, |x, y| x * y)
     }
     #[inline(always)]
     fn scale(self, s: F) -> V {
@@ -146,11 +158,7 @@ impl V {
     }
     #[inline(always)]
     fn scale_by(self, s: f64) -> V {
-        V {
-            x: self.x * s,
-            y: self.y * s,
-            z: self.z * s,
-        }
+        self.scale(F::splat(s))
     }
     #[inline(always)]
     fn is_finite(self) -> [bool; LANES] {
@@ -164,43 +172,16 @@ impl Add for V {
     type Output = V;
     #[inline(always)]
     fn add(self, b: V) -> V {
-        V {
-            x: self.x + b.x,
-            y: self.y + b.y,
-            z: self.z + b.z,
-        }
+        self.zip(b, |x, y| x + y)
     }
 }
 impl Sub for V {
     type Output = V;
     #[inline(always)]
     fn sub(self, b: V) -> V {
-        V {
-            x: self.x - b.x,
-            y: self.y - b.y,
-            z: self.z - b.z,
-        }
+        self.zip(b, |x, y| x - y)
     }
 }
-
-/// `so3::coefficients` on its short-series branch (`θ² < 0.01`), term for term.
-#[inline(always)]
-fn short_series(t: F) -> (F, F, F) {
-    let (tt, tttt) = (t * t, (t * t) * (t * t));
-    let a = (F::splat(1.0) - t * (1.0 / 6.0))
-        + tt * (F::splat(1.0 / 120.0) - t * (1.0 / 5040.0))
-        + tttt * (1.0 / 362_880.0);
-    let b = (F::splat(0.5) - t * (1.0 / 24.0))
-        + tt * (F::splat(1.0 / 720.0) - t * (1.0 / 40_320.0))
-        + tttt * (1.0 / 3_628_800.0);
-    let c = (F::splat(1.0 / 6.0) - t * (1.0 / 120.0))
-        + tt * (F::splat(1.0 / 5040.0) - t * (1.0 / 362_880.0))
-        + tttt * (1.0 / 39_916_800.0);
-    (a, b, c)
-}
-
-/// The short-series range of `so3::coefficients`.
-const SERIES_ANGLE_SQUARED: f64 = 0.01;
 
 /// The diagonal Newton solve of (M) in lanes; `None` hands the four bodies to the scalar path.
 #[inline(always)]
@@ -397,17 +378,8 @@ pub(crate) fn free_rotation_x4(
 mod tests {
     use super::*;
     use crate::inertia::PrincipalInertia;
+    use crate::many::free_rotation;
     use crate::random::Rng;
-    use crate::{midpoint, so3};
-
-    fn scalar(inertia: &PrincipalInertia, r: &mut Mat3, pi: &mut Vec3, h: f64) {
-        for _ in 0..2 {
-            let (psi, _) = midpoint::solve(inertia, *pi, h).unwrap();
-            let inc = so3::Increment::new(psi);
-            *r = inc.rotate(r);
-            *pi = inc.inverse_apply(*pi);
-        }
-    }
 
     /// Lanes and the scalar path agree bit for bit, and the lanes take the common case.
     #[test]
@@ -451,7 +423,7 @@ mod tests {
             taken += 1;
             for k in 0..LANES {
                 let (mut rs, mut ps) = (r[k], pi[k]);
-                scalar(&inertia[k], &mut rs, &mut ps, h);
+                free_rotation(&inertia[k], &mut rs, &mut ps, h).unwrap();
                 assert!(rs.bitwise_eq(&r_lanes[k]), "attitude, trial {trial}, lane {k}");
                 assert_eq!(
                     ps.to_array().map(f64::to_bits),

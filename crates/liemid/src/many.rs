@@ -156,7 +156,7 @@ fn chunks4<A: Send, B: Send, C: Send, D: Send>(
 /// The torque-free midpoint Lie rotation of one body: two half steps
 /// `solve (M) → Ψ; R ← R exp(Ψ); Π ← exp(−Ψ) Π`.
 #[inline]
-fn free_rotation(
+pub(crate) fn free_rotation(
     inertia: &PrincipalInertia,
     r: &mut Mat3,
     pi: &mut Vec3,

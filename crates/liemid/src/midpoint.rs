@@ -158,17 +158,15 @@ pub fn solve<I: InertiaOperator + ?Sized>(inertia: &I, p: Vec3, h: f64) -> Resul
         return solve_diagonal(d, d_inv, inertia.inverse_norm_bound(), p, h);
     }
     let psi0 = inertia.apply_inverse(p) * h;
-    let mut psi = inertia.apply_inverse(p + p.cross(psi0) * 0.5) * h;
+    let psi = inertia.apply_inverse(p + p.cross(psi0) * 0.5) * h;
     // The stopping rule h|P| |δ|² / λ_min ≤ u |Ψ|, squared to avoid square roots.
     let quadratic2 = p.norm_squared() * h * h * inertia.inverse_norm_bound().powi(2);
-    let mut stop = NewtonStop::new();
-    let mut g = Vec3::ZERO;
-    for it in 1..=MAX_ITERATIONS {
+    lean_newton(p, h, psi, quadratic2, |psi| {
         let v = psi * -0.5;
         let (a, b, c) = so3::coefficients(v.norm_squared());
         let vp = v.cross(p);
         let q = p + vp * a + v.cross(vp) * b;
-        g = inertia.apply(psi) - q * h;
+        let g = inertia.apply(psi) - q * h;
         // J = I − (h/2) hat(Q) Jl(v), Jl(v) = I + b hat(v) + c hat(v)²; columns q × Jl e_k.
         let jl = so3::i_plus_hat_plus_hat2(v, b, c);
         let s = -0.5 * h;
@@ -178,6 +176,26 @@ pub fn solve<I: InertiaOperator + ?Sized>(inertia: &I, p: Vec3, h: f64) -> Resul
             [c0.y, c1.y, c2.y],
             [c0.z, c1.z, c2.z],
         ]));
+        (g, j)
+    })
+}
+
+/// The Newton iteration of [`solve`] from the guess `psi`: `residual_and_jacobian(Ψ)`
+/// returns `(g(Ψ), ∂g/∂Ψ)`, the correction comes from the adjugate, and the iteration
+/// stops by the quadratic rule `quadratic2 |δ|⁴ ≤ u² |Ψ|²` or at round-off.
+#[inline(always)]
+fn lean_newton(
+    p: Vec3,
+    h: f64,
+    mut psi: Vec3,
+    quadratic2: f64,
+    mut residual_and_jacobian: impl FnMut(Vec3) -> (Vec3, Mat3),
+) -> Result<(Vec3, u32), NotConverged> {
+    let mut stop = NewtonStop::new();
+    let mut g = Vec3::ZERO;
+    for it in 1..=MAX_ITERATIONS {
+        let j;
+        (g, j) = residual_and_jacobian(psi);
         let Some(delta) = j.solve_adjugate(g) else {
             break;
         };
@@ -236,58 +254,36 @@ fn solve_diagonal(d: Vec3, d_inv: Vec3, inverse_norm: f64, p: Vec3, h: f64) -> R
         threshold *= 9.0;
     }
     let quadratic2 = p.norm_squared() * (h * inverse_norm) * (h * inverse_norm);
-    let mut stop = NewtonStop::new();
-    let mut g = Vec3::ZERO;
     let s = 0.5 * h;
-    for it in 1..=MAX_ITERATIONS {
+    lean_newton(p, h, psi, quadratic2, |psi| {
         let v = psi * -0.5;
         let t2 = v.norm_squared();
         let (a, b, c) = so3::coefficients(t2);
         let vp = v.cross(p);
         let q = p + vp * a + v.cross(vp) * b;
-        g = d.component_mul(psi) - q * h;
+        let g = d.component_mul(psi) - q * h;
         let w = q.cross(v);
         let (alpha, beta, gamma) = (s * (1.0 - c * t2), s * b, s * c);
         let diag = beta * q.dot(v);
         let (bv, gw, aq) = (v * beta, w * gamma, q * alpha);
-        // Rows of J.
-        let r0 = Vec3::new(
-            d.x + diag - bv.x * q.x - gw.x * v.x,
-            aq.z - bv.x * q.y - gw.x * v.y,
-            -aq.y - bv.x * q.z - gw.x * v.z,
-        );
-        let r1 = Vec3::new(
-            -aq.z - bv.y * q.x - gw.y * v.x,
-            d.y + diag - bv.y * q.y - gw.y * v.y,
-            aq.x - bv.y * q.z - gw.y * v.z,
-        );
-        let r2 = Vec3::new(
-            aq.y - bv.z * q.x - gw.z * v.x,
-            -aq.x - bv.z * q.y - gw.z * v.y,
-            d.z + diag - bv.z * q.z - gw.z * v.z,
-        );
-        let c0 = r1.cross(r2);
-        let det = r0.dot(c0);
-        if det == 0.0 || !det.is_finite() {
-            break;
-        }
-        let delta = (c0 * g.x + r2.cross(r0) * g.y + r0.cross(r1) * g.z) * (1.0 / det);
-        psi -= delta;
-        if !psi.is_finite() {
-            break;
-        }
-        let (d2, x2) = (delta.norm_squared(), psi.norm_squared());
-        if quadratic2 * d2 * d2 <= f64::EPSILON * f64::EPSILON * x2 || stop.done(d2.sqrt(), x2.sqrt()) {
-            if x2 > MAX_INCREMENT_ANGLE * MAX_INCREMENT_ANGLE {
-                return Err(NotConverged::IncrementTooLarge { angle: x2.sqrt() });
-            }
-            return Ok((psi, it));
-        }
-    }
-    let scale = (p * h).norm() + f64::MIN_POSITIVE;
-    Err(NotConverged::Iterations {
-        residual: g.norm() / scale,
-        iterations: MAX_ITERATIONS,
+        let j = Mat3::from_rows([
+            [
+                d.x + diag - bv.x * q.x - gw.x * v.x,
+                aq.z - bv.x * q.y - gw.x * v.y,
+                -aq.y - bv.x * q.z - gw.x * v.z,
+            ],
+            [
+                -aq.z - bv.y * q.x - gw.y * v.x,
+                d.y + diag - bv.y * q.y - gw.y * v.y,
+                aq.x - bv.y * q.z - gw.y * v.z,
+            ],
+            [
+                aq.y - bv.z * q.x - gw.z * v.x,
+                -aq.x - bv.z * q.y - gw.z * v.y,
+                d.z + diag - bv.z * q.z - gw.z * v.z,
+            ],
+        ]);
+        (g, j)
     })
 }
 

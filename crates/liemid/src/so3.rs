@@ -11,13 +11,15 @@
 //! Every coefficient that cancels near `θ = 0` switches to its Taylor series there, so all
 //! maps are accurate to a few ulps for every `θ`, including `θ = 0` exactly.
 
+use std::ops::{Add, Mul, Sub};
+
 use crate::linalg::{Mat3, Vec3};
 
 /// Below this angle (squared: 0.01) all coefficients use their Taylor series up to `θ⁸`,
 /// whose truncation error is below `3e-17` relative at the switch; above it the closed
 /// forms are accurate, since every coefficient multiplies a power of `hat(v)` that scales
 /// its own round-off down to a few ulps of the result.
-const SERIES_ANGLE_SQUARED: f64 = 0.01;
+pub(crate) const SERIES_ANGLE_SQUARED: f64 = 0.01;
 /// Below this angle squared (`θ < 0.5`) the coefficients use their series to `θ¹⁶`.
 const LONG_SERIES_ANGLE_SQUARED: f64 = 0.25;
 /// Below this angle squared (`θ < 4`) the coefficients are doubled from the series.
@@ -58,13 +60,20 @@ pub(crate) fn coefficients(t2: f64) -> (f64, f64, f64) {
 
 /// Taylor series to `θ⁸` for `θ² < 0.01`, by Estrin's scheme with constant coefficients: no
 /// division, and half the dependency chain of Horner's rule (these sit on the critical
-/// path of every step).
-#[inline]
-fn short_series(t: f64) -> (f64, f64, f64) {
+/// path of every step). Generic so that the SIMD lanes of the many-body kernel evaluate
+/// exactly the same operations as the scalar path.
+#[inline(always)]
+pub(crate) fn short_series<T>(t: T) -> (T, T, T)
+where
+    T: Copy + From<f64> + Add<Output = T> + Sub<Output = T> + Mul<Output = T>,
+{
+    let k = T::from;
     let (tt, tttt) = (t * t, (t * t) * (t * t));
-    let a = (1.0 - t * (1.0 / 6.0)) + tt * (1.0 / 120.0 - t * (1.0 / 5040.0)) + tttt * (1.0 / 362_880.0);
-    let b = (0.5 - t * (1.0 / 24.0)) + tt * (1.0 / 720.0 - t * (1.0 / 40_320.0)) + tttt * (1.0 / 3_628_800.0);
-    let c = (1.0 / 6.0 - t * (1.0 / 120.0)) + tt * (1.0 / 5040.0 - t * (1.0 / 362_880.0)) + tttt * (1.0 / 39_916_800.0);
+    let a = (k(1.0) - t * k(1.0 / 6.0)) + tt * (k(1.0 / 120.0) - t * k(1.0 / 5040.0)) + tttt * k(1.0 / 362_880.0);
+    let b = (k(0.5) - t * k(1.0 / 24.0)) + tt * (k(1.0 / 720.0) - t * k(1.0 / 40_320.0)) + tttt * k(1.0 / 3_628_800.0);
+    let c = (k(1.0 / 6.0) - t * k(1.0 / 120.0))
+        + tt * (k(1.0 / 5040.0) - t * k(1.0 / 362_880.0))
+        + tttt * k(1.0 / 39_916_800.0);
     (a, b, c)
 }
 
