@@ -49,19 +49,32 @@ fn for_chunks(force: &mut [Vec3], torque: &mut [Vec3], f: impl Fn(usize, &mut Ve
     }
 }
 
+impl Independent {
+    /// Force and torque on one body of mass `mass`.
+    #[inline]
+    fn on_body(&self, mass: f64, free: bool, rotation: &Mat3) -> (Vec3, Vec3) {
+        let w = self.gravity * mass;
+        if free {
+            (w, Vec3::ZERO)
+        } else {
+            (Vec3::ZERO, self.center_of_mass.cross(rotation.tr_mul_vec(w)))
+        }
+    }
+}
+
 impl Interaction for Independent {
     fn compute(&self, c: Configuration<'_>, force: &mut [Vec3], torque: &mut [Vec3]) {
-        let (g, x) = (self.gravity, self.center_of_mass);
         for_chunks(force, torque, |i, f, t| {
-            let w = g * c.mass[i];
-            if c.free[i] {
-                *f = w;
-                *t = Vec3::ZERO;
-            } else {
-                *f = Vec3::ZERO;
-                *t = x.cross(c.rotation[i].tr_mul_vec(w));
-            }
+            (*f, *t) = self.on_body(c.mass[i], c.free[i], &c.rotation[i]);
         });
+    }
+    fn is_local(&self) -> bool {
+        true
+    }
+    fn compute_local(&self, c: Configuration<'_>, force: &mut [Vec3], torque: &mut [Vec3]) {
+        for (i, (f, t)) in force.iter_mut().zip(torque.iter_mut()).enumerate() {
+            (*f, *t) = self.on_body(c.mass[i], c.free[i], &c.rotation[i]);
+        }
     }
     fn potential_energy(&self, c: Configuration<'_>) -> f64 {
         (0..c.mass.len())

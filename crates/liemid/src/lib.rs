@@ -40,6 +40,7 @@ pub mod driver;
 pub mod error;
 pub mod inertia;
 pub mod interactions;
+#[cfg(all(feature = "simd", target_arch = "x86_64"))]
 mod lanes;
 pub mod linalg;
 pub mod many;

@@ -29,8 +29,7 @@ use std::sync::Mutex;
 
 use crate::composition::Scheme;
 use crate::error::{Error, Result};
-use crate::inertia::{InertiaOperator, PrincipalInertia};
-use crate::lanes::LANES;
+use crate::inertia::PrincipalInertia;
 use crate::linalg::{Mat3, Vec3};
 use crate::midpoint;
 use crate::rotation::newton_error;
@@ -93,6 +92,19 @@ pub trait Interaction: Sync {
     fn compute(&self, config: Configuration<'_>, force: &mut [Vec3], torque: &mut [Vec3]);
     /// The potential energy of the configuration.
     fn potential_energy(&self, config: Configuration<'_>) -> f64;
+    /// `true` when each body's force and torque depend only on that body's own entries of
+    /// the configuration (no coupling). [`Bodies::step`] then evaluates them run by run of
+    /// bodies with [`Interaction::compute_local`], in the same pass over memory as the
+    /// rotation. The default is `false`.
+    fn is_local(&self) -> bool {
+        false
+    }
+    /// For a local interaction, the forces and torques of the run of consecutive bodies that
+    /// `config` holds, on the calling thread; must write what [`Interaction::compute`] writes
+    /// for these bodies. The default calls `compute`.
+    fn compute_local(&self, config: Configuration<'_>, force: &mut [Vec3], torque: &mut [Vec3]) {
+        self.compute(config, force, torque);
+    }
 }
 
 /// Totals of a many-body state.
@@ -122,35 +134,111 @@ fn chunks2<A: Send, B: Send>(a: &mut [A], b: &mut [B], f: impl Fn(usize, &mut [A
     }
 }
 
-/// Run `f(first_index, chunk_a, chunk_b, chunk_c, chunk_d)` over matching chunks of four
-/// slices of the same length.
-fn chunks4<A: Send, B: Send, C: Send, D: Send>(
-    a: &mut [A],
-    b: &mut [B],
-    c: &mut [C],
-    d: &mut [D],
-    f: impl Fn(usize, &mut [A], &mut [B], &mut [C], &mut [D]) + Sync + Send,
-) {
+/// The mutable state of a run of consecutive bodies, for one pass of a step.
+struct Chunk<'a> {
+    momentum: &'a mut [Vec3],
+    pi: &'a mut [Vec3],
+    position: &'a mut [Vec3],
+    rotation: &'a mut [Mat3],
+    force: &'a mut [Vec3],
+    torque: &'a mut [Vec3],
+}
+
+/// Run `f(first_index, chunk)` over the chunks of [`CHUNK`] bodies of `b`, in parallel with the
+/// `parallel` feature; every body is in exactly one chunk, whatever the thread count.
+fn for_each_chunk(b: Chunk<'_>, f: impl Fn(usize, Chunk<'_>) + Sync + Send) {
     #[cfg(feature = "parallel")]
-    {
-        use rayon::prelude::*;
-        a.par_chunks_mut(CHUNK)
-            .zip(b.par_chunks_mut(CHUNK))
-            .zip(c.par_chunks_mut(CHUNK))
-            .zip(d.par_chunks_mut(CHUNK))
-            .enumerate()
-            .for_each(|(k, (((a, b), c), d))| f(k * CHUNK, a, b, c, d));
-    }
+    use rayon::prelude::{IndexedParallelIterator, ParallelIterator, ParallelSliceMut as Chunks};
+    #[cfg(feature = "parallel")]
+    let (p, pi, x, r, fo, to) = (
+        b.momentum.par_chunks_mut(CHUNK),
+        b.pi.par_chunks_mut(CHUNK),
+        b.position.par_chunks_mut(CHUNK),
+        b.rotation.par_chunks_mut(CHUNK),
+        b.force.par_chunks_mut(CHUNK),
+        b.torque.par_chunks_mut(CHUNK),
+    );
     #[cfg(not(feature = "parallel"))]
-    for (k, (((a, b), c), d)) in a
-        .chunks_mut(CHUNK)
-        .zip(b.chunks_mut(CHUNK))
-        .zip(c.chunks_mut(CHUNK))
-        .zip(d.chunks_mut(CHUNK))
-        .enumerate()
-    {
-        f(k * CHUNK, a, b, c, d);
+    let (p, pi, x, r, fo, to) = (
+        b.momentum.chunks_mut(CHUNK),
+        b.pi.chunks_mut(CHUNK),
+        b.position.chunks_mut(CHUNK),
+        b.rotation.chunks_mut(CHUNK),
+        b.force.chunks_mut(CHUNK),
+        b.torque.chunks_mut(CHUNK),
+    );
+    p.zip(pi).zip(x).zip(r).zip(fo).zip(to).enumerate().for_each(
+        |(k, (((((momentum, pi), position), rotation), force), torque))| {
+            f(
+                k * CHUNK,
+                Chunk {
+                    momentum,
+                    pi,
+                    position,
+                    rotation,
+                    force,
+                    torque,
+                },
+            );
+        },
+    );
+}
+
+/// Half kick of a run of bodies: `p ← p + (h/2) F` (free bodies), `Π ← Π + (h/2) T`.
+#[inline]
+fn kick_chunk(free: &[bool], p: &mut [Vec3], pi: &mut [Vec3], force: &[Vec3], torque: &[Vec3], hh: f64) {
+    for k in 0..p.len() {
+        if free[k] {
+            p[k] += force[k] * hh;
+        }
+        pi[k] += torque[k] * hh;
     }
+}
+
+/// Bodies per group of the SIMD lanes.
+const GROUP: usize = 4;
+
+/// Whether [`rotate_group`] can run: the `simd` feature on an x86-64 processor with AVX.
+#[inline]
+fn lanes_available() -> bool {
+    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+    {
+        crate::lanes::use_avx()
+    }
+    #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
+    {
+        false
+    }
+}
+
+/// The torque-free rotation of a group of [`GROUP`] bodies in SIMD lanes, equal bit for bit
+/// to [`free_rotation`] of each; `false`, with nothing written, when the group needs the
+/// scalar path (always without `lanes`, which must be [`lanes_available`]).
+#[inline]
+#[allow(unused_variables)]
+fn rotate_group(lanes: bool, inertia: &[PrincipalInertia], r: &mut [Mat3], pi: &mut [Vec3], hh: f64) -> bool {
+    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+    {
+        use crate::inertia::InertiaOperator;
+        let (Ok(group), Ok(r), Ok(pi)) = (
+            <&[PrincipalInertia; GROUP]>::try_from(inertia),
+            <&mut [Mat3; GROUP]>::try_from(r),
+            <&mut [Vec3; GROUP]>::try_from(pi),
+        ) else {
+            return false;
+        };
+        crate::lanes::free_rotation_x4(
+            lanes,
+            &group.map(|g| g.moments),
+            &group.map(|g| g.inverse),
+            group.map(|g| g.inverse_norm_bound()),
+            r,
+            pi,
+            hh,
+        )
+    }
+    #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
+    false
 }
 
 /// The torque-free midpoint Lie rotation of one body: two half steps
@@ -265,13 +353,8 @@ impl Bodies {
         let hh = 0.5 * h;
         let (force, torque, free) = (&self.force, &self.torque, &self.free);
         chunks2(&mut self.momentum, &mut self.pi, |start, p, pi| {
-            for (k, (p, pi)) in p.iter_mut().zip(pi.iter_mut()).enumerate() {
-                let i = start + k;
-                if free[i] {
-                    *p += force[i] * hh;
-                }
-                *pi += torque[i] * hh;
-            }
+            let range = start..start + p.len();
+            kick_chunk(&free[range.clone()], p, pi, &force[range.clone()], &torque[range], hh);
         });
     }
 
@@ -291,73 +374,79 @@ impl Bodies {
         let t = self.t;
         let failure: Mutex<Option<(usize, Error)>> = Mutex::new(None);
         let failure_ref = &failure;
-        let (inertia, free, mass, force, torque) = (&self.inertia, &self.free, &self.mass, &self.force, &self.torque);
-        let avx = crate::lanes::use_avx();
+        let (inertia, free, mass) = (&self.inertia, &self.free, &self.mass);
+        let lanes = lanes_available();
+        let local = interaction.is_local();
+        let all = Chunk {
+            momentum: &mut self.momentum,
+            pi: &mut self.pi,
+            position: &mut self.position,
+            rotation: &mut self.rotation,
+            force: &mut self.force,
+            torque: &mut self.torque,
+        };
         // One pass over each chunk: the start impulse, the drift of free bodies, and the
         // torque-free midpoint Lie rotation (two half steps as in EA), four bodies at a
-        // time in SIMD lanes where they take the common path.
-        chunks4(
-            &mut self.momentum,
-            &mut self.pi,
-            &mut self.position,
-            &mut self.rotation,
-            |start, p, pi, x, r| {
-                for k in 0..p.len() {
-                    let i = start + k;
-                    if free[i] {
-                        p[k] += force[i] * hh;
-                    }
-                    pi[k] += torque[i] * hh;
-                    if free[i] {
-                        x[k] += p[k] * (h / mass[i]);
-                    }
+        // time in SIMD lanes where they take the common path; for a local interaction also
+        // the new forces and torques and the end impulse, so the step sweeps memory once.
+        for_each_chunk(all, |start, c| {
+            let (p, pi, x, r) = (c.momentum, c.pi, c.position, c.rotation);
+            let n = p.len();
+            let (free, mass) = (&free[start..start + n], &mass[start..start + n]);
+            for k in 0..n {
+                if free[k] {
+                    p[k] += c.force[k] * hh;
                 }
-                let mut k = 0;
-                while k < r.len() {
-                    let i = start + k;
-                    if cfg!(feature = "simd") && k + LANES <= r.len() {
-                        let group: [PrincipalInertia; LANES] = std::array::from_fn(|j| inertia[i + j]);
-                        let (rs, ps) = (
-                            <&mut [Mat3; LANES]>::try_from(&mut r[k..k + LANES]).expect("four"),
-                            <&mut [Vec3; LANES]>::try_from(&mut pi[k..k + LANES]).expect("four"),
-                        );
-                        if crate::lanes::free_rotation_x4(
-                            avx,
-                            group.map(|g| g.moments),
-                            group.map(|g| g.inverse),
-                            group.map(|g| g.inverse_norm_bound()),
-                            rs,
-                            ps,
-                            hh,
-                        ) {
-                            k += LANES;
-                            continue;
-                        }
-                    }
-                    // The scalar path: the rest of the chunk, and groups the lanes hand over.
-                    let end = (k + LANES).min(r.len());
-                    for k in k..end {
-                        let i = start + k;
-                        if let Err(e) = free_rotation(&inertia[i], &mut r[k], &mut pi[k], hh) {
-                            let mut f = failure_ref.lock().expect("not poisoned");
-                            let err = newton_error("many-body splitting", "midpoint equation (M)", t, h, e);
-                            if f.as_ref().map_or(true, |(j, _)| i < *j) {
-                                *f = Some((i, err));
-                            }
-                            return;
-                        }
-                    }
+                pi[k] += c.torque[k] * hh;
+                if free[k] {
+                    x[k] += p[k] * (h / mass[k]);
+                }
+            }
+            let mut k = 0;
+            while k < n {
+                let end = (k + GROUP).min(n);
+                let (i, j) = (start + k, start + end);
+                if lanes && rotate_group(lanes, &inertia[i..j], &mut r[k..end], &mut pi[k..end], hh) {
                     k = end;
+                    continue;
                 }
-            },
-        );
+                // The scalar path: the rest of the chunk, and groups the lanes hand over.
+                for k in k..end {
+                    let i = start + k;
+                    if let Err(e) = free_rotation(&inertia[i], &mut r[k], &mut pi[k], hh) {
+                        let mut f = failure_ref.lock().expect("not poisoned");
+                        let err = newton_error("many-body splitting", "midpoint equation (M)", t, h, e);
+                        if f.as_ref().is_none_or(|(j, _)| i < *j) {
+                            *f = Some((i, err));
+                        }
+                        return;
+                    }
+                }
+                k = end;
+            }
+            if local {
+                let config = Configuration {
+                    t: t + h,
+                    mass,
+                    free,
+                    position: x,
+                    rotation: r,
+                };
+                interaction.compute_local(config, c.force, c.torque);
+                kick_chunk(free, p, pi, c.force, c.torque, hh);
+            }
+        });
         if let Some((_, e)) = failure.into_inner().expect("not poisoned") {
             self.forces_valid = false;
             return Err(e);
         }
         self.t = t + h;
-        self.evaluate(interaction);
-        self.kick(h);
+        if local {
+            self.forces_valid = true;
+        } else {
+            self.evaluate(interaction);
+            self.kick(h);
+        }
         Ok(())
     }
 

@@ -19,9 +19,9 @@ use crate::so3;
 /// Iteration cap of the Newton solvers.
 pub const MAX_ITERATIONS: u32 = 50;
 /// Converged when the correction is at most this many ulps of the unknown.
-const CONVERGED_ULPS: f64 = 4.0;
+pub(crate) const CONVERGED_ULPS: f64 = 4.0;
 /// Below this many ulps, a correction that no longer halves is round-off noise.
-const STAGNATION_ULPS: f64 = 256.0;
+pub(crate) const STAGNATION_ULPS: f64 = 256.0;
 
 /// The largest accepted rotation increment `|Ψ|` per (sub)step: beyond a half turn the
 /// midpoint equation has several solutions and the step cannot resolve the rotation.

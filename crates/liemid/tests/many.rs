@@ -190,3 +190,69 @@ fn torque_free_bodies_keep_their_spin_magnitudes() {
     );
     assert!(e.is_err());
 }
+
+/// [`Independent`] without its `is_local` claim, so the step evaluates it in a separate pass.
+struct SeparatePass(Independent);
+
+impl Interaction for SeparatePass {
+    fn compute(&self, config: liemid::many::Configuration<'_>, force: &mut [Vec3], torque: &mut [Vec3]) {
+        self.0.compute(config, force, torque);
+    }
+    fn potential_energy(&self, config: liemid::many::Configuration<'_>) -> f64 {
+        self.0.potential_energy(config)
+    }
+}
+
+fn heavy_top_ensemble(threads: usize, interaction: &dyn Interaction) -> Bodies {
+    let mut rng = Rng::new(11);
+    let mut b = Bodies::new();
+    for i in 0..1001 {
+        let moments = Vec3::new(1.0 + rng.uniform(), 1.5 + rng.uniform(), 2.0 + rng.uniform());
+        let pi = rng.unit_vector() * (40.0 * rng.uniform());
+        let p = Vec3::new(rng.normal(), rng.normal(), rng.normal());
+        b.push(
+            1.0 + rng.uniform(),
+            moments,
+            i % 3 == 0,
+            Vec3::ZERO,
+            p,
+            rng.rotation(),
+            pi,
+        )
+        .unwrap();
+    }
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+    pool.install(|| {
+        for _ in 0..30 {
+            b.step(interaction, 2e-3).unwrap();
+        }
+    });
+    b
+}
+
+/// A local interaction is evaluated chunk by chunk in the rotation pass; that changes no
+/// bit, whatever the thread count.
+#[test]
+fn local_interactions_in_one_pass_equal_the_separate_pass() {
+    let tops = Independent {
+        gravity: Vec3::new(0.0, 0.0, -9.81),
+        center_of_mass: Vec3::new(0.0, 0.1, 0.3),
+    };
+    let reference = heavy_top_ensemble(1, &SeparatePass(tops));
+    for threads in [1, 2] {
+        let b = heavy_top_ensemble(threads, &tops);
+        assert!(
+            b.position == reference.position && b.momentum == reference.momentum,
+            "translation, {threads} threads"
+        );
+        assert!(
+            b.rotation == reference.rotation && b.pi == reference.pi,
+            "rotation, {threads} threads"
+        );
+        assert!(
+            b.force == reference.force && b.torque == reference.torque,
+            "forces, {threads} threads"
+        );
+    }
+    assert!(reference.position[0] != Vec3::ZERO && reference.torque[1] != Vec3::ZERO);
+}
