@@ -6,8 +6,9 @@
 use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use liemid::many::Bodies;
+use liemid::many::{Bodies, CHUNK};
 use liemid::problems;
+use rayon::prelude::*;
 
 /// Copy every state array of `b` into `into`: the least any step must move through memory.
 fn copy_state(b: &Bodies, into: &mut Bodies) {
@@ -22,6 +23,24 @@ fn copy_state(b: &Bodies, into: &mut Bodies) {
     into.torque.copy_from_slice(&b.torque);
 }
 
+/// [`copy_state`] with the arrays split in chunks over the threads of the current pool.
+fn copy_state_parallel(b: &Bodies, into: &mut Bodies) {
+    fn copy<T: Copy + Send + Sync>(from: &[T], to: &mut [T]) {
+        to.par_chunks_mut(CHUNK)
+            .zip(from.par_chunks(CHUNK))
+            .for_each(|(to, from)| to.copy_from_slice(from));
+    }
+    copy(&b.mass, &mut into.mass);
+    copy(&b.inertia, &mut into.inertia);
+    copy(&b.free, &mut into.free);
+    copy(&b.position, &mut into.position);
+    copy(&b.momentum, &mut into.momentum);
+    copy(&b.rotation, &mut into.rotation);
+    copy(&b.pi, &mut into.pi);
+    copy(&b.force, &mut into.force);
+    copy(&b.torque, &mut into.torque);
+}
+
 fn throughput(c: &mut Criterion) {
     let mut group = c.benchmark_group("many");
     group
@@ -32,11 +51,16 @@ fn throughput(c: &mut Criterion) {
         group.throughput(Throughput::Elements(n as u64));
         let (bodies, free) = problems::torque_free_ensemble(n, 1);
         let mut copy = bodies.clone();
-        group.bench_with_input(BenchmarkId::new("copy floor", n), &n, |b, _| {
+        group.bench_with_input(BenchmarkId::new("copy floor, 1 thread", n), &n, |b, _| {
             b.iter(|| copy_state(&bodies, &mut copy))
         });
         for threads in [1, 2] {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            if threads == 2 {
+                group.bench_with_input(BenchmarkId::new("copy floor, 2 threads", n), &n, |b, _| {
+                    b.iter(|| pool.install(|| copy_state_parallel(&bodies, &mut copy)))
+                });
+            }
             let mut state = bodies.clone();
             group.bench_with_input(
                 BenchmarkId::new(format!("torque-free, {threads} threads"), n),

@@ -118,14 +118,23 @@ pub struct Totals {
     pub angular_momentum: Vec3,
 }
 
+/// Split `chunks` into one contiguous run per thread of the current pool, instead of
+/// rayon's adaptive splitting into many pieces: each thread then steps the same bodies in
+/// every pass and every step, and finds them in its own caches (measured: 2 threads went
+/// from 1.3-1.6 to 1.7-1.8 times the speed of 1 for 10⁴ to 10⁶ torque-free bodies).
+#[cfg(feature = "parallel")]
+fn contiguous_per_thread<I: rayon::iter::IndexedParallelIterator>(chunks: I) -> rayon::iter::MinLen<I> {
+    let threads = rayon::current_num_threads().max(1);
+    let per_thread = (chunks.len() / threads).max(1);
+    chunks.with_min_len(per_thread)
+}
+
 /// Run `f(first_index, chunk_a, chunk_b)` over matching chunks of two slices.
 fn chunks2<A: Send, B: Send>(a: &mut [A], b: &mut [B], f: impl Fn(usize, &mut [A], &mut [B]) + Sync + Send) {
     #[cfg(feature = "parallel")]
     {
         use rayon::prelude::*;
-        a.par_chunks_mut(CHUNK)
-            .zip(b.par_chunks_mut(CHUNK))
-            .enumerate()
+        contiguous_per_thread(a.par_chunks_mut(CHUNK).zip(b.par_chunks_mut(CHUNK)).enumerate())
             .for_each(|(k, (x, y))| f(k * CHUNK, x, y));
     }
     #[cfg(not(feature = "parallel"))]
@@ -148,7 +157,7 @@ struct Chunk<'a> {
 /// `parallel` feature; every body is in exactly one chunk, whatever the thread count.
 fn for_each_chunk(b: Chunk<'_>, f: impl Fn(usize, Chunk<'_>) + Sync + Send) {
     #[cfg(feature = "parallel")]
-    use rayon::prelude::{IndexedParallelIterator, ParallelIterator, ParallelSliceMut as Chunks};
+    use rayon::prelude::{IndexedParallelIterator, ParallelIterator, ParallelSliceMut as _};
     #[cfg(feature = "parallel")]
     let (p, pi, x, r, fo, to) = (
         b.momentum.par_chunks_mut(CHUNK),
@@ -167,21 +176,22 @@ fn for_each_chunk(b: Chunk<'_>, f: impl Fn(usize, Chunk<'_>) + Sync + Send) {
         b.force.chunks_mut(CHUNK),
         b.torque.chunks_mut(CHUNK),
     );
-    p.zip(pi).zip(x).zip(r).zip(fo).zip(to).enumerate().for_each(
-        |(k, (((((momentum, pi), position), rotation), force), torque))| {
-            f(
-                k * CHUNK,
-                Chunk {
-                    momentum,
-                    pi,
-                    position,
-                    rotation,
-                    force,
-                    torque,
-                },
-            );
-        },
-    );
+    let all = p.zip(pi).zip(x).zip(r).zip(fo).zip(to).enumerate();
+    #[cfg(feature = "parallel")]
+    let all = contiguous_per_thread(all);
+    all.for_each(|(k, (((((momentum, pi), position), rotation), force), torque))| {
+        f(
+            k * CHUNK,
+            Chunk {
+                momentum,
+                pi,
+                position,
+                rotation,
+                force,
+                torque,
+            },
+        );
+    });
 }
 
 /// Half kick of a run of bodies: `p ← p + (h/2) F` (free bodies), `Π ← Π + (h/2) T`.
