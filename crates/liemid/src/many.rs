@@ -158,24 +158,22 @@ struct Chunk<'a> {
 fn for_each_chunk(b: Chunk<'_>, f: impl Fn(usize, Chunk<'_>) + Sync + Send) {
     #[cfg(feature = "parallel")]
     use rayon::prelude::{IndexedParallelIterator, ParallelIterator, ParallelSliceMut as _};
+    macro_rules! split {
+        ($chunks:ident) => {
+            (
+                b.momentum.$chunks(CHUNK),
+                b.pi.$chunks(CHUNK),
+                b.position.$chunks(CHUNK),
+                b.rotation.$chunks(CHUNK),
+                b.force.$chunks(CHUNK),
+                b.torque.$chunks(CHUNK),
+            )
+        };
+    }
     #[cfg(feature = "parallel")]
-    let (p, pi, x, r, fo, to) = (
-        b.momentum.par_chunks_mut(CHUNK),
-        b.pi.par_chunks_mut(CHUNK),
-        b.position.par_chunks_mut(CHUNK),
-        b.rotation.par_chunks_mut(CHUNK),
-        b.force.par_chunks_mut(CHUNK),
-        b.torque.par_chunks_mut(CHUNK),
-    );
+    let (p, pi, x, r, fo, to) = split!(par_chunks_mut);
     #[cfg(not(feature = "parallel"))]
-    let (p, pi, x, r, fo, to) = (
-        b.momentum.chunks_mut(CHUNK),
-        b.pi.chunks_mut(CHUNK),
-        b.position.chunks_mut(CHUNK),
-        b.rotation.chunks_mut(CHUNK),
-        b.force.chunks_mut(CHUNK),
-        b.torque.chunks_mut(CHUNK),
-    );
+    let (p, pi, x, r, fo, to) = split!(chunks_mut);
     let all = p.zip(pi).zip(x).zip(r).zip(fo).zip(to).enumerate();
     #[cfg(feature = "parallel")]
     let all = contiguous_per_thread(all);
