@@ -32,10 +32,15 @@ Examples:
   liemid many --model dipoles --bodies 10000   a dipolar fluid on all cores
   liemid methods";
 
-/// Structure-preserving integration of rigid-body rotation with the explicit midpoint Lie
-/// methods (LIEMID[E1], [E2], [EA]) and their comparison line-up.
+/// The command line (its help text is the `about` below).
 #[derive(Parser, Debug)]
-#[command(name = "liemid", version, after_help = EXAMPLES)]
+#[command(
+    name = "liemid",
+    version,
+    about = "Structure-preserving integration of rigid-body rotation with the explicit midpoint Lie methods (LIEMID[E1], [E2], [EA]) and their comparison line-up",
+    long_about = None,
+    after_help = EXAMPLES
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

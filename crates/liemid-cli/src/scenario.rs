@@ -89,7 +89,7 @@ pub struct Scenario {
 /// The built-in problem names.
 pub const PROBLEMS: [&str; 4] = ["fast-top", "slow-top", "free-body", "torque-top"];
 
-/// A built-in problem as a scenario (LIEMID[EA], h = 1e-4 for the tops).
+/// A built-in problem as a scenario (LIEMID\[EA\], h = 1e-4 for the tops).
 pub fn builtin(name: &str) -> Result<Scenario, String> {
     let (system, initial, t_end, step) = match name {
         "fast-top" => {

@@ -1,8 +1,8 @@
 //! # liemid
 //!
 //! Structure-preserving time integration of mechanical systems, built around the explicit
-//! midpoint Lie integrators for rigid-body rotation (LIEMID[E1], LIEMID[E2] and their
-//! alternating, second-order, symplectic, momentum-conserving composition LIEMID[EA]).
+//! midpoint Lie integrators for rigid-body rotation (LIEMID\[E1\], LIEMID\[E2\] and their
+//! alternating, second-order, symplectic, momentum-conserving composition LIEMID\[EA\]).
 //!
 //! - [`so3`]: hat/vee, `exp`, `log`, Jacobians, Cayley, quaternions.
 //! - [`rigid`]: the rigid-body state, the [`RigidBodySystem`] trait, models

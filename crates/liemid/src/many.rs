@@ -18,7 +18,7 @@
 //! p ← p + (h/2) F,  Π ← Π + (h/2) T              (impulse at the end)
 //! ```
 //!
-//! For one body with a torque it is exactly LIEMID[EA]; it is symplectic and time
+//! For one body with a torque it is exactly LIEMID\[EA\]; it is symplectic and time
 //! reversible, and keeps the total linear and angular momentum (orbital plus spin) of any
 //! translation- and rotation-invariant interaction to round-off. Work is split into
 //! chunks of [`CHUNK`] bodies; each body's force is gathered from its neighbours in a fixed

@@ -31,7 +31,7 @@ fn midpoint_rotation(
     Ok(psi)
 }
 
-/// LIEMID[E2]: explicit midpoint Lie with the torque impulse at the start of the step
+/// LIEMID\[E2\]: explicit midpoint Lie with the torque impulse at the start of the step
 /// (the SO(3) analogue of symplectic Euler).
 ///
 /// ```text
@@ -76,7 +76,7 @@ impl RotationIntegrator for LieMidpointE2 {
     }
 }
 
-/// LIEMID[E1]: explicit midpoint Lie with the torque impulse at the end of the step, the
+/// LIEMID\[E1\]: explicit midpoint Lie with the torque impulse at the end of the step, the
 /// adjoint of [`LieMidpointE2`] (`E1_h = (E2_{−h})⁻¹`).
 ///
 /// ```text
@@ -118,7 +118,7 @@ impl RotationIntegrator for LieMidpointE1 {
     }
 }
 
-/// LIEMID[EA]: the alternating composition `E1_{h/2} ∘ E2_{h/2}`.
+/// LIEMID\[EA\]: the alternating composition `E1_{h/2} ∘ E2_{h/2}`.
 ///
 /// ```text
 /// P = Π_n + (h/2) T_n;            solve (M) with (P, h/2) → Ψ₁;
@@ -174,7 +174,7 @@ impl RotationIntegrator for LieMidpointAlternating {
     }
 }
 
-/// LIEMID[I]: the implicit midpoint Lie rule, torque at the midpoint configuration
+/// LIEMID\[I\]: the implicit midpoint Lie rule, torque at the midpoint configuration
 /// `R_a = R_n exp(Ψ/2)`, `T_a = T(R_a, t_n + h/2)`:
 ///
 /// ```text

@@ -291,13 +291,13 @@ fn ea_composition(scheme: Scheme, name: &'static str) -> AnyRotationIntegrator {
 /// Any of the crate's rotation integrators, chosen at run time.
 #[derive(Clone, Debug)]
 pub enum AnyRotationIntegrator {
-    /// LIEMID[E1].
+    /// LIEMID\[E1\].
     E1(LieMidpointE1),
-    /// LIEMID[E2].
+    /// LIEMID\[E2\].
     E2(LieMidpointE2),
-    /// LIEMID[EA].
+    /// LIEMID\[EA\].
     Ea(LieMidpointAlternating),
-    /// LIEMID[I].
+    /// LIEMID\[I\].
     I(LieMidpointImplicit),
     /// AKW.
     Akw(AustinKrishnaprasadWang),
