@@ -138,7 +138,11 @@ pub fn solve_with(
 /// step.
 ///
 /// - Guess: the third-order predictor `Ψ₁ = h I⁻¹ (P + ½ P × Ψ₀)`, `Ψ₀ = h I⁻¹ P`, from
-///   `exp(−Ψ/2) P = P + ½ P × Ψ + O(Ψ²)`.
+///   `exp(−Ψ/2) P = P + ½ P × Ψ + O(Ψ²)`. It is better than a warm start from an earlier
+///   increment, whose error is the change of `Ψ` over a step: on the fast top over
+///   `t ∈ [0, 0.8]` the predictor is within 6.5e-8 (relative) of the root at `h = 1e-4`
+///   and 6.6e-6 at `h = 1e-3`, the previous step's increment only within 1.2e-5 and
+///   1.2e-4, enough to cost a second Newton iteration (`examples/newton_guess.rs`).
 /// - Newton with the exact Jacobian written as `I − (h/2) hat(Q) Jl(−Ψ/2)`,
 ///   `Q = exp(−Ψ/2) P` (since `exp(a) hat(P) Jr(a) = hat(exp(a) P) Jl(a)`), so one set of
 ///   coefficients serves the residual and the Jacobian; the 3x3 system is solved by the
