@@ -19,9 +19,9 @@
 use std::arch::x86_64::{
     __m256d, _mm256_add_pd, _mm256_and_pd, _mm256_andnot_pd, _mm256_blendv_pd, _mm256_cmp_pd, _mm256_div_pd,
     _mm256_loadu_pd, _mm256_movemask_pd, _mm256_mul_pd, _mm256_or_pd, _mm256_set1_pd, _mm256_setzero_pd,
-    _mm256_sqrt_pd, _mm256_storeu_pd, _mm256_sub_pd, _CMP_EQ_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_NEQ_UQ,
+    _mm256_sqrt_pd, _mm256_storeu_pd, _mm256_sub_pd, _mm256_xor_pd, _CMP_EQ_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_NEQ_UQ,
 };
-use std::ops::{Add, Mul, Sub};
+use std::ops::{Add, Mul, Neg, Sub};
 
 use crate::linalg::{Mat3, Vec3};
 use crate::midpoint::{CONVERGED_ULPS, MAX_INCREMENT_ANGLE, STAGNATION_ULPS};
@@ -146,6 +146,14 @@ impl Mul for F {
     #[inline(always)]
     fn mul(self, b: F) -> F {
         F(unsafe { _mm256_mul_pd(self.0, b.0) })
+    }
+}
+impl Neg for F {
+    type Output = F;
+    /// `−x` as the scalar path negates: the sign bit flipped (so `−0` stays distinct from `0 − 0`).
+    #[inline(always)]
+    fn neg(self) -> F {
+        F(unsafe { _mm256_xor_pd(self.0, _mm256_set1_pd(-0.0)) })
     }
 }
 impl Mul<f64> for F {
@@ -284,20 +292,19 @@ fn solve(d: V, d_inv: V, inverse_norm: F, p: V, h: f64) -> Option<V> {
         let (alpha, beta, gamma) = ((F::splat(1.0) - c * t2) * s, b * s, c * s);
         let diag = beta * q.dot(v);
         let (bv, gw, aq) = (v.scale(beta), w.scale(gamma), q.scale(alpha));
-        let zero = F::splat(0.0);
         let r0 = V {
             x: d.x + diag - bv.x * q.x - gw.x * v.x,
             y: aq.z - bv.x * q.y - gw.x * v.y,
-            z: (zero - aq.y) - bv.x * q.z - gw.x * v.z,
+            z: -aq.y - bv.x * q.z - gw.x * v.z,
         };
         let r1 = V {
-            x: (zero - aq.z) - bv.y * q.x - gw.y * v.x,
+            x: -aq.z - bv.y * q.x - gw.y * v.x,
             y: d.y + diag - bv.y * q.y - gw.y * v.y,
             z: aq.x - bv.y * q.z - gw.y * v.z,
         };
         let r2 = V {
             x: aq.y - bv.z * q.x - gw.z * v.x,
-            y: (zero - aq.x) - bv.z * q.y - gw.z * v.y,
+            y: -aq.x - bv.z * q.y - gw.z * v.y,
             z: d.z + diag - bv.z * q.z - gw.z * v.z,
         };
         let c0 = r1.cross(r2);
@@ -370,11 +377,10 @@ fn increment(psi: V, r: &mut M, pi: V) -> Option<V> {
     // `E = a hat(Ψ) + b hat(Ψ)²`, then `R + R E`.
     let (x, y, z) = (psi.x, psi.y, psi.z);
     let (xx, yy, zz) = (x * x, y * y, z * z);
-    let zero = F::splat(0.0);
     let e = [
-        [zero - b * (yy + zz), b * x * y - a * z, b * x * z + a * y],
-        [b * x * y + a * z, zero - b * (xx + zz), b * y * z - a * x],
-        [b * x * z - a * y, b * y * z + a * x, zero - b * (xx + yy)],
+        [-b * (yy + zz), b * x * y - a * z, b * x * z + a * y],
+        [b * x * y + a * z, -b * (xx + zz), b * y * z - a * x],
+        [b * x * z - a * y, b * y * z + a * x, -b * (xx + yy)],
     ];
     let m = r.0;
     for (i, row) in r.0.iter_mut().enumerate() {
@@ -466,6 +472,12 @@ mod tests {
                 inertia[k] = PrincipalInertia::new(m);
                 r[k] = rng.rotation();
                 pi[k] = rng.unit_vector() * (20.0 * rng.uniform());
+            }
+            if trial % 7 == 0 {
+                // Exact zeros, whose signs the lanes must reproduce too.
+                pi[0] = Vec3::ZERO;
+                pi[1] = Vec3::new(0.0, 0.0, -5.0 * rng.uniform());
+                r[2] = Mat3::IDENTITY;
             }
             // Mostly small increments; some large enough to leave the lanes.
             let h = if trial % 10 == 0 {
