@@ -45,12 +45,26 @@ const JAC_SERIES_ANGLE: f64 = 0.1;
 /// - beyond: the closed forms with one `sin_cos`.
 #[inline]
 pub(crate) fn coefficients(t2: f64) -> (f64, f64, f64) {
+    some_coefficients::<true>(t2)
+}
+
+/// `(a, b)` of [`coefficients`], bit for bit, without the work for `c` (what `exp` and the
+/// rotation of a vector need).
+#[inline]
+pub(crate) fn rodrigues(t2: f64) -> (f64, f64) {
+    let (a, b, _) = some_coefficients::<false>(t2);
+    (a, b)
+}
+
+/// [`coefficients`]; with `WITH_C = false` the third is not computed (0).
+#[inline]
+fn some_coefficients<const WITH_C: bool>(t2: f64) -> (f64, f64, f64) {
     if t2 < SERIES_ANGLE_SQUARED {
         short_series(t2)
     } else if t2 < LONG_SERIES_ANGLE_SQUARED {
-        long_series(t2)
+        long_series::<WITH_C>(t2)
     } else if t2 < DOUBLING_ANGLE_SQUARED {
-        doubled(t2)
+        doubled::<WITH_C>(t2)
     } else {
         let theta = t2.sqrt();
         let (s, co) = theta.sin_cos();
@@ -109,23 +123,27 @@ const C_SERIES: [f64; 9] = reciprocal_factorials(3);
 
 /// Taylor series to `θ¹⁶`, for `θ² < 0.25`.
 #[inline]
-fn long_series(t: f64) -> (f64, f64, f64) {
-    (series8(t, &A_SERIES), series8(t, &B_SERIES), series8(t, &C_SERIES))
+fn long_series<const WITH_C: bool>(t: f64) -> (f64, f64, f64) {
+    let c = if WITH_C { series8(t, &C_SERIES) } else { 0.0 };
+    (series8(t, &A_SERIES), series8(t, &B_SERIES), c)
 }
 
 /// The half-angle doublings from the series at `θ/2ᵏ < 0.5`, for `0.25 ≤ θ² < 16`.
 #[inline(never)]
-fn doubled(t2: f64) -> (f64, f64, f64) {
+fn doubled<const WITH_C: bool>(t2: f64) -> (f64, f64, f64) {
     let mut k = 0;
     let mut t = t2;
     while t >= LONG_SERIES_ANGLE_SQUARED {
         t *= 0.25;
         k += 1;
     }
-    let (mut a, mut b, mut c) = long_series(t);
+    let (mut a, mut b, mut c) = long_series::<WITH_C>(t);
     for _ in 0..k {
         let cos_half = 1.0 - t * b;
-        (a, b, c) = (a * cos_half, 0.5 * a * a, 0.25 * (c + a * b));
+        if WITH_C {
+            c = 0.25 * (c + a * b);
+        }
+        (a, b) = (a * cos_half, 0.5 * a * a);
         t *= 4.0;
     }
     (a, b, c)
@@ -153,7 +171,7 @@ pub fn vee(a: &Mat3) -> Vec3 {
 /// The Rodrigues coefficients `(sin θ/θ, (1 − cos θ)/θ²)` as functions of `θ`.
 #[cfg(test)]
 fn rodrigues_coefficients(theta: f64) -> (f64, f64) {
-    let (a, b, _) = coefficients(theta * theta);
+    let (a, b) = rodrigues(theta * theta);
     (a, b)
 }
 
@@ -175,7 +193,7 @@ pub(crate) fn i_plus_hat_plus_hat2(v: Vec3, a: f64, b: f64) -> Mat3 {
 #[must_use]
 #[inline]
 pub fn exp(v: Vec3) -> Mat3 {
-    let (a, b, _) = coefficients(v.norm_squared());
+    let (a, b) = rodrigues(v.norm_squared());
     i_plus_hat_plus_hat2(v, a, b)
 }
 
@@ -185,7 +203,7 @@ pub fn exp(v: Vec3) -> Mat3 {
 #[must_use]
 #[inline]
 pub fn exp_increment(v: Vec3) -> Mat3 {
-    let (a, b, _) = coefficients(v.norm_squared());
+    let (a, b) = rodrigues(v.norm_squared());
     i_plus_hat_plus_hat2_minus_identity(v, a, b)
 }
 
@@ -203,7 +221,7 @@ impl Increment {
     #[must_use]
     #[inline]
     pub fn new(psi: Vec3) -> Self {
-        let (a, b, _) = coefficients(psi.norm_squared());
+        let (a, b) = rodrigues(psi.norm_squared());
         Increment { psi, a, b }
     }
 
@@ -249,7 +267,7 @@ pub fn rotate_right(r: &Mat3, v: Vec3) -> Mat3 {
 #[must_use]
 #[inline]
 pub fn exp_apply(v: Vec3, x: Vec3) -> Vec3 {
-    let (a, b, _) = coefficients(v.norm_squared());
+    let (a, b) = rodrigues(v.norm_squared());
     let vx = v.cross(x);
     x + vx * a + v.cross(vx) * b
 }
