@@ -133,7 +133,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 /// Warm-up before each timed point: at least one run and at least this long, so that the
 /// first points of a process are not timed on a cold processor (measured: with a single
-/// warm-up run, the first method of `--methods liemid-ea4,…` came out 10% to 25% slower
+/// warm-up run, the first method of `--methods liemid-ea4,…` came out 15% to 25% slower
 /// than the same point measured later in the process).
 const WARM_UP_SECONDS: f64 = 0.02;
 
