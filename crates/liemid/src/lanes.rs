@@ -127,27 +127,21 @@ impl From<f64> for F {
     }
 }
 
-impl Add for F {
-    type Output = F;
-    #[inline(always)]
-    fn add(self, b: F) -> F {
-        F(unsafe { _mm256_add_pd(self.0, b.0) })
-    }
+/// The lane-wise binary operators of `F`, each one AVX instruction.
+macro_rules! lane_operator {
+    ($trait:ident, $method:ident, $intrinsic:ident) => {
+        impl $trait for F {
+            type Output = F;
+            #[inline(always)]
+            fn $method(self, b: F) -> F {
+                F(unsafe { $intrinsic(self.0, b.0) })
+            }
+        }
+    };
 }
-impl Sub for F {
-    type Output = F;
-    #[inline(always)]
-    fn sub(self, b: F) -> F {
-        F(unsafe { _mm256_sub_pd(self.0, b.0) })
-    }
-}
-impl Mul for F {
-    type Output = F;
-    #[inline(always)]
-    fn mul(self, b: F) -> F {
-        F(unsafe { _mm256_mul_pd(self.0, b.0) })
-    }
-}
+lane_operator!(Add, add, _mm256_add_pd);
+lane_operator!(Sub, sub, _mm256_sub_pd);
+lane_operator!(Mul, mul, _mm256_mul_pd);
 impl Neg for F {
     type Output = F;
     /// `−x` as the scalar path negates: the sign bit flipped (so `−0` stays distinct from `0 − 0`).

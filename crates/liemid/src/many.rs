@@ -401,11 +401,8 @@ impl Bodies {
             let (p, pi, x, r) = (c.momentum, c.pi, c.position, c.rotation);
             let n = p.len();
             let (free, mass) = (&free[start..start + n], &mass[start..start + n]);
+            kick_chunk(free, p, pi, c.force, c.torque, hh);
             for k in 0..n {
-                if free[k] {
-                    p[k] += c.force[k] * hh;
-                }
-                pi[k] += c.torque[k] * hh;
                 if free[k] {
                     x[k] += p[k] * (h / mass[k]);
                 }
@@ -414,7 +411,7 @@ impl Bodies {
             while k < n {
                 let end = (k + GROUP).min(n);
                 let (i, j) = (start + k, start + end);
-                if lanes && rotate_group(lanes, &inertia[i..j], &mut r[k..end], &mut pi[k..end], hh) {
+                if rotate_group(lanes, &inertia[i..j], &mut r[k..end], &mut pi[k..end], hh) {
                     k = end;
                     continue;
                 }
