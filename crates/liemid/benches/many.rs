@@ -11,34 +11,26 @@ use liemid::problems;
 use rayon::prelude::*;
 
 /// Copy every state array of `b` into `into`: the least any step must move through memory.
-fn copy_state(b: &Bodies, into: &mut Bodies) {
-    into.mass.copy_from_slice(&b.mass);
-    into.inertia.copy_from_slice(&b.inertia);
-    into.free.copy_from_slice(&b.free);
-    into.position.copy_from_slice(&b.position);
-    into.momentum.copy_from_slice(&b.momentum);
-    into.rotation.copy_from_slice(&b.rotation);
-    into.pi.copy_from_slice(&b.pi);
-    into.force.copy_from_slice(&b.force);
-    into.torque.copy_from_slice(&b.torque);
-}
-
-/// [`copy_state`] with the arrays split in chunks over the threads of the current pool.
-fn copy_state_parallel(b: &Bodies, into: &mut Bodies) {
-    fn copy<T: Copy + Send + Sync>(from: &[T], to: &mut [T]) {
-        to.par_chunks_mut(CHUNK)
-            .zip(from.par_chunks(CHUNK))
-            .for_each(|(to, from)| to.copy_from_slice(from));
+/// With `parallel`, each array is split in chunks over the threads of the current pool.
+fn copy_state(b: &Bodies, into: &mut Bodies, parallel: bool) {
+    fn copy<T: Copy + Send + Sync>(from: &[T], to: &mut [T], parallel: bool) {
+        if parallel {
+            to.par_chunks_mut(CHUNK)
+                .zip(from.par_chunks(CHUNK))
+                .for_each(|(to, from)| to.copy_from_slice(from));
+        } else {
+            to.copy_from_slice(from);
+        }
     }
-    copy(&b.mass, &mut into.mass);
-    copy(&b.inertia, &mut into.inertia);
-    copy(&b.free, &mut into.free);
-    copy(&b.position, &mut into.position);
-    copy(&b.momentum, &mut into.momentum);
-    copy(&b.rotation, &mut into.rotation);
-    copy(&b.pi, &mut into.pi);
-    copy(&b.force, &mut into.force);
-    copy(&b.torque, &mut into.torque);
+    copy(&b.mass, &mut into.mass, parallel);
+    copy(&b.inertia, &mut into.inertia, parallel);
+    copy(&b.free, &mut into.free, parallel);
+    copy(&b.position, &mut into.position, parallel);
+    copy(&b.momentum, &mut into.momentum, parallel);
+    copy(&b.rotation, &mut into.rotation, parallel);
+    copy(&b.pi, &mut into.pi, parallel);
+    copy(&b.force, &mut into.force, parallel);
+    copy(&b.torque, &mut into.torque, parallel);
 }
 
 fn throughput(c: &mut Criterion) {
@@ -52,13 +44,13 @@ fn throughput(c: &mut Criterion) {
         let (bodies, free) = problems::torque_free_ensemble(n, 1);
         let mut copy = bodies.clone();
         group.bench_with_input(BenchmarkId::new("copy floor, 1 thread", n), &n, |b, _| {
-            b.iter(|| copy_state(&bodies, &mut copy))
+            b.iter(|| copy_state(&bodies, &mut copy, false))
         });
         for threads in [1, 2] {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             if threads == 2 {
                 group.bench_with_input(BenchmarkId::new("copy floor, 2 threads", n), &n, |b, _| {
-                    b.iter(|| pool.install(|| copy_state_parallel(&bodies, &mut copy)))
+                    b.iter(|| pool.install(|| copy_state(&bodies, &mut copy, true)))
                 });
             }
             let mut state = bodies.clone();
