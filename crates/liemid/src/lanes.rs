@@ -6,8 +6,8 @@
 //! same order ([`crate::midpoint::solve`] on its diagonal path, [`crate::so3::Increment`]),
 //! without contraction into FMA, so the results are the same bit for bit; a lane whose
 //! Newton iteration has converged is no longer updated. Only the common case runs in
-//! lanes: small increments (`|Ψ| < 0.1`, where the predictor is used without fixed-point
-//! refinement and the coefficients come from their short series). Anything else (a large
+//! lanes: small increments (`|Ψ| < 0.1`, where the coefficients come from their short
+//! series). Anything else (a large
 //! increment, a singular Jacobian, a non-finite value, a slow convergence) returns `false`
 //! with nothing written, and the caller takes the scalar path, which is the reference and
 //! reports errors.
@@ -260,7 +260,7 @@ fn solve(d: V, d_inv: V, inverse_norm: F, p: V, h: f64) -> Option<V> {
     let psi0 = hd.component_mul(p);
     let mut psi = hd.component_mul(p + p.cross(psi0).scale_by(0.5));
     if psi.norm_squared().gt(F::splat(SERIES_ANGLE_SQUARED)).any() {
-        return None; // the scalar path refines large increments by fixed-point steps
+        return None; // large increments take the longer series of the scalar path
     }
     let hn = inverse_norm * h;
     let quadratic2 = p.norm_squared() * hn * hn;

@@ -20,8 +20,10 @@ use crate::linalg::{Mat3, Vec3};
 /// forms are accurate, since every coefficient multiplies a power of `hat(v)` that scales
 /// its own round-off down to a few ulps of the result.
 pub(crate) const SERIES_ANGLE_SQUARED: f64 = 0.01;
-/// Below this angle squared (`θ < 0.5`) the coefficients use their series to `θ¹⁶`.
-const LONG_SERIES_ANGLE_SQUARED: f64 = 0.25;
+/// Below this angle squared (`θ < 1`) the coefficients use their series to `θ¹⁶`.
+const LONG_SERIES_ANGLE_SQUARED: f64 = 1.0;
+/// Below this angle squared (`θ < 2`) the coefficients use their series to `θ²²`.
+const LONGER_SERIES_ANGLE_SQUARED: f64 = 4.0;
 /// Below this angle squared (`θ < 4`) the coefficients are doubled from the series.
 const DOUBLING_ANGLE_SQUARED: f64 = 16.0;
 #[cfg(test)]
@@ -33,9 +35,13 @@ const JAC_SERIES_ANGLE: f64 = 0.1;
 /// of the Jacobians, from `θ²`, without calling `sin` or `cos` below `θ = 4`:
 ///
 /// - `θ < 0.1`: their Taylor series to `θ⁸` (truncation below `3e-17` relative);
-/// - `θ < 0.5`: their Taylor series to `θ¹⁶` (truncation below `1e-19` relative);
-/// - `θ < 4`: the series at `θ/2ᵏ < 0.5`, `k ≤ 3`, doubled `k` times by the exact
-///   half-angle identities (no cancellation; each doubling adds about an ulp)
+/// - `θ < 1`: their Taylor series to `θ¹⁶` (the first omitted term, `θ¹⁸/19!` for `a`,
+///   is below `1e-17` relative);
+/// - `θ < 2`: their Taylor series to `θ²²` (first omitted term below `3e-18` relative; the
+///   largest term, `θ²/6` in `a`, is at most 1.5 times the sum, so rounding stays an ulp
+///   or two);
+/// - `θ < 4`: the series at `θ/2`, doubled once by the exact half-angle identities (no
+///   cancellation; the doubling adds about an ulp)
 ///
 /// ```text
 /// a(θ) = a(θ/2) cos(θ/2),  b(θ) = a(θ/2)² / 2,  c(θ) = (c(θ/2) + a(θ/2) b(θ/2)) / 4,
@@ -63,6 +69,8 @@ fn some_coefficients<const WITH_C: bool>(t2: f64) -> (f64, f64, f64) {
         short_series(t2)
     } else if t2 < LONG_SERIES_ANGLE_SQUARED {
         long_series::<WITH_C>(t2)
+    } else if t2 < LONGER_SERIES_ANGLE_SQUARED {
+        longer_series::<WITH_C>(t2)
     } else if t2 < DOUBLING_ANGLE_SQUARED {
         doubled::<WITH_C>(t2)
     } else {
@@ -93,18 +101,28 @@ where
 
 /// `Σ_{k ≤ 8} (−t)ᵏ / (2k + n)!` by Estrin's scheme, from the reciprocal factorials `f[k]`.
 #[inline]
-fn series8(t: f64, f: &[f64; 9]) -> f64 {
+fn series8(t: f64, f: &[f64; 12]) -> f64 {
     let (t2, t4) = (t * t, (t * t) * (t * t));
     let low = (f[0] - t * f[1]) + t2 * (f[2] - t * f[3]);
     let high = (f[4] - t * f[5]) + t2 * (f[6] - t * f[7]);
     low + t4 * (high + t4 * f[8])
 }
 
-/// `1/(2k + n)!` for `k = 0..8`.
-const fn reciprocal_factorials(n: u32) -> [f64; 9] {
-    let mut out = [0.0; 9];
+/// `Σ_{k ≤ 11} (−t)ᵏ / (2k + n)!` by Estrin's scheme, from the reciprocal factorials `f[k]`.
+#[inline]
+fn series11(t: f64, f: &[f64; 12]) -> f64 {
+    let (t2, t4) = (t * t, (t * t) * (t * t));
+    let p0 = (f[0] - t * f[1]) + t2 * (f[2] - t * f[3]);
+    let p1 = (f[4] - t * f[5]) + t2 * (f[6] - t * f[7]);
+    let p2 = (f[8] - t * f[9]) + t2 * (f[10] - t * f[11]);
+    p0 + t4 * (p1 + t4 * p2)
+}
+
+/// `1/(2k + n)!` for `k = 0..12`.
+const fn reciprocal_factorials(n: u32) -> [f64; 12] {
+    let mut out = [0.0; 12];
     let mut k = 0;
-    while k < 9 {
+    while k < 12 {
         let mut f = 1.0;
         let mut j = 2;
         while j <= 2 * k as u32 + n {
@@ -117,36 +135,32 @@ const fn reciprocal_factorials(n: u32) -> [f64; 9] {
     out
 }
 
-const A_SERIES: [f64; 9] = reciprocal_factorials(1);
-const B_SERIES: [f64; 9] = reciprocal_factorials(2);
-const C_SERIES: [f64; 9] = reciprocal_factorials(3);
+const A_SERIES: [f64; 12] = reciprocal_factorials(1);
+const B_SERIES: [f64; 12] = reciprocal_factorials(2);
+const C_SERIES: [f64; 12] = reciprocal_factorials(3);
 
-/// Taylor series to `θ¹⁶`, for `θ² < 0.25`.
+/// Taylor series to `θ¹⁶`, for `θ² < 1`.
 #[inline]
 fn long_series<const WITH_C: bool>(t: f64) -> (f64, f64, f64) {
     let c = if WITH_C { series8(t, &C_SERIES) } else { 0.0 };
     (series8(t, &A_SERIES), series8(t, &B_SERIES), c)
 }
 
-/// The half-angle doublings from the series at `θ/2ᵏ < 0.5`, for `0.25 ≤ θ² < 16`.
+/// Taylor series to `θ²²`, for `θ² < 4`.
+#[inline]
+fn longer_series<const WITH_C: bool>(t: f64) -> (f64, f64, f64) {
+    let c = if WITH_C { series11(t, &C_SERIES) } else { 0.0 };
+    (series11(t, &A_SERIES), series11(t, &B_SERIES), c)
+}
+
+/// For `4 ≤ θ² < 16`: the series at `θ/2`, doubled once.
 #[inline(never)]
 fn doubled<const WITH_C: bool>(t2: f64) -> (f64, f64, f64) {
-    let mut k = 0;
-    let mut t = t2;
-    while t >= LONG_SERIES_ANGLE_SQUARED {
-        t *= 0.25;
-        k += 1;
-    }
-    let (mut a, mut b, mut c) = long_series::<WITH_C>(t);
-    for _ in 0..k {
-        let cos_half = 1.0 - t * b;
-        if WITH_C {
-            c = 0.25 * (c + a * b);
-        }
-        (a, b) = (a * cos_half, 0.5 * a * a);
-        t *= 4.0;
-    }
-    (a, b, c)
+    let t = 0.25 * t2;
+    let (a, b, c) = longer_series::<WITH_C>(t);
+    let cos_half = 1.0 - t * b;
+    let c = if WITH_C { 0.25 * (c + a * b) } else { 0.0 };
+    (a * cos_half, 0.5 * a * a, c)
 }
 
 /// `hat(a)`: the skew-symmetric matrix with `hat(a) b = a × b`.
@@ -567,7 +581,7 @@ mod tests {
                 *w = w.max((x - r).abs() / (scale * f64::EPSILON));
             }
         }
-        // Three doublings of about an ulp each, plus the references' own rounding.
+        // One doubling of about an ulp, plus the references' own rounding.
         eprintln!("worst errors in ulps: {worst:?}");
         assert!(worst.iter().all(|&w| w < 8.0), "worst errors in ulps: {worst:?}");
     }
