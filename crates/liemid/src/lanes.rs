@@ -7,10 +7,9 @@
 //! without contraction into FMA, so the results are the same bit for bit; a lane whose
 //! Newton iteration has converged is no longer updated. Only the common case runs in
 //! lanes: small increments (`|Ψ| < 0.1`, where the coefficients come from their short
-//! series). Anything else (a large
-//! increment, a singular Jacobian, a non-finite value, a slow convergence) returns `false`
-//! with nothing written, and the caller takes the scalar path, which is the reference and
-//! reports errors.
+//! series). Anything else (a large increment, a singular Jacobian, a non-finite value, a
+//! slow convergence) returns `false` with nothing written, and the caller takes the scalar
+//! path, which is the reference and reports errors.
 //!
 //! The module exists with the `simd` feature on x86-64. A lane value is one 256-bit AVX
 //! register; the kernel is compiled for AVX and the caller runs it only where the processor
