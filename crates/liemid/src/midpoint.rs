@@ -358,8 +358,8 @@ mod tests {
         // turning by 0.5 to 2.6 rad as the compositions' largest steps do). With the
         // momentum a fraction ε off the axis, the predictor is within about ε/30 of the root
         // (relative) and Newton's error after one iteration is 0.3 to 0.7 times its square:
-        // up to ε = 0.3% (the fast top's own nutation) two iterations reach round-off, up
-        // to ε = 1% at most three.
+        // up to ε = 0.3% two iterations reach round-off, up to ε = 1% at most three (the
+        // fast top's nutation takes its momentum up to 0.8% off axis).
         let top = Inertia::principal([0.045_489_6, 0.045_489_6, 0.001_399_68]).unwrap();
         let spin_rate = 313.0 * std::f64::consts::PI;
         let spin = spin_rate * 0.001_399_68;
