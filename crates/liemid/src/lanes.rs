@@ -3,8 +3,9 @@
 //! [`free_rotation_x4`] performs, for four bodies with diagonal inertia, what the many-body
 //! step does body by body: two half steps of `solve (M) → Ψ; R ← R exp(Ψ); Π ← exp(−Ψ) Π`.
 //! Every lane performs exactly the floating-point operations of the scalar path, in the
-//! same order ([`crate::midpoint::solve`] on its diagonal path, [`crate::so3::Increment`]),
-//! without contraction into FMA, so the results are the same bit for bit; a lane whose
+//! same order ([`crate::midpoint::solve_increment`] on its diagonal path, with the
+//! increment's coefficients from [`crate::so3::Increment::from_half_angle`]), without
+//! contraction into FMA, so the results are the same bit for bit; a lane whose
 //! Newton iteration has converged is no longer updated. Only the common case runs in
 //! lanes: small increments (`|Ψ| < 0.1`, where the coefficients come from their short
 //! series). Anything else (a large increment, a singular Jacobian, a non-finite value, a
@@ -252,9 +253,11 @@ impl Sub for V {
     }
 }
 
-/// The diagonal Newton solve of (M) in lanes; `None` hands the four bodies to the scalar path.
+/// The diagonal Newton solve of (M) in lanes, with the half-angle coefficients `[t, a, b, c]`
+/// of each lane's last iteration (for [`increment`]); `None` hands the four bodies to the
+/// scalar path.
 #[inline(always)]
-fn solve(d: V, d_inv: V, inverse_norm: F, p: V, h: f64) -> Option<V> {
+fn solve(d: V, d_inv: V, inverse_norm: F, p: V, h: f64) -> Option<(V, [F; 4])> {
     let hd = d_inv.scale_by(h);
     let psi0 = hd.component_mul(p);
     let mut psi = hd.component_mul(p + p.cross(psi0).scale_by(0.5));
@@ -271,6 +274,7 @@ fn solve(d: V, d_inv: V, inverse_norm: F, p: V, h: f64) -> Option<V> {
     );
     let mut done = Mask::none();
     let mut previous = F::splat(f64::INFINITY);
+    let mut half = [F::splat(0.0); 4];
     for _ in 0..MAX_LANE_ITERATIONS {
         let v = psi.scale_by(-0.5);
         let t2 = v.norm_squared();
@@ -312,6 +316,9 @@ fn solve(d: V, d_inv: V, inverse_norm: F, p: V, h: f64) -> Option<V> {
             return None;
         }
         psi = next.replace(done, psi);
+        for (kept, now) in half.iter_mut().zip([t2, a, b, c]) {
+            *kept = now.replace(done, *kept);
+        }
         let (d2, x2) = (delta.norm_squared(), next.norm_squared());
         // `NewtonStop::done` of the scalar path.
         let (dl, ulp) = (d2.sqrt(), eps * x2.sqrt());
@@ -325,7 +332,7 @@ fn solve(d: V, d_inv: V, inverse_norm: F, p: V, h: f64) -> Option<V> {
         }
         done = done.or(converged);
         if done.all() {
-            return Some(psi);
+            return Some((psi, half));
         }
     }
     None
@@ -359,14 +366,15 @@ impl M {
     }
 }
 
-/// `R exp(Ψ)` and `exp(−Ψ) Π` as [`crate::so3::Increment`] computes them.
+/// `R exp(Ψ)` and `exp(−Ψ) Π` as [`crate::so3::Increment`] computes them, with the
+/// coefficients from the half-angle ones of the last Newton iteration
+/// ([`crate::so3::Increment::from_half_angle`]).
 #[inline(always)]
-fn increment(psi: V, r: &mut M, pi: V) -> Option<V> {
-    let t = psi.norm_squared();
-    if F::splat(SERIES_ANGLE_SQUARED).le(t).any() {
-        return None;
-    }
-    let (a, b, _) = short_series(t);
+fn increment(psi: V, [t, a, b, c]: [F; 4], r: &mut M, pi: V) -> V {
+    let delta = psi.norm_squared() * 0.25 - t;
+    let a_half = a + (c - b) * 0.5 * delta;
+    let cos_half = (F::splat(1.0) - t * b) - a * 0.5 * delta;
+    let (a, b) = (a_half * cos_half, a_half * 0.5 * a_half);
     // `E = a hat(Ψ) + b hat(Ψ)²`, then `R + R E`.
     let (x, y, z) = (psi.x, psi.y, psi.z);
     let (xx, yy, zz) = (x * x, y * y, z * z);
@@ -382,7 +390,7 @@ fn increment(psi: V, r: &mut M, pi: V) -> Option<V> {
         }
     }
     let px = psi.cross(pi);
-    Some(pi - px.scale(a) + psi.cross(px).scale(b))
+    pi - px.scale(a) + psi.cross(px).scale(b)
 }
 
 /// Two torque-free midpoint Lie half steps of `h` each for four bodies with diagonal
@@ -401,13 +409,10 @@ fn kernel_avx(
     let mut p = V::gather(pi);
     let mut r = M::gather(rotation);
     for _ in 0..2 {
-        let Some(psi) = solve(d, d_inv, inverse_norm, p, h) else {
+        let Some((psi, half)) = solve(d, d_inv, inverse_norm, p, h) else {
             return false;
         };
-        let Some(next) = increment(psi, &mut r, p) else {
-            return false;
-        };
-        p = next;
+        p = increment(psi, half, &mut r, p);
     }
     r.scatter(rotation);
     p.scatter(pi);

@@ -33,7 +33,6 @@ use crate::inertia::PrincipalInertia;
 use crate::linalg::{Mat3, Vec3};
 use crate::midpoint;
 use crate::rotation::newton_error;
-use crate::so3;
 
 /// Bodies per parallel work item (fixed, so that results do not depend on the threads).
 pub const CHUNK: usize = 256;
@@ -259,8 +258,7 @@ pub(crate) fn free_rotation(
     hh: f64,
 ) -> std::result::Result<(), midpoint::NotConverged> {
     for _ in 0..2 {
-        let (psi, _) = midpoint::solve(inertia, *pi, hh)?;
-        let inc = so3::Increment::new(psi);
+        let (inc, _) = midpoint::solve_increment(inertia, *pi, hh)?;
         *r = inc.rotate(r);
         *pi = inc.inverse_apply(*pi);
     }

@@ -162,6 +162,20 @@ pub fn solve_with(
 /// Returns `Ψ` and the number of iterations.
 #[inline]
 pub fn solve<I: InertiaOperator + ?Sized>(inertia: &I, p: Vec3, h: f64) -> Result<(Vec3, u32), NotConverged> {
+    solve_increment(inertia, p, h).map(|(inc, it)| (inc.psi(), it))
+}
+
+/// [`solve`], returning the increment `exp(Ψ)` with its Rodrigues coefficients ready for the
+/// updates `R exp(Ψ)` and `exp(−Ψ) x`. They come from the coefficients of `exp(−Ψ_k/2)` that
+/// Newton's last iteration computed at its iterate `Ψ_k` (see
+/// [`so3::Increment::from_half_angle`]), so no further series is evaluated: the trig of
+/// `exp(−Ψ/2)` and `exp(Ψ)` is shared.
+#[inline]
+pub(crate) fn solve_increment<I: InertiaOperator + ?Sized>(
+    inertia: &I,
+    p: Vec3,
+    h: f64,
+) -> Result<(so3::Increment, u32), NotConverged> {
     if let Some((d, d_inv)) = inertia.diagonal() {
         return solve_diagonal(d, d_inv, inertia.inverse_norm_bound(), p, h);
     }
@@ -171,7 +185,8 @@ pub fn solve<I: InertiaOperator + ?Sized>(inertia: &I, p: Vec3, h: f64) -> Resul
     let quadratic2 = p.norm_squared() * h * h * inertia.inverse_norm_bound().powi(2);
     lean_newton(p, h, psi, quadratic2, |psi| {
         let v = psi * -0.5;
-        let (a, b, c) = so3::coefficients(v.norm_squared());
+        let t2 = v.norm_squared();
+        let (a, b, c) = so3::coefficients(t2);
         let vp = v.cross(p);
         let q = p + vp * a + v.cross(vp) * b;
         let g = inertia.apply(psi) - q * h;
@@ -184,7 +199,7 @@ pub fn solve<I: InertiaOperator + ?Sized>(inertia: &I, p: Vec3, h: f64) -> Resul
             [c0.y, c1.y, c2.y],
             [c0.z, c1.z, c2.z],
         ]));
-        (g, j)
+        (g, j, [t2, a, b, c])
     })
 }
 
@@ -197,13 +212,13 @@ fn lean_newton(
     h: f64,
     mut psi: Vec3,
     quadratic2: f64,
-    mut residual_and_jacobian: impl FnMut(Vec3) -> (Vec3, Mat3),
-) -> Result<(Vec3, u32), NotConverged> {
+    mut residual_and_jacobian: impl FnMut(Vec3) -> (Vec3, Mat3, [f64; 4]),
+) -> Result<(so3::Increment, u32), NotConverged> {
     let mut stop = NewtonStop::new();
     let mut g = Vec3::ZERO;
     for it in 1..=MAX_ITERATIONS {
-        let j;
-        (g, j) = residual_and_jacobian(psi);
+        let (j, half);
+        (g, j, half) = residual_and_jacobian(psi);
         let Some(delta) = j.solve_adjugate(g) else {
             break;
         };
@@ -216,7 +231,7 @@ fn lean_newton(
             if x2 > MAX_INCREMENT_ANGLE * MAX_INCREMENT_ANGLE {
                 return Err(NotConverged::IncrementTooLarge { angle: x2.sqrt() });
             }
-            return Ok((psi, it));
+            return Ok((so3::Increment::from_half_angle(psi, half), it));
         }
     }
     let scale = (p * h).norm() + f64::MIN_POSITIVE;
@@ -239,7 +254,13 @@ fn lean_newton(
 /// built entry by entry and solved by the adjugate; same iterates as the general path up to
 /// rounding.
 #[inline]
-fn solve_diagonal(d: Vec3, d_inv: Vec3, inverse_norm: f64, p: Vec3, h: f64) -> Result<(Vec3, u32), NotConverged> {
+fn solve_diagonal(
+    d: Vec3,
+    d_inv: Vec3,
+    inverse_norm: f64,
+    p: Vec3,
+    h: f64,
+) -> Result<(so3::Increment, u32), NotConverged> {
     let hd = d_inv * h;
     let psi0 = hd.component_mul(p);
     let psi = hd.component_mul(p + p.cross(psi0) * 0.5);
@@ -273,7 +294,7 @@ fn solve_diagonal(d: Vec3, d_inv: Vec3, inverse_norm: f64, p: Vec3, h: f64) -> R
                 d.z + diag - bv.z * q.z - gw.z * v.z,
             ],
         ]);
-        (g, j)
+        (g, j, [t2, a, b, c])
     })
 }
 

@@ -16,8 +16,8 @@ use crate::midpoint;
 use crate::rigid::{RigidBodySystem, RigidState};
 use crate::so3;
 
-/// Solve (M) for `(P, h)` and return `Ψ`; errors name the step `(t, step)` that was being
-/// taken.
+/// Solve (M) for `(P, h)` and return the increment `exp(Ψ)`; errors name the step
+/// `(t, step)` that was being taken.
 #[inline(always)]
 fn midpoint_rotation(
     method: &'static str,
@@ -25,10 +25,10 @@ fn midpoint_rotation(
     p: Vec3,
     h: f64,
     (t, step): (f64, f64),
-) -> Result<Vec3> {
-    let (psi, _) =
-        midpoint::solve(inertia, p, h).map_err(|e| newton_error(method, "midpoint equation (M)", t, step, e))?;
-    Ok(psi)
+) -> Result<so3::Increment> {
+    let (increment, _) = midpoint::solve_increment(inertia, p, h)
+        .map_err(|e| newton_error(method, "midpoint equation (M)", t, step, e))?;
+    Ok(increment)
 }
 
 /// LIEMID\[E2\]: explicit midpoint Lie with the torque impulse at the start of the step
@@ -67,7 +67,7 @@ impl RotationIntegrator for LieMidpointE2 {
         let t = state.t;
         let torque = self.cache.torque(system, &state.rotation, t);
         let p = state.pi + torque * h;
-        let inc = so3::Increment::new(midpoint_rotation(self.name(), system.inertia(), p, h, (t, h))?);
+        let inc = midpoint_rotation(self.name(), system.inertia(), p, h, (t, h))?;
         let next = RigidState::new(t + h, inc.inverse_apply(p), inc.rotate(&state.rotation));
         commit(self.name(), state, h, next)
     }
@@ -109,7 +109,7 @@ impl RotationIntegrator for LieMidpointE1 {
     fn step<S: RigidBodySystem + ?Sized>(&mut self, system: &S, state: &mut RigidState, h: f64) -> Result<()> {
         check_step(h)?;
         let t = state.t;
-        let inc = so3::Increment::new(midpoint_rotation(self.name(), system.inertia(), state.pi, h, (t, h))?);
+        let inc = midpoint_rotation(self.name(), system.inertia(), state.pi, h, (t, h))?;
         let rotation = inc.rotate(&state.rotation);
         let t1 = t + h;
         let torque = system.torque(&rotation, t1);
@@ -158,9 +158,9 @@ impl RotationIntegrator for LieMidpointAlternating {
         let inertia = system.inertia();
         let torque0 = self.cache.torque(system, &state.rotation, t);
         let p = state.pi + torque0 * hh;
-        let inc1 = so3::Increment::new(midpoint_rotation(self.name(), inertia, p, hh, (t, h))?);
+        let inc1 = midpoint_rotation(self.name(), inertia, p, hh, (t, h))?;
         let pi_half = inc1.inverse_apply(p);
-        let inc2 = so3::Increment::new(midpoint_rotation(self.name(), inertia, pi_half, hh, (t, h))?);
+        let inc2 = midpoint_rotation(self.name(), inertia, pi_half, hh, (t, h))?;
         let rotation = inc2.rotate(&inc1.rotate(&state.rotation));
         let t1 = t + h;
         let torque1 = system.torque(&rotation, t1);
