@@ -1,5 +1,5 @@
-//! The midpoint Lie family: explicit LIEMID[E1], LIEMID[E2], their alternating composition
-//! LIEMID[EA], and the implicit LIEMID[I].
+//! The midpoint Lie family: explicit LIEMID\[E1\], LIEMID\[E2\], their alternating composition
+//! LIEMID\[EA\], and the implicit LIEMID\[I\].
 //!
 //! All four advance the attitude by `R_{n+1} = R_n exp(Ψ)` with `Ψ` from the midpoint
 //! equation `(1/h) I Ψ = exp(−Ψ/2) P` (see [`crate::midpoint`]); they differ in where the
