@@ -259,8 +259,18 @@ impl Sub for V {
 #[inline(always)]
 fn solve(d: V, d_inv: V, inverse_norm: F, p: V, h: f64) -> Option<(V, [F; 4])> {
     let hd = d_inv.scale_by(h);
-    let psi0 = hd.component_mul(p);
-    let mut psi = hd.component_mul(p + p.cross(psi0).scale_by(0.5));
+    let k = V {
+        x: d_inv.z - d_inv.y,
+        y: d_inv.x - d_inv.z,
+        z: d_inv.y - d_inv.x,
+    }
+    .scale_by(0.5 * h);
+    let pp = V {
+        x: p.y * p.z,
+        y: p.z * p.x,
+        z: p.x * p.y,
+    };
+    let mut psi = hd.component_mul(p) + hd.component_mul(k).component_mul(pp);
     if psi.norm_squared().gt(F::splat(SERIES_ANGLE_SQUARED)).any() {
         return None; // large increments take the longer series of the scalar path
     }

@@ -63,11 +63,23 @@ pub(crate) fn rodrigues(t2: f64) -> (f64, f64) {
 }
 
 /// [`coefficients`]; with `WITH_C = false` the third is not computed (0).
-#[inline]
+///
+/// The short series is inlined into the caller; the longer branches are a call. (As one
+/// call, the coefficients of every step came back through memory, a store and a load on
+/// the critical path of every Newton iteration.)
+#[inline(always)]
 fn some_coefficients<const WITH_C: bool>(t2: f64) -> (f64, f64, f64) {
     if t2 < SERIES_ANGLE_SQUARED {
         short_series(t2)
-    } else if t2 < LONG_SERIES_ANGLE_SQUARED {
+    } else {
+        long_coefficients::<WITH_C>(t2)
+    }
+}
+
+/// [`some_coefficients`] from `θ = 0.1` on.
+#[inline(never)]
+fn long_coefficients<const WITH_C: bool>(t2: f64) -> (f64, f64, f64) {
+    if t2 < LONG_SERIES_ANGLE_SQUARED {
         by_series::<WITH_C>(t2, series8)
     } else if t2 < LONGER_SERIES_ANGLE_SQUARED {
         by_series::<WITH_C>(t2, series11)

@@ -66,7 +66,7 @@ impl RotationIntegrator for LieMidpointE2 {
         check_step(h)?;
         let t = state.t;
         let torque = self.cache.torque(system, &state.rotation, t);
-        let p = state.pi + torque * h;
+        let p = Vec3::load_split(&state.pi) + torque * h;
         let inc = midpoint_rotation(self.name(), system.inertia(), p, h, (t, h))?;
         let next = RigidState::new(t + h, inc.inverse_apply(p), inc.rotate(&state.rotation));
         commit(self.name(), state, h, next)
@@ -109,11 +109,12 @@ impl RotationIntegrator for LieMidpointE1 {
     fn step<S: RigidBodySystem + ?Sized>(&mut self, system: &S, state: &mut RigidState, h: f64) -> Result<()> {
         check_step(h)?;
         let t = state.t;
-        let inc = midpoint_rotation(self.name(), system.inertia(), state.pi, h, (t, h))?;
+        let pi = Vec3::load_split(&state.pi);
+        let inc = midpoint_rotation(self.name(), system.inertia(), pi, h, (t, h))?;
         let rotation = inc.rotate(&state.rotation);
         let t1 = t + h;
         let torque = system.torque(&rotation, t1);
-        let next = RigidState::new(t1, inc.inverse_apply(state.pi) + torque * h, rotation);
+        let next = RigidState::new(t1, inc.inverse_apply(pi) + torque * h, rotation);
         commit(self.name(), state, h, next)
     }
 }
@@ -157,7 +158,7 @@ impl RotationIntegrator for LieMidpointAlternating {
         let hh = 0.5 * h;
         let inertia = system.inertia();
         let torque0 = self.cache.torque(system, &state.rotation, t);
-        let p = state.pi + torque0 * hh;
+        let p = Vec3::load_split(&state.pi) + torque0 * hh;
         let inc1 = midpoint_rotation(self.name(), inertia, p, hh, (t, h))?;
         let pi_half = inc1.inverse_apply(p);
         let inc2 = midpoint_rotation(self.name(), inertia, pi_half, hh, (t, h))?;

@@ -100,7 +100,7 @@ impl TorqueCache {
                 && (t == *tc || (t - tc).abs() <= 1e-12 * t.abs().max(tc.abs()))
                 && rc.bitwise_eq(rotation)
             {
-                return *torque;
+                return Vec3::load_split(torque);
             }
         }
         system.torque(rotation, t)
