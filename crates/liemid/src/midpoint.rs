@@ -176,10 +176,10 @@ pub(crate) fn solve_increment<I: InertiaOperator + ?Sized>(
     p: Vec3,
     h: f64,
 ) -> Result<(so3::Increment, u32), NotConverged> {
-    // The solvers take `P` in three registers: passed by reference, it sits in memory that
-    // the caller has just written component by component, and a 16-byte load of two of them
-    // straddles two stores, which the processor cannot forward (a stall of some 15 cycles
-    // on the step's critical path).
+    // The solvers take `P` in three registers. Passed by reference, it sat in memory the
+    // caller had just written one component and then two, and the solver's 16-byte load of
+    // two of them straddled both stores, which the processor cannot forward: the load waited
+    // on the step's critical path (EA 191 → 171 ns per step on the fast top).
     let (x, y, z) = (p.x, p.y, p.z);
     match inertia.diagonal() {
         Some((d, d_inv)) => solve_diagonal(d, d_inv, inertia.inverse_norm_bound(), x, y, z, h),
