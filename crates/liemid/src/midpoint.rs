@@ -202,11 +202,7 @@ fn solve_general<I: InertiaOperator + ?Sized>(
     // The stopping rule h|P| |δ|² / λ_min ≤ u |Ψ|, squared to avoid square roots.
     let quadratic2 = p.norm_squared() * h * h * inertia.inverse_norm_bound().powi(2);
     lean_newton(p, h, psi, quadratic2, |psi| {
-        let v = psi * -0.5;
-        let t2 = v.norm_squared();
-        let (a, b, c) = so3::coefficients(t2);
-        let vp = v.cross(p);
-        let q = p + vp * a + v.cross(vp) * b;
+        let (v, q, [t2, a, b, c]) = half_rotation(p, psi);
         let g = inertia.apply(psi) - q * h;
         // J = I − (h/2) hat(Q) Jl(v), Jl(v) = I + b hat(v) + c hat(v)²; columns q × Jl e_k.
         let jl = so3::i_plus_hat_plus_hat2(v, b, c);
@@ -219,6 +215,18 @@ fn solve_general<I: InertiaOperator + ?Sized>(
         ]));
         (g, j, [t2, a, b, c])
     })
+}
+
+/// `v = −Ψ/2`, `Q = exp(v) P = P + a v × P + b v × (v × P)` and the coefficients
+/// `[θ², a, b, c]` of `exp(v)` (`θ = |v|`): the part of an iteration of (M) that the general
+/// and the diagonal solver share.
+#[inline(always)]
+fn half_rotation(p: Vec3, psi: Vec3) -> (Vec3, Vec3, [f64; 4]) {
+    let v = psi * -0.5;
+    let t2 = v.norm_squared();
+    let (a, b, c) = so3::coefficients(t2);
+    let vp = v.cross(p);
+    (v, p + vp * a + v.cross(vp) * b, [t2, a, b, c])
 }
 
 /// The Newton iteration of [`solve`] from the guess `psi`: `residual_and_jacobian(Ψ)`
@@ -296,11 +304,7 @@ fn solve_diagonal(
     let quadratic2 = p.norm_squared() * (h * inverse_norm) * (h * inverse_norm);
     let s = 0.5 * h;
     lean_newton(p, h, psi, quadratic2, |psi| {
-        let v = psi * -0.5;
-        let t2 = v.norm_squared();
-        let (a, b, c) = so3::coefficients(t2);
-        let vp = v.cross(p);
-        let q = p + vp * a + v.cross(vp) * b;
+        let (v, q, [t2, a, b, c]) = half_rotation(p, psi);
         let g = d.component_mul(psi) - q * h;
         let w = q.cross(v);
         let (alpha, beta, gamma) = (s * (1.0 - c * t2), s * b, s * c);
