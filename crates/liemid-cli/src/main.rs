@@ -89,10 +89,10 @@ struct RunArgs {
     #[arg(long)]
     method: Option<String>,
     /// Override the step size (s).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     step: Option<f64>,
     /// Override the end time (s).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     t_end: Option<f64>,
     /// Trajectory file [default: the scenario's [output] path, else trajectory.csv].
     #[arg(long)]
@@ -123,10 +123,10 @@ struct ConvergeArgs {
     #[arg(long, value_delimiter = ',')]
     methods: Option<Vec<String>>,
     /// Comma-separated step sizes [default: 2e-3 halved five times].
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, allow_negative_numbers = true, value_delimiter = ',')]
     steps: Option<Vec<f64>>,
     /// End time [default: the problem's].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     t_end: Option<f64>,
     /// Plot file: NAME writes NAME.svg and NAME.png; NAME.svg or NAME.png writes one.
     #[arg(long, default_value = "convergence")]
@@ -149,7 +149,7 @@ struct WorkPrecisionArgs {
     #[arg(long, conflicts_with = "problem")]
     scenario: Option<PathBuf>,
     /// End time [default: the problem's].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     t_end: Option<f64>,
     /// Comma-separated methods, `dop853` for the adaptive baseline [default: all].
     #[arg(long, value_delimiter = ',')]
@@ -158,10 +158,10 @@ struct WorkPrecisionArgs {
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(5..))]
     repetitions: u64,
     /// Stop a method's sequence once one run takes longer than this many seconds.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 0.5)]
     budget: f64,
     /// Stop a method's sequence once its attitude error is below this.
-    #[arg(long, default_value_t = 1e-11)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 1e-11)]
     min_error: f64,
     /// At most this many points per method.
     #[arg(long, default_value_t = 16)]

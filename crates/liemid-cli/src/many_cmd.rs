@@ -34,10 +34,10 @@ pub struct ManyArgs {
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     pub bodies: Option<u64>,
     /// End time [default: 0.01 for tops, 0.1 torque-free, 1 for dipoles].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub t_end: Option<f64>,
     /// Step [default: 1e-4 for tops, 1e-3 otherwise].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub step: Option<f64>,
     /// Threads [default: all cores]; results are identical for any count.
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
@@ -46,7 +46,7 @@ pub struct ManyArgs {
     #[arg(long)]
     pub seed: Option<u64>,
     /// Number density of the dipolar fluid [default: 0.3].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub density: Option<f64>,
     /// Write the summary as JSON to FILE, or to standard output with `-`.
     #[arg(long)]
@@ -235,27 +235,30 @@ pub fn many(cli: &ManyArgs) -> Result<(), (u8, String)> {
     if !(t_end.is_finite() && t_end >= 0.0) {
         return Err(input(format!("--t-end must be a non-negative number, found {t_end}")));
     }
+    liemid::step_count(0.0, t_end, h).map_err(|e| input(e.to_string()))?;
     let mut builder = rayon::ThreadPoolBuilder::new();
     if let Some(k) = cli.threads {
         builder = builder.num_threads(k as usize);
     }
     let pool = builder.build().map_err(|e| (1, format!("thread pool: {e}")))?;
     let threads = pool.current_num_threads();
+    let failed = |m: String| (1u8, m);
     let result = pool.install(|| match args.model {
         Model::Independent => {
             let (b, m) = problems::top_ensemble(n, args.seed);
-            run_model(args, b, &m, h, t_end)
+            run_model(args, b, &m, h, t_end).map_err(failed)
         }
         Model::TorqueFree => {
             let (b, m) = problems::torque_free_ensemble(n, args.seed);
-            run_model(args, b, &m, h, t_end)
+            run_model(args, b, &m, h, t_end).map_err(failed)
         }
         Model::Dipoles => {
-            let (b, m) = problems::dipolar_fluid(n, args.density, args.seed).map_err(|e| e.to_string())?;
-            run_model(args, b, &m, h, t_end)
+            // A bad density is bad input (exit 2), not a failed run.
+            let (b, m) = problems::dipolar_fluid(n, args.density, args.seed).map_err(|e| input(e.to_string()))?;
+            run_model(args, b, &m, h, t_end).map_err(failed)
         }
     });
-    let (bodies, first, last, steps, seconds, max_de) = result.map_err(|e| (1, e))?;
+    let (bodies, first, last, steps, seconds, max_de) = result?;
     let body_steps = steps as f64 * bodies.len() as f64;
     let throughput = if seconds > 0.0 { body_steps / seconds } else { f64::NAN };
     let dp = last.linear_momentum - first.linear_momentum;

@@ -439,6 +439,7 @@ pub fn parse(text: &str, name: &str) -> Result<Scenario, String> {
     if t_end < t0 {
         return Err(integ.err("t_end", format!("{t_end} is before the start time {t0}")));
     }
+    liemid::step_count(t0, t_end, step).map_err(|e| integ.err("step", e.to_string()))?;
 
     let mut output = OutputSpec::default();
     if let Some(out) = Section::new(&root, "output", &["path", "every", "format"], false)? {
@@ -563,6 +564,11 @@ format = "npy"
                 "[torque] mass: expected a number, found string",
             ),
             ("step = 1e-4", "step = 0.0", "[integrator] step: must be positive"),
+            (
+                "step = 1e-4",
+                "step = 1e-40",
+                "[integrator] step: step size h = 1e-40 is too small for t from 0 to 0.8: t + h rounds",
+            ),
             (
                 "t_end = 0.8",
                 "t_end = -1.0",

@@ -230,6 +230,28 @@ fn bad_input_is_one_line_naming_file_and_key_with_exit_code_2() {
     let o = run_in(&dir, &["run", "--step=-1"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("--step must be a positive number"));
+    // A negative number after a space is the option's value, not an unknown flag.
+    let o = run_in(&dir, &["run", "--step", "-1"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--step must be a positive number, found -1"));
+    // A mistyped exponent is refused before the first step and writes nothing (it used to
+    // run until the disk was full).
+    let files = std::fs::read_dir(&dir).unwrap().count();
+    for args in [
+        &["run", "--step", "1e-30"][..],
+        &["run", "--t-end", "1e12", "--step", "1e-30"],
+        &["many", "--step", "1e-300"],
+    ] {
+        let o = run_in(&dir, args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        let err = stderr(&o);
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+        assert!(err.contains("is too small for t from 0 to"), "{args:?}: {err}");
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), files, "{args:?} wrote a file");
+    }
+    let o = run_in(&dir, &["many", "--model", "dipoles", "--density", "-1"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("`density` = -1"));
     let o = run_in(&dir, &["run", "--every", "0"]);
     assert_eq!(o.status.code(), Some(2));
     let o = run_in(&dir, &["converge", "--methods", "liemid-ea,nope", "--no-plot"]);

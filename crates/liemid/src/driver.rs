@@ -6,9 +6,20 @@ use crate::linalg::Vec3;
 use crate::rigid::{Diagnostics, RigidBodySystem, RigidState};
 use crate::rotation::RotationIntegrator;
 
+/// The most steps a run may take: step `k` ends at `t0 + k h` with `k` converted to `f64`,
+/// which is exact up to `2^53`.
+pub const MAX_STEPS: u64 = 1 << 53;
+
 /// The number of steps of size `h` that cover `[t0, t_end]`: `(t_end − t0)/h` when that
 /// is an integer to a relative `1e-9`, otherwise the next integer up (the last step is
 /// then shorter).
+///
+/// # Errors
+/// `h` not finite and positive; `t_end` before `t0`; and [`Error::StepTooSmall`] when the
+/// run would take more than [`MAX_STEPS`] steps, or when `h` is below the resolution of the
+/// time at the end of the interval (`|t| + h` rounds to `|t|`, so steps would share their
+/// time stamps). A mistyped exponent (`1e-30` for `1e-3`) is refused before the first step
+/// instead of running for ever.
 pub fn step_count(t0: f64, t_end: f64, h: f64) -> Result<u64> {
     if !(h.is_finite() && h > 0.0) {
         return Err(Error::InvalidStep { h });
@@ -16,7 +27,21 @@ pub fn step_count(t0: f64, t_end: f64, h: f64) -> Result<u64> {
     if !(t0.is_finite() && t_end.is_finite()) || t_end < t0 {
         return Err(Error::EndBeforeStart { t0, t_end });
     }
+    if t_end == t0 {
+        return Ok(0);
+    }
+    let too_small = |reason: String| Err(Error::StepTooSmall { h, t0, t_end, reason });
+    let t_max = t0.abs().max(t_end.abs());
+    if t_max + h == t_max {
+        return too_small(format!("t + h rounds to t at |t| = {t_max}"));
+    }
     let ratio = (t_end - t0) / h;
+    if ratio > MAX_STEPS as f64 {
+        return too_small(format!(
+            "the run would take {ratio:.3e} steps, more than 2^53 = {MAX_STEPS:.3e}",
+            MAX_STEPS = MAX_STEPS as f64
+        ));
+    }
     let nearest = ratio.round();
     let n = if (ratio - nearest).abs() <= 1e-9 * nearest.max(1.0) {
         nearest
@@ -213,5 +238,25 @@ mod tests {
         assert!(matches!(step_count(0.0, 1.0, 0.0), Err(Error::InvalidStep { .. })));
         assert!(matches!(step_count(0.0, 1.0, f64::NAN), Err(Error::InvalidStep { .. })));
         assert!(matches!(step_count(1.0, 0.0, 0.1), Err(Error::EndBeforeStart { .. })));
+        // A mistyped exponent: a step that does not move the clock (it would run for ever).
+        assert!(matches!(step_count(0.0, 0.8, 1e-30), Err(Error::StepTooSmall { .. })));
+        assert!(matches!(step_count(0.0, 1e12, 1e-5), Err(Error::StepTooSmall { .. })));
+        assert!(matches!(
+            step_count(1e6, 1e6 + 1.0, 1e-12),
+            Err(Error::StepTooSmall { .. })
+        ));
+        let msg = step_count(0.0, 0.8, 1e-30).unwrap_err().to_string();
+        assert!(
+            msg.contains("h = 1e-30") && msg.contains("rounds to t at |t| = 0.8"),
+            "{msg}"
+        );
+        // Steps that move the clock but are more than the counter keeps exact: 1.98 × 2^53.
+        let ulp = f64::EPSILON / 2.0;
+        let msg = step_count(-0.99, 0.99, ulp).unwrap_err().to_string();
+        assert!(msg.contains("1.783e16 steps, more than 2^53"), "{msg}");
+        // Up to the limits, runs are accepted.
+        assert_eq!(step_count(-0.5, 0.5, ulp).unwrap(), MAX_STEPS);
+        assert_eq!(step_count(0.0, 1.0, f64::EPSILON).unwrap(), MAX_STEPS / 2);
+        assert_eq!(step_count(1.0, 1.0, 1e-300).unwrap(), 0);
     }
 }

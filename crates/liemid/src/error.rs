@@ -49,6 +49,19 @@ pub enum Error {
         /// End time.
         t_end: f64,
     },
+    /// The step is too small for the interval: the run would take more steps than the
+    /// driver counts exactly (`2^53`), or `t + h` rounds to `t` at the end of the interval.
+    #[error("step size h = {h:e} is too small for t from {t0} to {t_end}: {reason}")]
+    StepTooSmall {
+        /// The step size.
+        h: f64,
+        /// Start time.
+        t0: f64,
+        /// End time.
+        t_end: f64,
+        /// Which of the two limits it breaks.
+        reason: String,
+    },
     /// The output interval of the driver is zero.
     #[error("observer interval `every` must be at least 1")]
     InvalidObserverInterval,
