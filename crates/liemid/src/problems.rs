@@ -292,7 +292,8 @@ pub fn torque_free_ensemble(n: usize, seed: u64) -> (crate::many::Bodies, crate:
 
 /// A dipolar fluid of `n` free spheres (mass 1, inertia 0.1, dipole `(0, 0, 1)` in the body
 /// frame, WCA σ = ε = 1) on a cubic lattice at number density `density` in a periodic box
-/// with cutoff 3 (open space with all pairs when the box is smaller than twice the cutoff),
+/// with cutoff 3 (the dipole energy switched off smoothly from 2.4; open space with all pairs
+/// when the box is smaller than twice the cutoff),
 /// random attitudes, Maxwell velocities at unit temperature with zero total momentum.
 pub fn dipolar_fluid(
     n: usize,

@@ -123,6 +123,7 @@ fn results_are_identical_for_one_and_two_threads() {
 
 #[test]
 fn dipole_forces_and_torques_are_the_gradients_of_the_energy() {
+    // With a cutoff of 2.5 the switching shell [2.0, 2.5] holds the pairs two spacings apart.
     for (cutoff, box_length) in [(None, None), (Some(2.5), Some(5.2))] {
         let dipoles = Dipoles::new(Vec3::new(0.3, -0.2, 1.0), 1.0, 1.0, cutoff, box_length).unwrap();
         let mut b = dipolar_cluster(3, 1.15, 3);
