@@ -23,7 +23,8 @@ pub enum Model {
 /// Arguments of `liemid many`.
 #[derive(clap::Args, Debug)]
 pub struct ManyArgs {
-    /// Scenario file (TOML) with `[system] model, bodies, seed, density`,
+    /// Scenario file (TOML) with `[system] model, bodies, seed, density, cutoff,
+    /// switch_start`,
     /// `[integrator] step, t_end` and `[output] path, every`; command-line options win.
     #[arg(long)]
     pub scenario: Option<PathBuf>,
@@ -48,6 +49,14 @@ pub struct ManyArgs {
     /// Number density of the dipolar fluid [default: 0.3].
     #[arg(long, allow_negative_numbers = true)]
     pub density: Option<f64>,
+    /// Cutoff of the dipolar fluid's pair sum [default: 3]; without a box of at least twice
+    /// the cutoff, all pairs in open space.
+    #[arg(long, allow_negative_numbers = true)]
+    pub cutoff: Option<f64>,
+    /// Where the dipole energy starts to be switched off [default: 0.8 × cutoff]; equal to
+    /// the cutoff, a plain truncation.
+    #[arg(long, allow_negative_numbers = true)]
+    pub switch_start: Option<f64>,
     /// Write the summary as JSON to FILE, or to standard output with `-`.
     #[arg(long)]
     pub json: Option<String>,
@@ -65,6 +74,8 @@ struct Settings {
     bodies: usize,
     seed: u64,
     density: f64,
+    cutoff: Option<f64>,
+    switch_start: Option<f64>,
     step: Option<f64>,
     t_end: Option<f64>,
     out: Option<PathBuf>,
@@ -77,6 +88,8 @@ fn settings(args: &ManyArgs) -> Result<Settings, String> {
         bodies: 1000,
         seed: 1,
         density: 0.3,
+        cutoff: None,
+        switch_start: None,
         step: None,
         t_end: None,
         out: None,
@@ -95,7 +108,12 @@ fn settings(args: &ManyArgs) -> Result<Settings, String> {
                 }
             }
             use crate::scenario::Section;
-            if let Some(sys) = Section::new(&root, "system", &["model", "bodies", "seed", "density"], true)? {
+            if let Some(sys) = Section::new(
+                &root,
+                "system",
+                &["model", "bodies", "seed", "density", "cutoff", "switch_start"],
+                true,
+            )? {
                 if let Some(m) = sys.string("model")? {
                     s.model = match m {
                         "independent" => Model::Independent,
@@ -118,6 +136,8 @@ fn settings(args: &ManyArgs) -> Result<Settings, String> {
                 if let Some(d) = sys.number("density")? {
                     s.density = d;
                 }
+                s.cutoff = sys.number("cutoff")?;
+                s.switch_start = sys.number("switch_start")?;
             }
             if let Some(integ) = Section::new(&root, "integrator", &["step", "t_end"], false)? {
                 s.step = integ.number("step")?;
@@ -144,6 +164,15 @@ fn settings(args: &ManyArgs) -> Result<Settings, String> {
     }
     if let Some(v) = args.density {
         s.density = v;
+    }
+    if args.cutoff.is_some() {
+        s.cutoff = args.cutoff;
+    }
+    if args.switch_start.is_some() {
+        s.switch_start = args.switch_start;
+    }
+    if s.model != Model::Dipoles && (s.cutoff.is_some() || s.switch_start.is_some()) {
+        return Err("cutoff and switch_start apply to the dipoles model only".into());
     }
     if args.step.is_some() {
         s.step = args.step;
@@ -254,7 +283,19 @@ pub fn many(cli: &ManyArgs) -> Result<(), (u8, String)> {
         }
         Model::Dipoles => {
             // A bad density is bad input (exit 2), not a failed run.
-            let (b, m) = problems::dipolar_fluid(n, args.density, args.seed).map_err(|e| input(e.to_string()))?;
+            let cutoff = args.cutoff.unwrap_or(problems::DIPOLAR_FLUID_CUTOFF);
+            let (b, mut m) = problems::dipolar_fluid_with_cutoff(n, args.density, args.seed, cutoff)
+                .map_err(|e| input(e.to_string()))?;
+            if let Some(r_s) = args.switch_start {
+                if m.cutoff.is_none() {
+                    return Err(input(format!(
+                        "switch_start = {r_s} needs a cutoff, but the box ({:.3}) is shorter than twice the cutoff \
+                         {cutoff}, so all pairs interact",
+                        (n as f64 / args.density).cbrt()
+                    )));
+                }
+                m = m.with_switch_start(r_s).map_err(|e| input(e.to_string()))?;
+            }
             run_model(args, b, &m, h, t_end).map_err(failed)
         }
     });

@@ -508,6 +508,37 @@ fn many_reports_throughput_and_conservation() {
     );
     let o = run_in(&dir, &["many", "--step=-1"]);
     assert_eq!(o.status.code(), Some(2));
+    // The dipole switch from the command line: the default smooth switch against a plain
+    // truncation (switch start = cutoff) in a periodic box of 216 bodies; the truncated
+    // energy jumps as pairs cross the cutoff.
+    let energy_error = |extra: &[&str]| {
+        let mut args = vec!["many", "--model", "dipoles", "--bodies", "216", "--t-end", "0.2"];
+        args.extend_from_slice(&["--every", "1", "--json", "-", "--cutoff", "2.5"]);
+        args.extend_from_slice(extra);
+        let o = run_in(&dir, &args);
+        assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+        json(&stdout(&o))["max_relative_energy_error"].as_f64().unwrap()
+    };
+    let (switched, truncated) = (energy_error(&[]), energy_error(&["--switch-start", "2.5"]));
+    assert!(
+        truncated > 10.0 * switched,
+        "switched {switched:e}, truncated {truncated:e}"
+    );
+    for (args, expected) in [
+        (&["many", "--cutoff", "2"][..], "apply to the dipoles model only"),
+        (
+            &["many", "--model", "dipoles", "--switch-start", "3.5"],
+            "`switch_start` = 3.5",
+        ),
+        (
+            &["many", "--model", "dipoles", "--bodies", "50", "--switch-start", "2"],
+            "needs a cutoff",
+        ),
+    ] {
+        let o = run_in(&dir, args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        assert!(stderr(&o).contains(expected), "{args:?}: {}", stderr(&o));
+    }
     // The scenario-file form, with a command-line override.
     let example = examples().join("dipolar_fluid.toml");
     let o = run_in(

@@ -290,20 +290,46 @@ pub fn torque_free_ensemble(n: usize, seed: u64) -> (crate::many::Bodies, crate:
     (bodies, crate::interactions::Independent::torque_free())
 }
 
+/// The cutoff of [`dipolar_fluid`].
+pub const DIPOLAR_FLUID_CUTOFF: f64 = 3.0;
+
 /// A dipolar fluid of `n` free spheres (mass 1, inertia 0.1, dipole `(0, 0, 1)` in the body
 /// frame, WCA σ = ε = 1) on a cubic lattice at number density `density` in a periodic box
 /// with cutoff 3 (the dipole energy switched off smoothly from 2.4; open space with all pairs
 /// when the box is smaller than twice the cutoff),
 /// random attitudes, Maxwell velocities at unit temperature with zero total momentum.
+///
+/// # Errors
+/// A density that is not finite and positive.
 pub fn dipolar_fluid(
     n: usize,
     density: f64,
     seed: u64,
 ) -> crate::Result<(crate::many::Bodies, crate::interactions::Dipoles)> {
+    dipolar_fluid_with_cutoff(n, density, seed, DIPOLAR_FLUID_CUTOFF)
+}
+
+/// [`dipolar_fluid`] with another cutoff (the switch starts at 0.8 of it).
+///
+/// # Errors
+/// A density or cutoff that is not finite and positive.
+pub fn dipolar_fluid_with_cutoff(
+    n: usize,
+    density: f64,
+    seed: u64,
+    cutoff: f64,
+) -> crate::Result<(crate::many::Bodies, crate::interactions::Dipoles)> {
     if !(density.is_finite() && density > 0.0) {
         return Err(crate::Error::InvalidParameter {
             name: "density",
             value: density,
+            reason: "must be finite and positive",
+        });
+    }
+    if !(cutoff.is_finite() && cutoff > 0.0) {
+        return Err(crate::Error::InvalidParameter {
+            name: "cutoff",
+            value: cutoff,
             reason: "must be finite and positive",
         });
     }
@@ -326,7 +352,6 @@ pub fn dipolar_fluid(
         let pi = Vec3::new(rng.normal(), rng.normal(), rng.normal()) * 0.1f64.sqrt();
         bodies.push(1.0, Vec3::new(0.1, 0.1, 0.1), true, pos, p, rng.rotation(), pi)?;
     }
-    let cutoff = 3.0;
     let (cutoff, box_length) = if box_length >= 2.0 * cutoff {
         (Some(cutoff), Some(box_length))
     } else {
