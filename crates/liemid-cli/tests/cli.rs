@@ -364,6 +364,28 @@ fn converge_json_to_stdout_and_a_single_plot() {
     }
     assert!(stderr(&o).contains("observed order"));
     assert!(dir.join("orders.svg").exists() && !dir.join("orders.png").exists());
+    // Steps far too large for the fast top: the methods fail and say why, but the reference
+    // is bounded by the rotation rate (0.01 / |Ω₀|), not only by the smallest step, so it
+    // stays accurate and the study completes (RK4 at 0.25 / 64 used to blow up).
+    let o = run_in(
+        &dir,
+        &[
+            "converge",
+            "--methods",
+            "liemid-ea",
+            "--steps",
+            "0.5,0.25",
+            "--no-plot",
+            "--json",
+            "-",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let study = json(&stdout(&o));
+    let reference = &study["reference"];
+    assert!(reference["step"].as_f64().unwrap() <= 0.01 / 983.0, "{reference}");
+    assert!(reference["estimated_error"].as_f64().unwrap() < 1e-6, "{reference}");
+    assert!(stderr(&o).contains("more than half a turn"), "{}", stderr(&o));
 }
 
 #[test]
