@@ -194,9 +194,8 @@ fn run_model<I: Interaction>(
     mut bodies: Bodies,
     model: &I,
     h: f64,
-    t_end: f64,
-) -> Result<(Bodies, Totals, Totals, u64, f64, f64), String> {
-    let steps = liemid::step_count(0.0, t_end, h).map_err(|e| e.to_string())?;
+    steps: u64,
+) -> Result<(Bodies, Totals, Totals, f64, f64), String> {
     bodies.evaluate(model);
     let first = bodies.totals(model);
     let mut out = match &args.out {
@@ -243,7 +242,7 @@ fn run_model<I: Interaction>(
         std::fs::rename(&partial, &path).map_err(|e| e.to_string())?;
     }
     let last = bodies.totals(model);
-    Ok((bodies, first, last, steps, stepping, max_de))
+    Ok((bodies, first, last, stepping, max_de))
 }
 
 /// Run `liemid many`; errors are (exit code, message).
@@ -264,7 +263,7 @@ pub fn many(cli: &ManyArgs) -> Result<(), (u8, String)> {
     if !(t_end.is_finite() && t_end >= 0.0) {
         return Err(input(format!("--t-end must be a non-negative number, found {t_end}")));
     }
-    liemid::step_count(0.0, t_end, h).map_err(|e| input(e.to_string()))?;
+    let steps = liemid::step_count(0.0, t_end, h).map_err(|e| input(e.to_string()))?;
     let mut builder = rayon::ThreadPoolBuilder::new();
     if let Some(k) = cli.threads {
         builder = builder.num_threads(k as usize);
@@ -275,14 +274,14 @@ pub fn many(cli: &ManyArgs) -> Result<(), (u8, String)> {
     let result = pool.install(|| match args.model {
         Model::Independent => {
             let (b, m) = problems::top_ensemble(n, args.seed);
-            run_model(args, b, &m, h, t_end).map_err(failed)
+            run_model(args, b, &m, h, steps).map_err(failed)
         }
         Model::TorqueFree => {
             let (b, m) = problems::torque_free_ensemble(n, args.seed);
-            run_model(args, b, &m, h, t_end).map_err(failed)
+            run_model(args, b, &m, h, steps).map_err(failed)
         }
         Model::Dipoles => {
-            // A bad density is bad input (exit 2), not a failed run.
+            // A bad density, cutoff or switch is bad input (exit 2), not a failed run.
             let cutoff = args.cutoff.unwrap_or(problems::DIPOLAR_FLUID_CUTOFF);
             let (b, mut m) = problems::dipolar_fluid_with_cutoff(n, args.density, args.seed, cutoff)
                 .map_err(|e| input(e.to_string()))?;
@@ -296,10 +295,10 @@ pub fn many(cli: &ManyArgs) -> Result<(), (u8, String)> {
                 }
                 m = m.with_switch_start(r_s).map_err(|e| input(e.to_string()))?;
             }
-            run_model(args, b, &m, h, t_end).map_err(failed)
+            run_model(args, b, &m, h, steps).map_err(failed)
         }
     });
-    let (bodies, first, last, steps, seconds, max_de) = result?;
+    let (bodies, first, last, seconds, max_de) = result?;
     let body_steps = steps as f64 * bodies.len() as f64;
     let throughput = if seconds > 0.0 { body_steps / seconds } else { f64::NAN };
     let dp = last.linear_momentum - first.linear_momentum;
