@@ -123,6 +123,17 @@ impl<M> Composition<M> {
     pub fn scheme(&self) -> &Scheme {
         &self.scheme
     }
+
+    /// The base method.
+    #[must_use]
+    pub fn base(&self) -> &M {
+        &self.base
+    }
+
+    /// The base method, mutably (to restore its cache).
+    pub fn base_mut(&mut self) -> &mut M {
+        &mut self.base
+    }
 }
 
 impl<M: RotationIntegrator> RotationIntegrator for Composition<M> {

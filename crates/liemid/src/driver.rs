@@ -93,41 +93,130 @@ pub struct RunSummary {
     pub max_orthogonality_defect: f64,
 }
 
-/// Tracks the extremes of the diagnostics along a run.
-#[derive(Clone, Copy, Debug)]
-struct Extremes {
-    initial: Diagnostics,
-    energy: f64,
-    momentum: Vec3,
-    norm: f64,
-    defect: f64,
+/// A fixed-step run from `t0` to `t_end` that can be advanced one step at a time, stopped
+/// and continued: everything that decides the next step is in its public fields, so a run
+/// rebuilt from them (a checkpoint) continues bit for bit as if it had not stopped.
+///
+/// Step `k` ends at `t0 + k h` exactly as computed in floating point (the time is reset
+/// after each step so that it does not accumulate round-off), and the last step lands on
+/// `t_end`. The diagnostics are evaluated after every step and their extremes kept in
+/// [`Run::progress`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Run {
+    /// Start time.
+    pub t0: f64,
+    /// End time.
+    pub t_end: f64,
+    /// Nominal step.
+    pub h: f64,
+    /// Steps of the whole run, [`step_count`]`(t0, t_end, h)`.
+    pub total_steps: u64,
+    /// The run so far: the current state, the steps taken and the extremes of the
+    /// diagnostics.
+    pub progress: RunSummary,
 }
 
-impl Extremes {
-    fn new(initial: Diagnostics) -> Self {
-        Extremes {
-            initial,
-            energy: 0.0,
-            momentum: Vec3::ZERO,
-            norm: 0.0,
-            defect: initial.orthogonality_defect,
+impl Run {
+    /// A run of `system` from `initial` (at `initial.t`) to `t_end` with step `h`.
+    ///
+    /// # Errors
+    /// Invalid `h`, `t_end` before `t0`, a step too small for the interval, a non-finite
+    /// initial state or an attitude that is not a rotation ([`RigidState::check_valid`]).
+    pub fn new<S: RigidBodySystem + ?Sized>(system: &S, initial: RigidState, t_end: f64, h: f64) -> Result<Run> {
+        initial.check_valid()?;
+        let total_steps = step_count(initial.t, t_end, h)?;
+        let first = Diagnostics::of(system, &initial);
+        Ok(Run {
+            t0: initial.t,
+            t_end,
+            h,
+            total_steps,
+            progress: RunSummary {
+                state: initial,
+                steps: 0,
+                initial: first,
+                last: first,
+                max_energy_error: 0.0,
+                max_spatial_momentum_change: Vec3::ZERO,
+                max_body_momentum_norm_change: 0.0,
+                max_orthogonality_defect: first.orthogonality_defect,
+            },
+        })
+    }
+
+    /// Whether the run has reached `t_end`.
+    #[must_use]
+    pub fn is_done(&self) -> bool {
+        self.progress.steps >= self.total_steps
+    }
+
+    /// The current state.
+    #[must_use]
+    pub fn state(&self) -> &RigidState {
+        &self.progress.state
+    }
+
+    /// The size of the next step: `h`, or the shorter last step that lands on `t_end`.
+    #[must_use]
+    pub fn next_step_size(&self) -> f64 {
+        if self.progress.steps + 1 >= self.total_steps {
+            self.t_end - self.progress.state.t
+        } else {
+            self.h
         }
     }
 
-    fn update(&mut self, d: &Diagnostics) {
-        let e0 = self.initial.energy;
+    /// Take the next step and update the diagnostics; returns the new state's diagnostics.
+    /// Does nothing (and returns the last diagnostics) once the run is done.
+    ///
+    /// # Errors
+    /// The method's error (Newton not converging, a non-finite result), with its time and
+    /// step; the run is then unchanged.
+    pub fn step<M, S>(&mut self, method: &mut M, system: &S) -> Result<Diagnostics>
+    where
+        M: RotationIntegrator,
+        S: RigidBodySystem + ?Sized,
+    {
+        if self.is_done() {
+            return Ok(self.progress.last);
+        }
+        let k = self.progress.steps + 1;
+        let last_step = k == self.total_steps;
+        let target = if last_step {
+            self.t_end
+        } else {
+            self.t0 + k as f64 * self.h
+        };
+        let dt = if last_step {
+            target - self.progress.state.t
+        } else {
+            self.h
+        };
+        let mut state = self.progress.state;
+        method.step(system, &mut state, dt)?;
+        state.t = target;
+        let d = Diagnostics::of(system, &state);
+        let p = &mut self.progress;
+        let e0 = p.initial.energy;
         let de = (d.energy - e0).abs();
-        self.energy = self.energy.max(if e0 != 0.0 { de / e0.abs() } else { de });
-        let dm = d.spatial_momentum - self.initial.spatial_momentum;
-        self.momentum = Vec3::new(
-            self.momentum.x.max(dm.x.abs()),
-            self.momentum.y.max(dm.y.abs()),
-            self.momentum.z.max(dm.z.abs()),
-        );
-        self.norm = self
-            .norm
-            .max((d.body_momentum_norm - self.initial.body_momentum_norm).abs());
-        self.defect = self.defect.max(d.orthogonality_defect);
+        p.max_energy_error = p.max_energy_error.max(if e0 != 0.0 { de / e0.abs() } else { de });
+        let dm = d.spatial_momentum - p.initial.spatial_momentum;
+        let m = p.max_spatial_momentum_change;
+        p.max_spatial_momentum_change = Vec3::new(m.x.max(dm.x.abs()), m.y.max(dm.y.abs()), m.z.max(dm.z.abs()));
+        p.max_body_momentum_norm_change = p
+            .max_body_momentum_norm_change
+            .max((d.body_momentum_norm - p.initial.body_momentum_norm).abs());
+        p.max_orthogonality_defect = p.max_orthogonality_defect.max(d.orthogonality_defect);
+        p.state = state;
+        p.last = d;
+        p.steps = k;
+        Ok(d)
+    }
+
+    /// The summary of the run so far.
+    #[must_use]
+    pub fn summary(&self) -> RunSummary {
+        self.progress
     }
 }
 
@@ -137,11 +226,13 @@ impl Extremes {
 /// steps with `every` dividing `n` makes `n/every + 1` calls), with the state and its
 /// diagnostics; returning `Err(message)` stops the run with [`Error::ObserverFailed`].
 /// Step `k` ends at `t0 + k h` exactly as computed in floating point, and the last step
-/// lands on `t_end`. The diagnostics are evaluated after every step.
+/// lands on `t_end`. The diagnostics are evaluated after every step. A [`Run`] does the
+/// same one step at a time.
 ///
 /// # Errors
-/// Invalid `h`, `t_end` before `t0`, `every = 0`, a non-finite initial state, or the first
-/// failing step (Newton not converging, a non-finite result), with its time and step.
+/// Invalid `h`, `t_end` before `t0`, `every = 0`, a non-finite initial state, an initial
+/// attitude that is not a rotation ([`RigidState::check_valid`]), or the first failing
+/// step (Newton not converging, a non-finite result), with its time and step.
 pub fn integrate<M, S, O>(
     method: &mut M,
     system: &S,
@@ -159,38 +250,17 @@ where
     if every == 0 {
         return Err(Error::InvalidObserverInterval);
     }
-    initial.check_finite()?;
-    let t0 = initial.t;
-    let steps = step_count(t0, t_end, h)?;
-    let first = Diagnostics::of(system, &initial);
-    let mut extremes = Extremes::new(first);
-    let mut state = initial;
-    let mut last = first;
+    let mut run = Run::new(system, initial, t_end, h)?;
     let fail = |t: f64, reason: String| Error::ObserverFailed { t, reason };
-    observer(0, &state, &first).map_err(|r| fail(t0, r))?;
-    for k in 1..=steps {
-        let target = if k == steps { t_end } else { t0 + k as f64 * h };
-        // The nominal step, except for the last one, which lands on t_end; the time is then
-        // reset to t0 + k h so that it does not accumulate round-off.
-        let dt = if k == steps { target - state.t } else { h };
-        method.step(system, &mut state, dt)?;
-        state.t = target;
-        last = Diagnostics::of(system, &state);
-        extremes.update(&last);
-        if k % every == 0 || k == steps {
-            observer(k, &state, &last).map_err(|r| fail(state.t, r))?;
+    observer(0, &run.progress.state, &run.progress.initial).map_err(|r| fail(run.t0, r))?;
+    while !run.is_done() {
+        let d = run.step(method, system)?;
+        let k = run.progress.steps;
+        if k % every == 0 || k == run.total_steps {
+            observer(k, &run.progress.state, &d).map_err(|r| fail(run.progress.state.t, r))?;
         }
     }
-    Ok(RunSummary {
-        state,
-        steps,
-        initial: first,
-        last,
-        max_energy_error: extremes.energy,
-        max_spatial_momentum_change: extremes.momentum,
-        max_body_momentum_norm_change: extremes.norm,
-        max_orthogonality_defect: extremes.defect,
-    })
+    Ok(run.summary())
 }
 
 /// Step from `state` to `t_end` with step `h` and nothing else: no diagnostics, no
@@ -204,7 +274,7 @@ where
     M: RotationIntegrator,
     S: RigidBodySystem + ?Sized,
 {
-    state.check_finite()?;
+    state.check_valid()?;
     let t0 = state.t;
     let steps = step_count(t0, t_end, h)?;
     for k in 1..=steps {
@@ -258,5 +328,57 @@ mod tests {
         assert_eq!(step_count(-0.5, 0.5, ulp).unwrap(), MAX_STEPS);
         assert_eq!(step_count(0.0, 1.0, f64::EPSILON).unwrap(), MAX_STEPS / 2);
         assert_eq!(step_count(1.0, 1.0, 1e-300).unwrap(), 0);
+    }
+
+    #[test]
+    fn refuses_an_attitude_that_is_not_a_rotation() {
+        // Issue 14, item 7: diag(2, 1, 1) used to run and only report a defect of 3.
+        let top = crate::problems::fast_top();
+        let mut ea = crate::LieMidpointAlternating::new();
+        let bad = RigidState::new(
+            0.0,
+            top.initial.pi,
+            crate::Mat3::from_diagonal(Vec3::new(2.0, 1.0, 1.0)),
+        );
+        let e = integrate_to(&mut ea, &top.system, bad, 0.01, 1e-4).unwrap_err();
+        assert!(matches!(e, Error::NotARotation { .. }), "{e}");
+        assert!(e.to_string().contains("defect |R^T R - I| = 3.000e0"), "{e}");
+        let mut state = bad;
+        assert!(advance(&mut ea, &top.system, &mut state, 0.01, 1e-4).is_err());
+        // A reflection is refused too.
+        let mirror = RigidState::new(
+            0.0,
+            top.initial.pi,
+            crate::Mat3::from_diagonal(Vec3::new(-1.0, 1.0, 1.0)),
+        );
+        assert!(matches!(
+            Run::new(&top.system, mirror, 0.01, 1e-4),
+            Err(Error::NotARotation { .. })
+        ));
+        // Round-off-level defects are accepted.
+        let r = crate::so3::exp(Vec3::new(0.3, 0.2, 0.1)) * (1.0 + 1e-9);
+        assert!(Run::new(&top.system, RigidState::new(0.0, top.initial.pi, r), 0.01, 1e-4).is_ok());
+    }
+
+    #[test]
+    fn a_run_rebuilt_from_its_fields_continues_bit_for_bit() {
+        let top = crate::problems::fast_top();
+        let method = crate::RotationMethod::RungeKutta4;
+        let whole = integrate_to(&mut method.integrator(), &top.system, top.initial, 0.05, 3e-4).unwrap();
+        let mut first = method.integrator();
+        let mut run = Run::new(&top.system, top.initial, 0.05, 3e-4).unwrap();
+        assert_eq!(run.total_steps, 167);
+        for _ in 0..100 {
+            run.step(&mut first, &top.system).unwrap();
+        }
+        // A copy of the fields and of the method's cache, as a checkpoint holds them.
+        let mut copy = run;
+        let mut second = method.integrator();
+        second.restore_cache(&top.system, first.cache()).unwrap();
+        while !copy.is_done() {
+            copy.step(&mut second, &top.system).unwrap();
+        }
+        assert_eq!(copy.summary(), whole);
+        assert_eq!(copy.state().t, 0.05);
     }
 }

@@ -35,6 +35,22 @@ pub enum Error {
         /// The state's time.
         t: f64,
     },
+    /// An attitude that is not a rotation matrix: `‖RᵀR − I‖_F` above
+    /// [`crate::rigid::ROTATION_TOLERANCE`] or `det R ≤ 0`.
+    #[error(
+        "the attitude at t = {t} is not a rotation: orthogonality defect |R^T R - I| = {defect:.3e} \
+         (at most {tolerance:e} is accepted), determinant {determinant:.6}"
+    )]
+    NotARotation {
+        /// The state's time.
+        t: f64,
+        /// `‖RᵀR − I‖_F`.
+        defect: f64,
+        /// `det R`.
+        determinant: f64,
+        /// The largest defect accepted.
+        tolerance: f64,
+    },
     /// The step size is zero or not finite.
     #[error("step size h = {h} must be finite and non-zero")]
     InvalidStep {
@@ -61,6 +77,14 @@ pub enum Error {
         t_end: f64,
         /// Which of the two limits it breaks.
         reason: String,
+    },
+    /// A method cache put back into a method that does not carry that kind of cache.
+    #[error("{method} cannot take a cache of kind `{found}` (or it holds non-finite numbers)")]
+    IncompatibleCache {
+        /// The method.
+        method: &'static str,
+        /// The kind of cache offered.
+        found: &'static str,
     },
     /// The output interval of the driver is zero.
     #[error("observer interval `every` must be at least 1")]

@@ -18,12 +18,28 @@ pub struct Inertia {
 
 impl Inertia {
     /// A principal inertia tensor `diag(I₁, I₂, I₃)`; every moment must be finite and
-    /// positive.
+    /// positive, and they must satisfy the triangle inequality `I_i ≤ I_j + I_k` of every
+    /// physical body (equality, a planar body, is allowed).
     pub fn principal(moments: [f64; 3]) -> Result<Self> {
         for (k, &m) in moments.iter().enumerate() {
             if !m.is_finite() || m <= 0.0 {
                 return Err(Error::InvalidInertia {
                     reason: format!("principal moment I{} = {m} must be finite and positive", k + 1),
+                });
+            }
+        }
+        // A physical body has I_i = ∫ (r² − x_i²) dm ≤ I_j + I_k = ∫ (r² + x_i²) dm, with
+        // equality for planar bodies (allowed, to a relative 8 ulps).
+        let [a, b, c] = moments;
+        for (k, (m, others)) in [(a, b + c), (b, a + c), (c, a + b)].into_iter().enumerate() {
+            if m > others * (1.0 + 8.0 * f64::EPSILON) {
+                let (j, l) = [(2, 3), (1, 3), (1, 2)][k];
+                return Err(Error::InvalidInertia {
+                    reason: format!(
+                        "principal moments violate the triangle inequality: I{} = {m} > I{j} + I{l} = {others} \
+                         (no rigid body has these moments)",
+                        k + 1
+                    ),
                 });
             }
         }
@@ -38,7 +54,9 @@ impl Inertia {
     }
 
     /// A full inertia tensor given by its rows. It must be finite, symmetric (to a relative
-    /// `1e-12`) and positive definite (all Cholesky pivots positive). A diagonal matrix takes
+    /// `1e-12`), positive definite (all Cholesky pivots positive) and physical: its principal
+    /// moments satisfy the triangle inequality, i.e. `tr(I)/2 · 1 − I` is positive
+    /// semidefinite. A diagonal matrix takes
     /// the principal fast path.
     pub fn from_matrix(rows: [[f64; 3]; 3]) -> Result<Self> {
         let m = Mat3::from_rows(rows);
@@ -75,6 +93,27 @@ impl Inertia {
                     "not positive definite (leading principal minors {d0:e}, {:e}, {d2:e})",
                     d0 * d1
                 ),
+            });
+        }
+        // The triangle inequality of the (unknown) principal moments: the second-moment
+        // tensor C = (tr I / 2) 1 − I = ∫ x xᵀ dm must be positive semidefinite. Its
+        // principal minors, to a relative 1e-12 of the scale.
+        let c = Mat3::IDENTITY * (0.5 * (a[0][0] + a[1][1] + a[2][2])) - s;
+        let cm = &c.m;
+        let minors = [
+            cm[0][0] / scale,
+            cm[1][1] / scale,
+            cm[2][2] / scale,
+            (cm[0][0] * cm[1][1] - cm[0][1] * cm[0][1]) / (scale * scale),
+            (cm[0][0] * cm[2][2] - cm[0][2] * cm[0][2]) / (scale * scale),
+            (cm[1][1] * cm[2][2] - cm[1][2] * cm[1][2]) / (scale * scale),
+            c.determinant() / (scale * scale * scale),
+        ];
+        if minors.iter().any(|&m| m < -1e-12) {
+            return Err(Error::InvalidInertia {
+                reason: "its principal moments violate the triangle inequality (I_i > I_j + I_k: \
+                         tr(I)/2 - I is not positive semidefinite); no rigid body has this tensor"
+                    .into(),
             });
         }
         let inverse = s.inverse().ok_or_else(|| Error::InvalidInertia {
@@ -150,6 +189,38 @@ mod tests {
         let e = Inertia::from_matrix([[1.0, 2.0, 0.0], [2.0, 1.0, 0.0], [0.0, 0.0, 1.0]]).unwrap_err();
         assert!(e.to_string().contains("not positive definite"), "{e}");
         assert!(Inertia::from_matrix([[1.0, 0.0, 0.0], [0.0, f64::INFINITY, 0.0], [0.0, 0.0, 1.0]]).is_err());
+    }
+
+    #[test]
+    fn refuses_moments_no_body_has() {
+        // Issue 14, item 7: [1, 1, 3] violates I3 <= I1 + I2.
+        let e = Inertia::principal([1.0, 1.0, 3.0]).unwrap_err().to_string();
+        assert!(
+            e.contains("triangle inequality") && e.contains("I3 = 3 > I1 + I2 = 2"),
+            "{e}"
+        );
+        let e = Inertia::principal([3.0, 1.0, 1.0]).unwrap_err().to_string();
+        assert!(e.contains("I1 = 3 > I2 + I3 = 2"), "{e}");
+        // Equality is a planar body (a thin plate): allowed, also after rounding.
+        assert!(Inertia::principal([1.0, 1.0, 2.0]).is_ok());
+        assert!(Inertia::principal([0.1, 0.2, 0.1 + 0.2]).is_ok());
+        // The same for full tensors: R diag(d) Rᵀ for an oblique R.
+        let r = crate::so3::exp(Vec3::new(0.3, -0.7, 0.5));
+        let rotated = |d: [f64; 3]| {
+            let m = r * Mat3::from_diagonal(Vec3::from_array(d)) * r.transpose();
+            let mut rows = m.m;
+            for i in 0..3 {
+                for j in 0..i {
+                    rows[i][j] = rows[j][i];
+                }
+            }
+            Inertia::from_matrix(rows)
+        };
+        let e = rotated([1.0, 1.0, 3.0]).unwrap_err().to_string();
+        assert!(e.contains("triangle inequality"), "{e}");
+        assert!(rotated([1.0, 1.0, 2.1]).unwrap_err().to_string().contains("triangle"));
+        assert!(rotated([1.0, 2.0, 3.0]).is_ok());
+        assert!(rotated([1.0, 2.0, 2.5]).is_ok());
     }
 
     #[test]

@@ -53,7 +53,7 @@ pub mod so3;
 pub mod vector;
 
 pub use composition::{Composition, Scheme};
-pub use driver::{advance, integrate, integrate_to, observed_order, step_count, RunSummary, MAX_STEPS};
+pub use driver::{advance, integrate, integrate_to, observed_order, step_count, Run, RunSummary, MAX_STEPS};
 pub use error::{Error, Result};
 pub use inertia::{Inertia, InertiaOperator, PrincipalInertia};
 pub use linalg::{Mat3, Vec3};
@@ -62,5 +62,6 @@ pub use rigid::{
 };
 pub use rotation::{
     AnyRotationIntegrator, AustinKrishnaprasadWang, KryslEndresNewmark, LieMidpointAlternating, LieMidpointE1,
-    LieMidpointE2, LieMidpointImplicit, RotationIntegrator, RotationMethod, RungeKutta4Quaternion, SimoWong,
+    LieMidpointE2, LieMidpointImplicit, MethodCache, RotationIntegrator, RotationMethod, RungeKutta4Quaternion,
+    SimoWong,
 };

@@ -389,12 +389,17 @@ mod tests {
         // Large increments of asymmetric bodies, far from the one-iteration regime of the
         // predictor: same root as plain Newton from Ψ₀, to round-off.
         for _ in 0..500 {
-            let moments = [
-                1.0 + 4.0 * rng.uniform(),
-                1.0 + 4.0 * rng.uniform(),
-                1.0 + 4.0 * rng.uniform(),
-            ];
-            let inertia = Inertia::principal(moments).unwrap();
+            // Moments in [1, 5], drawn until they are those of a body (triangle inequality).
+            let inertia = loop {
+                let moments = [
+                    1.0 + 4.0 * rng.uniform(),
+                    1.0 + 4.0 * rng.uniform(),
+                    1.0 + 4.0 * rng.uniform(),
+                ];
+                if let Ok(inertia) = Inertia::principal(moments) {
+                    break inertia;
+                }
+            };
             let p = rng.unit_vector() * 2.0;
             let h = 2.5 * rng.uniform() + 1e-3; // |Ψ| up to about 2.5
             let (a, _) = match solve(&inertia, p, h) {

@@ -163,8 +163,9 @@ fn dipole_forces_and_torques_are_the_gradients_of_the_energy() {
 fn torque_free_bodies_keep_their_spin_magnitudes() {
     let mut rng = Rng::new(5);
     let mut b = Bodies::new();
+        // Moments of a body (I3 <= I1 + I2 for every draw).
     for _ in 0..300 {
-        let moments = Vec3::new(1.0 + rng.uniform(), 2.0 + rng.uniform(), 3.0 + rng.uniform());
+        let moments = Vec3::new(2.0 + rng.uniform(), 3.0 + rng.uniform(), 4.0 + rng.uniform());
         let pi = rng.unit_vector() * 10.0;
         b.push(1.0, moments, false, Vec3::ZERO, Vec3::ZERO, rng.rotation(), pi)
             .unwrap();
@@ -208,7 +209,7 @@ fn heavy_top_ensemble(threads: usize, interaction: &dyn Interaction) -> Bodies {
     let mut rng = Rng::new(11);
     let mut b = Bodies::new();
     for i in 0..1001 {
-        let moments = Vec3::new(1.0 + rng.uniform(), 1.5 + rng.uniform(), 2.0 + rng.uniform());
+        let moments = Vec3::new(1.5 + rng.uniform(), 2.0 + rng.uniform(), 2.5 + rng.uniform());
         let pi = rng.unit_vector() * (40.0 * rng.uniform());
         let p = Vec3::new(rng.normal(), rng.normal(), rng.normal());
         b.push(

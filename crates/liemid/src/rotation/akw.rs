@@ -24,7 +24,7 @@ use crate::so3;
 /// iteration). At high spin rates the Cayley map's phase error dominates its attitude error.
 #[derive(Clone, Debug, Default)]
 pub struct AustinKrishnaprasadWang {
-    cache: TorqueCache,
+    pub(super) cache: TorqueCache,
 }
 
 impl AustinKrishnaprasadWang {

@@ -44,7 +44,7 @@ fn midpoint_rotation(
 /// vertical for a heavy top). One torque evaluation per step.
 #[derive(Clone, Debug, Default)]
 pub struct LieMidpointE2 {
-    cache: TorqueCache,
+    pub(super) cache: TorqueCache,
 }
 
 impl LieMidpointE2 {
@@ -134,7 +134,7 @@ impl RotationIntegrator for LieMidpointE1 {
 /// per step.
 #[derive(Clone, Debug, Default)]
 pub struct LieMidpointAlternating {
-    cache: TorqueCache,
+    pub(super) cache: TorqueCache,
 }
 
 impl LieMidpointAlternating {

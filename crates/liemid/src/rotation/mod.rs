@@ -115,6 +115,60 @@ impl TorqueCache {
     pub(crate) fn clear(&mut self) {
         self.entry = None;
     }
+
+    /// The cached `(t, R, T)`, if any.
+    pub(crate) fn snapshot(&self) -> Option<(f64, Mat3, Vec3)> {
+        self.entry.map(|(_, t, r, torque)| (t, r, torque))
+    }
+}
+
+/// What a method carries from one step to the next, taken out of it
+/// ([`AnyRotationIntegrator::cache`]) and put back ([`AnyRotationIntegrator::restore_cache`])
+/// so that a run stopped and continued (a checkpoint) takes the same steps bit for bit.
+///
+/// Every cached value is a function of the state, so a fresh method gives the same result
+/// to round-off; only with the cache is it the same to the bit (RK4's quaternion is not
+/// recomputed from the matrix; the end torque was computed at `t + h`, which may differ by
+/// an ulp from the reset time `t0 + k h`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum MethodCache {
+    /// Nothing is carried.
+    Empty,
+    /// The end torque of the last step: `torque = T(rotation, t)` (EA, E2, AKW, NMB and
+    /// the EA compositions).
+    Torque {
+        /// The time it was computed at.
+        t: f64,
+        /// The attitude it was computed at.
+        rotation: Mat3,
+        /// The body torque.
+        torque: Vec3,
+    },
+    /// RK4's unit quaternion of the attitude it produced.
+    Quaternion {
+        /// The attitude.
+        rotation: Mat3,
+        /// Its quaternion, as RK4 integrated it.
+        quaternion: crate::so3::Quaternion,
+    },
+}
+
+impl MethodCache {
+    fn kind(&self) -> &'static str {
+        match self {
+            MethodCache::Empty => "empty",
+            MethodCache::Torque { .. } => "torque",
+            MethodCache::Quaternion { .. } => "quaternion",
+        }
+    }
+
+    fn from_torque(entry: Option<(f64, Mat3, Vec3)>) -> Self {
+        entry.map_or(MethodCache::Empty, |(t, rotation, torque)| MethodCache::Torque {
+            t,
+            rotation,
+            torque,
+        })
+    }
 }
 
 /// Every rotation method of the crate, for selection by name at run time.
@@ -339,5 +393,76 @@ impl RotationIntegrator for AnyRotationIntegrator {
     }
     fn reset(&mut self) {
         dispatch!(self, m => m.reset())
+    }
+}
+
+impl AnyRotationIntegrator {
+    /// What the method carries to its next step (see [`MethodCache`]).
+    #[must_use]
+    pub fn cache(&self) -> MethodCache {
+        match self {
+            AnyRotationIntegrator::E2(m) => MethodCache::from_torque(m.cache.snapshot()),
+            AnyRotationIntegrator::Ea(m) => MethodCache::from_torque(m.cache.snapshot()),
+            AnyRotationIntegrator::Akw(m) => MethodCache::from_torque(m.cache.snapshot()),
+            AnyRotationIntegrator::Nmb(m) => MethodCache::from_torque(m.cache.snapshot()),
+            AnyRotationIntegrator::Composed(m) => MethodCache::from_torque(m.base().cache.snapshot()),
+            AnyRotationIntegrator::Rk4(m) => {
+                m.last
+                    .map_or(MethodCache::Empty, |(rotation, quaternion)| MethodCache::Quaternion {
+                        rotation,
+                        quaternion,
+                    })
+            }
+            AnyRotationIntegrator::E1(_) | AnyRotationIntegrator::I(_) | AnyRotationIntegrator::Sw(_) => {
+                MethodCache::Empty
+            }
+        }
+    }
+
+    /// Put back what [`AnyRotationIntegrator::cache`] took out, for `system` (the cache is
+    /// keyed on the system it is used with).
+    ///
+    /// # Errors
+    /// [`Error::IncompatibleCache`] when `cache` is of a kind this method does not carry,
+    /// or holds non-finite numbers.
+    pub fn restore_cache<S: RigidBodySystem + ?Sized>(&mut self, system: &S, cache: MethodCache) -> Result<()> {
+        let method = self.name();
+        let mismatch = || Error::IncompatibleCache {
+            method,
+            found: cache.kind(),
+        };
+        let finite = match cache {
+            MethodCache::Empty => true,
+            MethodCache::Torque { t, rotation, torque } => t.is_finite() && rotation.is_finite() && torque.is_finite(),
+            MethodCache::Quaternion {
+                rotation,
+                quaternion: q,
+            } => rotation.is_finite() && [q.w, q.x, q.y, q.z].iter().all(|c| c.is_finite()),
+        };
+        if !finite {
+            return Err(mismatch());
+        }
+        let torque_cache = match self {
+            AnyRotationIntegrator::E2(m) => Some(&mut m.cache),
+            AnyRotationIntegrator::Ea(m) => Some(&mut m.cache),
+            AnyRotationIntegrator::Akw(m) => Some(&mut m.cache),
+            AnyRotationIntegrator::Nmb(m) => Some(&mut m.cache),
+            AnyRotationIntegrator::Composed(m) => Some(&mut m.base_mut().cache),
+            _ => None,
+        };
+        match (torque_cache, cache) {
+            (Some(c), MethodCache::Empty) => c.clear(),
+            (Some(c), MethodCache::Torque { t, rotation, torque }) => c.store(system, &rotation, t, torque),
+            (Some(_), MethodCache::Quaternion { .. }) => return Err(mismatch()),
+            (None, _) => match (self, cache) {
+                (AnyRotationIntegrator::Rk4(m), MethodCache::Empty) => m.last = None,
+                (AnyRotationIntegrator::Rk4(m), MethodCache::Quaternion { rotation, quaternion }) => {
+                    m.last = Some((rotation, quaternion));
+                }
+                (_, MethodCache::Empty) => {}
+                _ => return Err(mismatch()),
+            },
+        }
+        Ok(())
     }
 }

@@ -25,7 +25,7 @@ use crate::so3;
 /// by Newton with the Jacobian `I + (h/2)(hat(W) I − hat(I W))`.
 #[derive(Clone, Debug, Default)]
 pub struct KryslEndresNewmark {
-    cache: TorqueCache,
+    pub(super) cache: TorqueCache,
 }
 
 impl KryslEndresNewmark {

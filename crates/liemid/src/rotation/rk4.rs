@@ -15,7 +15,7 @@ use crate::so3::Quaternion;
 /// not convert the matrix back at every step.
 #[derive(Clone, Debug, Default)]
 pub struct RungeKutta4Quaternion {
-    last: Option<(Mat3, Quaternion)>,
+    pub(super) last: Option<(Mat3, Quaternion)>,
 }
 
 impl RungeKutta4Quaternion {
