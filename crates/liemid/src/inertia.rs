@@ -208,13 +208,13 @@ mod tests {
         let r = crate::so3::exp(Vec3::new(0.3, -0.7, 0.5));
         let rotated = |d: [f64; 3]| {
             let m = r * Mat3::from_diagonal(Vec3::from_array(d)) * r.transpose();
-            let mut rows = m.m;
-            for i in 0..3 {
-                for j in 0..i {
-                    rows[i][j] = rows[j][i];
-                }
-            }
-            Inertia::from_matrix(rows)
+            // Symmetric to the bit: the upper triangle mirrored.
+            let u = m.m;
+            Inertia::from_matrix([
+                [u[0][0], u[0][1], u[0][2]],
+                [u[0][1], u[1][1], u[1][2]],
+                [u[0][2], u[1][2], u[2][2]],
+            ])
         };
         let e = rotated([1.0, 1.0, 3.0]).unwrap_err().to_string();
         assert!(e.contains("triangle inequality"), "{e}");
