@@ -2,24 +2,25 @@
 //! study of the explicit midpoint Lie paper.
 
 mod baseline;
+mod checkpoint;
 mod converge;
+mod interrupt;
 mod many_cmd;
 mod output;
 mod plot;
+mod run_cmd;
 mod scenario;
 mod work_precision;
 
-use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::time::Instant;
 
 use clap::{Args, Parser, Subcommand};
-use liemid::{integrate, RotationIntegrator, RotationMethod};
-use serde_json::json;
+use liemid::error::Num;
+use liemid::RotationMethod;
 
-use output::TrajectoryWriter;
-use scenario::{Format, Scenario};
+use output::OutputPlan;
+use scenario::Scenario;
 
 const EXAMPLES: &str = "\
 Examples:
@@ -53,7 +54,7 @@ enum Command {
         after_help = "Examples:\n  liemid run\n  liemid run examples/fast_top.toml --every 10\n  \
         liemid run --problem free-body --out flip.npy --json"
     )]
-    Run(RunArgs),
+    Run(run_cmd::RunArgs),
     /// Errors of every method against a reference for a sequence of steps, with plots.
     #[command(
         after_help = "Examples:\n  liemid converge\n  liemid converge --problem slow-top --plot slow\n  \
@@ -76,39 +77,6 @@ enum Command {
     Methods,
     /// List the built-in problems.
     Problems,
-}
-
-#[derive(Args, Debug)]
-struct RunArgs {
-    /// Scenario file (TOML). Without it, the built-in problem given by --problem.
-    file: Option<PathBuf>,
-    /// Built-in problem to run when no file is given.
-    #[arg(long, default_value = "fast-top", conflicts_with = "file")]
-    problem: String,
-    /// Override the scenario's method (see `liemid methods`).
-    #[arg(long)]
-    method: Option<String>,
-    /// Override the step size (s).
-    #[arg(long, allow_negative_numbers = true)]
-    step: Option<f64>,
-    /// Override the end time (s).
-    #[arg(long, allow_negative_numbers = true)]
-    t_end: Option<f64>,
-    /// Trajectory file [default: the scenario's [output] path, else trajectory.csv].
-    #[arg(long)]
-    out: Option<PathBuf>,
-    /// Write every N-th step (the first and last states are always written) [default: 1].
-    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
-    every: Option<u64>,
-    /// Trajectory format [default: from the file extension, else csv].
-    #[arg(long, value_enum)]
-    format: Option<Format>,
-    /// Write no trajectory, only the summary.
-    #[arg(long, conflicts_with = "out")]
-    no_output: bool,
-    /// Print the summary as one JSON object.
-    #[arg(long)]
-    json: bool,
 }
 
 #[derive(Args, Debug)]
@@ -177,27 +145,23 @@ struct WorkPrecisionArgs {
     json: Option<String>,
 }
 
-/// How a command failed: bad input (exit 2) or a failed run (exit 1).
-enum Failure {
+/// How a command failed: bad input (exit 2), a failed run (exit 1), or a stop asked for by
+/// a signal (exit 130 for SIGINT, 143 for SIGTERM).
+pub(crate) enum Failure {
     Input(String),
     Run(String),
+    Signal(u8, String),
 }
 
-type CmdResult = Result<(), Failure>;
-
-fn input<E: std::fmt::Display>(e: E) -> Failure {
-    Failure::Input(e.to_string())
-}
+pub(crate) type CmdResult = Result<(), Failure>;
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Run(args) => run(args),
+        Command::Run(args) => run_cmd::run(args),
         Command::Converge(args) => converge_cmd(args),
         Command::WorkPrecision(args) => work_precision_cmd(args),
-        Command::Many(args) => {
-            many_cmd::many(&args).map_err(|(code, m)| if code == 2 { Failure::Input(m) } else { Failure::Run(m) })
-        }
+        Command::Many(args) => many_cmd::many(&args),
         Command::Methods => {
             methods();
             Ok(())
@@ -218,6 +182,10 @@ fn main() -> ExitCode {
         Err(Failure::Run(m)) => {
             eprintln!("liemid: error: {}", one_line(&m));
             ExitCode::from(1)
+        }
+        Err(Failure::Signal(code, m)) => {
+            eprintln!("liemid: {}", one_line(&m));
+            ExitCode::from(code)
         }
     }
 }
@@ -243,14 +211,14 @@ fn methods() {
     }
 }
 
-fn parse_method(name: &str) -> Result<RotationMethod, Failure> {
+pub(crate) fn parse_method(name: &str) -> Result<RotationMethod, Failure> {
     RotationMethod::from_key(name).ok_or_else(|| {
         let known: Vec<&str> = RotationMethod::ALL.iter().map(|m| m.key()).collect();
         Failure::Input(format!("unknown method `{name}` (known: {})", known.join(", ")))
     })
 }
 
-fn check_positive(name: &str, v: f64) -> Result<f64, Failure> {
+pub(crate) fn check_positive(name: &str, v: f64) -> Result<f64, Failure> {
     if v.is_finite() && v > 0.0 {
         Ok(v)
     } else {
@@ -263,179 +231,6 @@ fn load_scenario(file: Option<&Path>, problem: &str) -> Result<Scenario, Failure
         Some(path) => scenario::load(path).map_err(Failure::Input),
         None => scenario::builtin(problem).map_err(Failure::Input),
     }
-}
-
-/// A progress line on stderr for long runs on a terminal.
-struct Progress {
-    enabled: bool,
-    total: u64,
-    next: u64,
-}
-
-impl Progress {
-    fn new(total: u64) -> Self {
-        Progress {
-            enabled: total >= 200_000 && std::io::stderr().is_terminal(),
-            total,
-            next: 0,
-        }
-    }
-    fn update(&mut self, k: u64) {
-        if self.enabled && k >= self.next {
-            let pct = 100 * k / self.total.max(1);
-            eprint!("\r[{:<40}] {pct:>3}%", "#".repeat((pct as usize * 40) / 100));
-            let _ = std::io::stderr().flush();
-            self.next = k + self.total / 100;
-        }
-    }
-    fn finish(&self) {
-        if self.enabled {
-            eprint!("\r{:<60}\r", "");
-        }
-    }
-}
-
-fn run(args: RunArgs) -> CmdResult {
-    let mut sc = load_scenario(args.file.as_deref(), &args.problem)?;
-    if let Some(m) = &args.method {
-        sc.method = parse_method(m)?;
-    }
-    if let Some(h) = args.step {
-        sc.step = check_positive("step", h)?;
-    }
-    if let Some(t) = args.t_end {
-        if !(t.is_finite() && t >= sc.initial.t) {
-            return Err(Failure::Input(format!(
-                "--t-end {t} is before the start time {}",
-                sc.initial.t
-            )));
-        }
-        sc.t_end = t;
-    }
-    let steps = liemid::step_count(sc.initial.t, sc.t_end, sc.step).map_err(input)?;
-    let every = args.every.or(sc.output.every).unwrap_or(1);
-    let path = if args.no_output {
-        None
-    } else {
-        Some(
-            args.out
-                .clone()
-                .or(sc.output.path.clone().map(PathBuf::from))
-                .unwrap_or_else(|| "trajectory.csv".into()),
-        )
-    };
-    let format = args.format.or(sc.output.format).unwrap_or_else(|| match &path {
-        Some(p) if p.extension().is_some_and(|x| x == "npy") => Format::Npy,
-        _ => Format::Csv,
-    });
-    let mut writer = match &path {
-        Some(p) => Some(
-            TrajectoryWriter::create(p, format)
-                .map_err(|e| Failure::Input(format!("{}: cannot create: {e}", output::partial_path(p).display())))?,
-        ),
-        None => None,
-    };
-
-    let mut integrator = sc.method.integrator();
-    let mut progress = Progress::new(steps);
-    let started = Instant::now();
-    let result = integrate(
-        &mut integrator,
-        &sc.system,
-        sc.initial,
-        sc.t_end,
-        sc.step,
-        every,
-        |k, s, d| {
-            progress.update(k);
-            if let Some(w) = writer.as_mut() {
-                let r = s.rotation.to_row_major();
-                let p = d.spatial_momentum;
-                let row = [
-                    s.t, s.pi.x, s.pi.y, s.pi.z, r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], d.energy, p.x,
-                    p.y, p.z,
-                ];
-                w.write_row(&row)
-                    .map_err(|e| format!("writing {}: {e}", w.partial().display()))?;
-            }
-            Ok(())
-        },
-    );
-    let wall = started.elapsed().as_secs_f64();
-    progress.finish();
-    let summary = match result {
-        Ok(s) => s,
-        Err(e) => {
-            let kept = writer
-                .as_ref()
-                .map(|w| format!("; the {} rows written are kept in {}", w.rows(), w.partial().display()))
-                .unwrap_or_default();
-            return Err(Failure::Run(format!("{}: {e}{kept}", sc.name)));
-        }
-    };
-    let trajectory = match writer {
-        Some(w) => {
-            let partial = w.partial().to_path_buf();
-            Some(
-                w.finish()
-                    .map_err(|e| Failure::Run(format!("finishing {}: {e}", partial.display())))?,
-            )
-        }
-        None => None,
-    };
-
-    let s = &summary.state;
-    if args.json {
-        let out = json!({
-            "problem": sc.name,
-            "method": sc.method.key(),
-            "step": sc.step,
-            "t": s.t,
-            "pi": s.pi.to_array(),
-            "rotation": s.rotation.to_row_major(),
-            "steps": summary.steps,
-            "max_energy_error": summary.max_energy_error,
-            "max_spatial_momentum_change": summary.max_spatial_momentum_change.to_array(),
-            "max_orthogonality_defect": summary.max_orthogonality_defect,
-            "wall_time_seconds": wall,
-            "trajectory": trajectory.as_ref().map(|(p, rows)| json!({
-                "path": p.display().to_string(),
-                "rows": rows,
-                "format": if format == Format::Npy { "npy" } else { "csv" },
-            })),
-        });
-        println!("{out}");
-    } else {
-        let r = s.rotation.m;
-        let dm = summary.max_spatial_momentum_change;
-        println!("{}: {} with h = {} to t = {}", sc.name, integrator.name(), sc.step, s.t);
-        println!("steps                          {}", summary.steps);
-        println!(
-            "final Pi                       [{:.12e}, {:.12e}, {:.12e}]",
-            s.pi.x, s.pi.y, s.pi.z
-        );
-        for (i, row) in r.iter().enumerate() {
-            let label = if i == 0 { "final R" } else { "" };
-            println!(
-                "{label:<30} [{:>19.12e}, {:>19.12e}, {:>19.12e}]",
-                row[0], row[1], row[2]
-            );
-        }
-        println!("max relative energy error      {:.3e}", summary.max_energy_error);
-        println!(
-            "max spatial momentum change    [{:.3e}, {:.3e}, {:.3e}]",
-            dm.x, dm.y, dm.z
-        );
-        println!(
-            "max orthogonality defect       {:.3e}",
-            summary.max_orthogonality_defect
-        );
-        println!("wall time                      {wall:.3} s");
-        if let Some((p, rows)) = &trajectory {
-            println!("trajectory                     {} ({rows} rows)", p.display());
-        }
-    }
-    Ok(())
 }
 
 fn plot_paths(base: &Path) -> Vec<PathBuf> {
@@ -470,6 +265,7 @@ fn converge_cmd(args: ConvergeArgs) -> CmdResult {
         return Err(Failure::Input("--steps and --methods must not be empty".into()));
     }
     let t_end = study_end(&sc, args.t_end)?;
+    check_study_outputs(args.scenario.as_deref(), &args.plot, args.no_plot, args.json.as_deref())?;
     let study = converge::study(&sc, &methods, &steps, t_end).map_err(|e| Failure::Run(format!("reference: {e}")))?;
     report(
         &converge::table(&study),
@@ -484,13 +280,30 @@ fn converge_cmd(args: ConvergeArgs) -> CmdResult {
 /// The end time of a study: `--t-end` if given (after the start), else the scenario's.
 fn study_end(sc: &Scenario, t_end: Option<f64>) -> Result<f64, Failure> {
     match t_end {
-        Some(t) if t.is_finite() && t > sc.initial.t => Ok(t),
+        Some(t) if !t.is_finite() => Err(Failure::Input(format!("--t-end must be a finite number, found {t}"))),
+        Some(t) if t > sc.initial.t => Ok(t),
         Some(t) => Err(Failure::Input(format!(
-            "--t-end {t} must be after the start time {}",
-            sc.initial.t
+            "--t-end {} must be after the start time {}",
+            Num(t),
+            Num(sc.initial.t)
         ))),
         None => Ok(sc.t_end),
     }
+}
+
+/// Check a study's plot and JSON paths before it runs (a study takes seconds to minutes).
+fn check_study_outputs(scenario: Option<&Path>, plot: &Path, no_plot: bool, json: Option<&str>) -> CmdResult {
+    let inputs: Vec<&Path> = scenario.into_iter().collect();
+    let mut plan = OutputPlan::new(&inputs);
+    if !no_plot {
+        for p in plot_paths(plot) {
+            plan.add("--plot", &p).map_err(Failure::Input)?;
+        }
+    }
+    if let Some(j) = json.filter(|j| *j != "-") {
+        plan.add("--json", Path::new(j)).map_err(Failure::Input)?;
+    }
+    Ok(())
 }
 
 /// Print a study's table, write its plots and its JSON. With JSON on standard output
@@ -530,9 +343,7 @@ fn write_json<T: serde::Serialize>(target: &str, value: &T) -> CmdResult {
     if target == "-" {
         println!("{text}");
     } else {
-        let partial = output::partial_path(Path::new(target));
-        std::fs::write(&partial, text + "\n")
-            .and_then(|()| std::fs::rename(&partial, target))
+        output::write_atomically(Path::new(target), (text + "\n").as_bytes())
             .map_err(|e| Failure::Run(format!("{target}: cannot write: {e}")))?;
         println!("wrote {target}");
     }
@@ -563,6 +374,7 @@ fn work_precision_cmd(args: WorkPrecisionArgs) -> CmdResult {
         min_error: check_positive("min-error", args.min_error)?,
         max_points: args.max_points.max(1),
     };
+    check_study_outputs(args.scenario.as_deref(), &args.plot, args.no_plot, args.json.as_deref())?;
     let study = work_precision::study(&sc, t_end, &options).map_err(Failure::Run)?;
     report(
         &work_precision::table(&study),

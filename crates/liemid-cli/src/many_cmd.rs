@@ -1,13 +1,41 @@
 //! `liemid many`: step an ensemble of rigid bodies in parallel and report throughput and
 //! conservation.
 
-use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use liemid::error::Num;
 use liemid::many::{Bodies, Interaction, Totals, BYTES_PER_BODY};
 use liemid::problems;
 use serde_json::json;
+
+use crate::interrupt::{progress, Interrupt};
+use crate::output::{plural, OutputPlan, TrajectoryWriter};
+use crate::scenario::Format;
+use crate::{CmdResult, Failure};
+
+/// The densest dipolar fluid accepted: the WCA spheres have diameter 1 and the bodies start
+/// on a simple cubic lattice, so above 1.2 (lattice spacing 0.94) neighbours start deep in
+/// each other's repulsion; close packing is sqrt(2) = 1.414.
+pub const MAX_DENSITY: f64 = 1.2;
+
+/// Threads beyond this multiple of the cores are capped (they only add switching).
+const THREADS_PER_CORE: usize = 4;
+
+/// Memory a run needs per body, beyond the state: forces, cell lists and the model's
+/// parameters, with a margin (bytes).
+const WORKING_BYTES_PER_BODY: usize = 2 * BYTES_PER_BODY;
+
+/// Columns of the totals file.
+const TOTALS_COLUMNS: [&str; 8] = ["t", "energy", "px", "py", "pz", "lx", "ly", "lz"];
+
+/// Available memory from `/proc/meminfo` (bytes), if it can be read.
+fn available_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
 
 /// Which built-in many-body model.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -18,6 +46,17 @@ pub enum Model {
     TorqueFree,
     /// A dipolar fluid: point dipoles with WCA repulsion in a periodic box.
     Dipoles,
+}
+
+impl Model {
+    /// The name on the command line and in files.
+    pub fn key(self) -> &'static str {
+        match self {
+            Model::Independent => "independent",
+            Model::TorqueFree => "torque-free",
+            Model::Dipoles => "dipoles",
+        }
+    }
 }
 
 /// Arguments of `liemid many`.
@@ -66,6 +105,9 @@ pub struct ManyArgs {
     /// Interval of the totals file, in steps [default: 10].
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     pub every: Option<u64>,
+    /// Refuse runs of more than N body-steps (bodies × steps; exit 2) before the first step.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    pub max_body_steps: Option<u64>,
 }
 
 /// The settings of a run, from the scenario file and the command line.
@@ -102,8 +144,13 @@ fn settings(args: &ManyArgs) -> Result<Settings, String> {
             let root = crate::scenario::parse_table(&text)?;
             for key in root.keys() {
                 if !["system", "integrator", "output"].contains(&key.as_str()) {
+                    let hint = if ["body", "initial", "torque"].contains(&key.as_str()) {
+                        "; this is a single-body scenario: run it with `liemid run FILE`"
+                    } else {
+                        ""
+                    };
                     return Err(format!(
-                        "unknown section or key `{key}` (sections: system, integrator, output)"
+                        "unknown section or key `{key}` (sections: system, integrator, output){hint}"
                     ));
                 }
             }
@@ -189,65 +236,97 @@ fn settings(args: &ManyArgs) -> Result<Settings, String> {
     Ok(s)
 }
 
+/// What a finished run reports.
+struct Outcome {
+    bodies: Bodies,
+    first: Totals,
+    last: Totals,
+    stepping_seconds: f64,
+    max_energy_error: f64,
+}
+
+/// Step `bodies` to `t_end` (the last step lands on it), writing the totals every
+/// `args.every` steps; errors are failed runs (exit 1) or a stop by a signal.
 fn run_model<I: Interaction>(
     args: &Settings,
     mut bodies: Bodies,
     model: &I,
-    h: f64,
-    steps: u64,
-) -> Result<(Bodies, Totals, Totals, f64, f64), String> {
+    (h, t_end, steps): (f64, f64, u64),
+    interrupt: &Interrupt,
+) -> Result<Outcome, Failure> {
     bodies.evaluate(model);
     let first = bodies.totals(model);
     let mut out = match &args.out {
-        Some(p) => {
-            let partial = crate::output::partial_path(p);
-            let mut f = std::io::BufWriter::new(
-                std::fs::File::create(&partial).map_err(|e| format!("{}: cannot create: {e}", partial.display()))?,
-            );
-            writeln!(f, "t,energy,px,py,pz,lx,ly,lz").map_err(|e| e.to_string())?;
-            Some((f, partial, p.clone()))
-        }
+        Some(p) => Some(TrajectoryWriter::create(p, Format::Csv, &TOTALS_COLUMNS).map_err(Failure::Run)?),
         None => None,
     };
     let mut max_de = 0.0f64;
-    let mut write =
-        |b: &Bodies, out: &mut Option<(std::io::BufWriter<std::fs::File>, PathBuf, PathBuf)>| -> Result<(), String> {
-            let tot = b.totals(model);
-            let de = ((tot.energy - first.energy) / first.energy).abs();
-            max_de = max_de.max(de);
-            if let Some((f, _, _)) = out.as_mut() {
-                let (p, l) = (tot.linear_momentum, tot.angular_momentum);
-                writeln!(
-                    f,
-                    "{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}",
-                    b.t, tot.energy, p.x, p.y, p.z, l.x, l.y, l.z
-                )
-                .map_err(|e| e.to_string())?;
-            }
-            Ok(())
-        };
-    write(&bodies, &mut out)?;
+    let mut write = |b: &Bodies, out: &mut Option<TrajectoryWriter>| -> Result<(), String> {
+        let tot = b.totals(model);
+        let de = ((tot.energy - first.energy) / first.energy).abs();
+        max_de = max_de.max(de);
+        if let Some(w) = out.as_mut() {
+            let (p, l) = (tot.linear_momentum, tot.angular_momentum);
+            w.write_row(&[b.t, tot.energy, p.x, p.y, p.z, l.x, l.y, l.z])?;
+        }
+        Ok(())
+    };
+    let keep = |out: Option<TrajectoryWriter>| out.map(|w| format!("; {}", w.keep_partial())).unwrap_or_default();
+    if let Err(e) = write(&bodies, &mut out) {
+        return Err(Failure::Run(format!("{e}{}", keep(out))));
+    }
+    let bar = progress(steps, "steps", steps as f64 * bodies.len() as f64 >= 2e7);
     let mut stepping = 0.0;
+    let t0 = bodies.t;
     for k in 1..=steps {
+        if let Some((signal, code)) = interrupt.requested() {
+            bar.finish_and_clear();
+            return Err(Failure::Signal(
+                code,
+                format!(
+                    "{signal}: stopped at t = {} after {} of {steps} steps{}",
+                    Num(bodies.t),
+                    k - 1,
+                    keep(out)
+                ),
+            ));
+        }
+        // The nominal step, except for the last one, which lands on t_end.
+        let target = if k == steps { t_end } else { t0 + k as f64 * h };
+        let dt = target - bodies.t;
         let start = Instant::now();
-        bodies.step(model, h).map_err(|e| format!("step {k}: {e}"))?;
+        if let Err(e) = bodies.step(model, dt) {
+            bar.finish_and_clear();
+            return Err(Failure::Run(format!("step {k}: {e}{}", keep(out))));
+        }
         stepping += start.elapsed().as_secs_f64();
+        bodies.t = target;
         if k % args.every == 0 || k == steps {
-            write(&bodies, &mut out)?;
+            if let Err(e) = write(&bodies, &mut out) {
+                return Err(Failure::Run(format!("{e}{}", keep(out))));
+            }
+        }
+        if k % 64 == 0 {
+            bar.set_position(k);
         }
     }
-    if let Some((mut f, partial, path)) = out {
-        f.flush().map_err(|e| e.to_string())?;
-        drop(f);
-        std::fs::rename(&partial, &path).map_err(|e| e.to_string())?;
+    bar.finish_and_clear();
+    if let Some(w) = out {
+        w.finish().map_err(Failure::Run)?;
     }
     let last = bodies.totals(model);
-    Ok((bodies, first, last, stepping, max_de))
+    Ok(Outcome {
+        bodies,
+        first,
+        last,
+        stepping_seconds: stepping,
+        max_energy_error: max_de,
+    })
 }
 
-/// Run `liemid many`; errors are (exit code, message).
-pub fn many(cli: &ManyArgs) -> Result<(), (u8, String)> {
-    let input = |m: String| (2u8, m);
+/// Run `liemid many`.
+pub fn many(cli: &ManyArgs) -> CmdResult {
+    let input = Failure::Input;
     let args = &settings(cli).map_err(input)?;
     let n = args.bodies;
     let (h_default, t_default) = match args.model {
@@ -263,22 +342,72 @@ pub fn many(cli: &ManyArgs) -> Result<(), (u8, String)> {
     if !(t_end.is_finite() && t_end >= 0.0) {
         return Err(input(format!("--t-end must be a non-negative number, found {t_end}")));
     }
-    let steps = liemid::step_count(0.0, t_end, h).map_err(|e| input(e.to_string()))?;
+    let steps = liemid::step_count(0.0, t_end, h)
+        .map_err(|e| input(format!("--step {} and --t-end {}: {e}", Num(h), Num(t_end))))?;
+    if let Some(max) = cli.max_body_steps {
+        let work = steps as f64 * n as f64;
+        if work > max as f64 {
+            return Err(input(format!(
+                "the run would take {work:e} body-steps ({n} {} × {steps} {}), more than --max-body-steps {max}",
+                plural(n as u64, "body", "bodies"),
+                plural(steps, "step", "steps")
+            )));
+        }
+    }
+    let needed = n as f64 * (BYTES_PER_BODY + WORKING_BYTES_PER_BODY) as f64;
+    if let Some(available) = available_memory() {
+        if needed > 0.8 * available as f64 {
+            return Err(input(format!(
+                "--bodies {n}: the bodies need about {:.1} GB ({} bytes each with working storage), more \
+                 than 80% of the {:.1} GB of memory available",
+                needed / 1e9,
+                BYTES_PER_BODY + WORKING_BYTES_PER_BODY,
+                available as f64 / 1e9
+            )));
+        }
+    }
+    if args.model == Model::Dipoles && !(args.density > 0.0 && args.density <= MAX_DENSITY) {
+        return Err(input(format!(
+            "density {}: the dipolar fluid accepts 0 < density <= {MAX_DENSITY} (WCA diameter 1; above it \
+             the bodies start inside each other's repulsion; close packing is 1.414)",
+            Num(args.density)
+        )));
+    }
+    let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
     let mut builder = rayon::ThreadPoolBuilder::new();
     if let Some(k) = cli.threads {
-        builder = builder.num_threads(k as usize);
+        let cap = THREADS_PER_CORE * cores;
+        let k = usize::try_from(k).unwrap_or(usize::MAX);
+        if k > cap {
+            eprintln!(
+                "liemid: note: --threads {k} capped at {cap} ({THREADS_PER_CORE} per core on {cores} {}); \
+                 the results do not depend on it",
+                plural(cores as u64, "core", "cores")
+            );
+        }
+        builder = builder.num_threads(k.min(cap));
     }
-    let pool = builder.build().map_err(|e| (1, format!("thread pool: {e}")))?;
+    // Every output is checked before the bodies are built.
+    let inputs: Vec<&Path> = cli.scenario.as_deref().into_iter().collect();
+    let mut plan = OutputPlan::new(&inputs);
+    if let Some(p) = &args.out {
+        plan.add("--out", p).map_err(input)?;
+    }
+    if let Some(j) = cli.json.as_deref().filter(|j| *j != "-") {
+        plan.add("--json", Path::new(j)).map_err(input)?;
+    }
+    let pool = builder.build().map_err(|e| Failure::Run(format!("thread pool: {e}")))?;
     let threads = pool.current_num_threads();
-    let failed = |m: String| (1u8, m);
-    let result = pool.install(|| match args.model {
+    let interrupt = Interrupt::install();
+    let run = (h, t_end, steps);
+    let outcome = pool.install(|| match args.model {
         Model::Independent => {
             let (b, m) = problems::top_ensemble(n, args.seed);
-            run_model(args, b, &m, h, steps).map_err(failed)
+            run_model(args, b, &m, run, &interrupt)
         }
         Model::TorqueFree => {
             let (b, m) = problems::torque_free_ensemble(n, args.seed);
-            run_model(args, b, &m, h, steps).map_err(failed)
+            run_model(args, b, &m, run, &interrupt)
         }
         Model::Dipoles => {
             // A bad density, cutoff or switch is bad input (exit 2), not a failed run.
@@ -295,49 +424,75 @@ pub fn many(cli: &ManyArgs) -> Result<(), (u8, String)> {
                 }
                 m = m.with_switch_start(r_s).map_err(|e| input(e.to_string()))?;
             }
-            run_model(args, b, &m, h, steps).map_err(failed)
+            run_model(args, b, &m, run, &interrupt).map_err(|f| match f {
+                Failure::Run(m) => Failure::Run(format!("{m} (density {}, step {})", Num(args.density), Num(h))),
+                other => other,
+            })
         }
-    });
-    let (bodies, first, last, seconds, max_de) = result?;
+    })?;
+    let Outcome {
+        bodies,
+        first,
+        last,
+        stepping_seconds: seconds,
+        max_energy_error: max_de,
+    } = outcome;
     let body_steps = steps as f64 * bodies.len() as f64;
     let throughput = if seconds > 0.0 { body_steps / seconds } else { f64::NAN };
     let dp = last.linear_momentum - first.linear_momentum;
     let dl = last.angular_momentum - first.angular_momentum;
+    // Every model conserves energy (gravity about fixed pivots, the dipole and WCA
+    // potentials), so a large error is the step's.
+    if max_de > 1e-2 {
+        eprintln!(
+            "liemid: warning: the relative energy error reached {max_de:.3e}; the step {} is probably too large \
+             for this system",
+            Num(h)
+        );
+    }
     let summary = json!({
-        "model": format!("{:?}", args.model).to_lowercase(),
+        "model": args.model.key(),
         "bodies": bodies.len(),
         "steps": steps,
         "step": h,
         "t_end": t_end,
+        "t": bodies.t,
         "threads": threads,
         "stepping_seconds": seconds,
         "body_steps_per_second": throughput,
         "bytes_per_body": BYTES_PER_BODY,
         "energy": [first.energy, last.energy],
         "max_relative_energy_error": max_de,
+        "energy_error_sampled_every": args.every,
         "linear_momentum_change": dp.to_array(),
         "angular_momentum_change": dl.to_array(),
     });
     match cli.json.as_deref() {
         Some("-") => println!("{summary}"),
         Some(path) => {
-            std::fs::write(path, summary.to_string() + "\n").map_err(|e| (1, format!("{path}: {e}")))?;
+            crate::output::write_atomically(Path::new(path), (summary.to_string() + "\n").as_bytes())
+                .map_err(|e| Failure::Run(format!("{path}: cannot write: {e}")))?;
             println!("wrote {path}");
         }
         None => {}
     }
     if cli.json.as_deref() != Some("-") {
+        let nb = bodies.len() as u64;
         println!(
-            "{:?}: {} bodies, {} steps of {h} on {threads} threads: {:.3} s stepping, {:.3e} body-steps/s",
-            args.model,
-            bodies.len(),
-            steps,
+            "{}: {nb} {}, {steps} {} of {} to t = {} on {threads} {}: {:.3} s stepping, {:.3e} body-steps/s",
+            args.model.key(),
+            plural(nb, "body", "bodies"),
+            plural(steps, "step", "steps"),
+            Num(h),
+            Num(bodies.t),
+            plural(threads as u64, "thread", "threads"),
             seconds,
             throughput
         );
         println!(
-            "max relative energy error (sampled every {} steps)  {max_de:.3e}",
-            args.every
+            "max relative energy error (sampled every {} {})  {max_de:.3e}",
+            args.every,
+            plural(args.every, "step", "steps")
         );
         println!(
             "change of total linear momentum   [{:.3e}, {:.3e}, {:.3e}]",

@@ -11,6 +11,30 @@ use liemid::{
 };
 use toml::{Table, Value};
 
+/// The largest magnitude of any number in a scenario file: products of a few such numbers
+/// (energies, torques, Newton's Jacobian) stay far from overflow.
+pub const MAX_MAGNITUDE: f64 = 1e100;
+
+/// The range of principal moments (and of the entries of a full tensor): inverse moments,
+/// squares and determinants stay far from overflow and underflow. Molecules are about 1e-46
+/// kg m², planets 1e38.
+pub const INERTIA_RANGE: (f64, f64) = (1e-100, 1e100);
+
+/// The largest rotation angle `|rotation_vector|` accepted (rad): beyond it the angle
+/// modulo a turn has lost more than 1e-12 rad to rounding.
+pub const MAX_ROTATION_ANGLE: f64 = 1e4;
+
+/// Which quantities a scenario's torque model conserves, for honest summaries.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Conservation {
+    /// Torque-free: energy and all of `π`.
+    Free,
+    /// Gravity: energy and `π · ĝ` along the unit vector `ĝ` (the other components change).
+    Gravity(Vec3),
+    /// A constant torque does work: neither energy nor `π` is conserved.
+    Driven,
+}
+
 /// The torque models a scenario can use, dispatched statically.
 #[derive(Clone, Debug)]
 pub enum ScenarioSystem {
@@ -43,6 +67,30 @@ impl RigidBodySystem for ScenarioSystem {
             ScenarioSystem::Free(s) => s.potential_energy(rotation, t),
             ScenarioSystem::Gravity(s) => s.potential_energy(rotation, t),
             ScenarioSystem::Constant(s) => s.potential_energy(rotation, t),
+        }
+    }
+}
+
+impl ScenarioSystem {
+    /// What this torque model conserves.
+    pub fn conservation(&self) -> Conservation {
+        match self {
+            ScenarioSystem::Free(_) => Conservation::Free,
+            ScenarioSystem::Gravity(top) => {
+                let g = top.gravity;
+                if top.mass == 0.0 || g.norm() == 0.0 || top.center_of_mass.norm() == 0.0 {
+                    Conservation::Free
+                } else {
+                    Conservation::Gravity(g * (1.0 / g.norm()))
+                }
+            }
+            ScenarioSystem::Constant(c) => {
+                if c.body.norm() == 0.0 && c.spatial.norm() == 0.0 {
+                    Conservation::Free
+                } else {
+                    Conservation::Driven
+                }
+            }
         }
     }
 }
@@ -188,6 +236,14 @@ impl<'a> Section<'a> {
         if !x.is_finite() {
             return Err(self.err(key, format!("must be finite, found {x}")));
         }
+        if x.abs() > MAX_MAGNITUDE {
+            return Err(self.err(
+                key,
+                format!(
+                    "{x:e} is too large: values up to {MAX_MAGNITUDE:e} in magnitude are accepted (rescale the units)"
+                ),
+            ));
+        }
         Ok(x)
     }
 
@@ -296,8 +352,13 @@ pub fn parse(text: &str, name: &str) -> Result<Scenario, String> {
     })?;
     for key in root.keys() {
         if !["body", "initial", "torque", "integrator", "output"].contains(&key.as_str()) {
+            let hint = if key == "system" {
+                "; this is a many-body scenario: run it with `liemid many --scenario FILE`"
+            } else {
+                ""
+            };
             return Err(format!(
-                "unknown section or key `{key}` (sections: body, initial, torque, integrator, output)"
+                "unknown section or key `{key}` (sections: body, initial, torque, integrator, output){hint}"
             ));
         }
     }
@@ -314,6 +375,18 @@ pub fn parse(text: &str, name: &str) -> Result<Scenario, String> {
         _ => Inertia::principal(body.vec3_of("inertia", inertia_value)?.to_array()),
     }
     .map_err(|e| body.err("inertia", e))?;
+    let (lo, hi) = INERTIA_RANGE;
+    let entries = inertia.matrix().m;
+    if let Some(x) = entries
+        .iter()
+        .flatten()
+        .find(|x| **x != 0.0 && !(lo..=hi).contains(&x.abs()))
+    {
+        return Err(body.err(
+            "inertia",
+            format!("{x:e} is out of range: moments from {lo:e} to {hi:e} kg m^2 are accepted (rescale the units)"),
+        ));
+    }
 
     let initial = Section::new(
         &root,
@@ -331,7 +404,20 @@ pub fn parse(text: &str, name: &str) -> Result<Scenario, String> {
     .expect("required");
     let rotation = match initial.one_of(&["rotation_vector", "quaternion", "matrix"], true)? {
         None => Mat3::IDENTITY,
-        Some("rotation_vector") => so3::exp(initial.vec3("rotation_vector")?.expect("present")),
+        Some("rotation_vector") => {
+            let v = initial.vec3("rotation_vector")?.expect("present");
+            if v.norm() > MAX_ROTATION_ANGLE {
+                return Err(initial.err(
+                    "rotation_vector",
+                    format!(
+                        "its length, the rotation angle, is {:e} rad; at most {MAX_ROTATION_ANGLE:e} is accepted \
+                         (take it modulo 2 pi)",
+                        v.norm()
+                    ),
+                ));
+            }
+            so3::exp(v)
+        }
         Some("quaternion") => {
             let a = initial.array_of("quaternion", &initial.table["quaternion"], 4)?;
             let c: Vec<f64> = a
@@ -422,6 +508,35 @@ pub fn parse(text: &str, name: &str) -> Result<Scenario, String> {
         }
     };
 
+    // Inputs each in range can still overflow together (a huge mass at a huge distance).
+    let state = RigidState::new(t0, pi, rotation);
+    let d = liemid::Diagnostics::of(&system, &state);
+    let torque0 = system.torque(&rotation, t0);
+    let omega = inertia.apply_inverse(pi);
+    for (what, ok, keys) in [
+        (
+            "angular velocity",
+            omega.is_finite() && omega.norm() <= MAX_MAGNITUDE,
+            "[body] inertia, [initial] angular_velocity or angular_momentum",
+        ),
+        (
+            "torque",
+            torque0.is_finite() && torque0.norm() <= MAX_MAGNITUDE,
+            "[torque]",
+        ),
+        (
+            "energy",
+            d.energy.is_finite() && d.energy.abs() <= MAX_MAGNITUDE,
+            "[body], [initial] and [torque]",
+        ),
+    ] {
+        if !ok {
+            return Err(format!(
+                "the initial {what} overflows (beyond {MAX_MAGNITUDE:e}); check the magnitudes in {keys}"
+            ));
+        }
+    }
+
     let integ = Section::new(&root, "integrator", &["method", "step", "t_end"], true)?.expect("required");
     let method_name = integ.string("method")?.unwrap_or("liemid-ea");
     let method = RotationMethod::from_key(method_name).ok_or_else(|| {
@@ -439,7 +554,7 @@ pub fn parse(text: &str, name: &str) -> Result<Scenario, String> {
     if t_end < t0 {
         return Err(integ.err("t_end", format!("{t_end} is before the start time {t0}")));
     }
-    liemid::step_count(t0, t_end, step).map_err(|e| integ.err("step", e.to_string()))?;
+    liemid::step_count(t0, t_end, step).map_err(|e| integ.err("step and t_end", e.to_string()))?;
 
     let mut output = OutputSpec::default();
     if let Some(out) = Section::new(&root, "output", &["path", "every", "format"], false)? {
@@ -567,7 +682,7 @@ format = "npy"
             (
                 "step = 1e-4",
                 "step = 1e-40",
-                "[integrator] step: step size h = 1e-40 is too small for t from 0 to 0.8: t + h rounds",
+                "[integrator] step and t_end: step size h = 1e-40 is too small for t from 0 to 0.8: t + h rounds",
             ),
             (
                 "t_end = 0.8",

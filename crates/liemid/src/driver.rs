@@ -33,7 +33,7 @@ pub fn step_count(t0: f64, t_end: f64, h: f64) -> Result<u64> {
     let too_small = |reason: String| Err(Error::StepTooSmall { h, t0, t_end, reason });
     let t_max = t0.abs().max(t_end.abs());
     if t_max + h == t_max {
-        return too_small(format!("t + h rounds to t at |t| = {t_max}"));
+        return too_small(format!("t + h rounds to t at |t| = {}", crate::error::Num(t_max)));
     }
     let ratio = (t_end - t0) / h;
     if ratio > MAX_STEPS as f64 {

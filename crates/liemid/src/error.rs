@@ -58,7 +58,7 @@ pub enum Error {
         h: f64,
     },
     /// The end time lies before the start time (or either is not finite).
-    #[error("end time t_end = {t_end} is before the start time t0 = {t0} (or not finite)")]
+    #[error("end time t_end = {} is before the start time t0 = {} (or not finite)", Num(*.t_end), Num(*.t0))]
     EndBeforeStart {
         /// Start time.
         t0: f64,
@@ -67,7 +67,7 @@ pub enum Error {
     },
     /// The step is too small for the interval: the run would take more steps than the
     /// driver counts exactly (`2^53`), or `t + h` rounds to `t` at the end of the interval.
-    #[error("step size h = {h:e} is too small for t from {t0} to {t_end}: {reason}")]
+    #[error("step size h = {h:e} is too small for t from {} to {}: {reason}", Num(*.t0), Num(*.t_end))]
     StepTooSmall {
         /// The step size.
         h: f64,
@@ -142,6 +142,22 @@ pub enum Error {
         /// The observer's message.
         reason: String,
     },
+}
+
+/// A number in messages: as Rust prints it between 1e-4 and 1e6 (`0.8`, `1000`), in
+/// exponent form outside (`1e300`, not three hundred digits).
+#[derive(Clone, Copy, Debug)]
+pub struct Num(pub f64);
+
+impl core::fmt::Display for Num {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let a = self.0.abs();
+        if a == 0.0 || !a.is_finite() || (1e-4..1e6).contains(&a) {
+            write!(f, "{}", self.0)
+        } else {
+            write!(f, "{:e}", self.0)
+        }
+    }
 }
 
 /// Result type of the library.

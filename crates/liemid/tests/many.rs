@@ -163,7 +163,7 @@ fn dipole_forces_and_torques_are_the_gradients_of_the_energy() {
 fn torque_free_bodies_keep_their_spin_magnitudes() {
     let mut rng = Rng::new(5);
     let mut b = Bodies::new();
-        // Moments of a body (I3 <= I1 + I2 for every draw).
+    // Moments of a body (I3 <= I1 + I2 for every draw).
     for _ in 0..300 {
         let moments = Vec3::new(2.0 + rng.uniform(), 3.0 + rng.uniform(), 4.0 + rng.uniform());
         let pi = rng.unit_vector() * 10.0;

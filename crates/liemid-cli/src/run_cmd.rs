@@ -1,0 +1,525 @@
+//! `liemid run`: integrate one scenario, stream its trajectory, checkpoint and resume, and
+//! print a summary that says what is conserved.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use clap::Args;
+use liemid::error::Num;
+use liemid::{RotationMethod, Run, Vec3};
+use serde_json::json;
+
+use crate::checkpoint::{Checkpoint, Settings, Source};
+use crate::interrupt::{progress, Interrupt};
+use crate::output::{plural, OutputPlan, TrajectoryWriter, COLUMNS};
+use crate::scenario::{self, Conservation, Format, Scenario};
+use crate::{check_positive, parse_method, CmdResult, Failure};
+
+/// The largest trajectory `run` writes unless `--allow-large-output` is given (bytes).
+pub const MAX_TRAJECTORY_BYTES: f64 = 4.0 * (1u64 << 30) as f64;
+
+/// Bytes per trajectory row: `.npy` exactly, CSV at most (17 numbers in `{:e}`).
+fn row_bytes(format: Format) -> f64 {
+    match format {
+        Format::Npy => 8.0 * COLUMNS.len() as f64,
+        Format::Csv => 25.0 * COLUMNS.len() as f64,
+    }
+}
+
+/// Default interval of `--checkpoint`, in steps.
+const CHECKPOINT_EVERY: u64 = 100_000;
+
+/// Arguments of `liemid run`.
+#[derive(Args, Debug)]
+pub struct RunArgs {
+    /// Scenario file (TOML). Without it, the built-in problem given by --problem.
+    file: Option<PathBuf>,
+    /// Built-in problem to run when no file is given.
+    #[arg(long, default_value = "fast-top", conflicts_with = "file")]
+    problem: String,
+    /// Override the scenario's method (see `liemid methods`).
+    #[arg(long)]
+    method: Option<String>,
+    /// Override the step size (s).
+    #[arg(long, allow_negative_numbers = true)]
+    step: Option<f64>,
+    /// Override the end time (s).
+    #[arg(long, allow_negative_numbers = true)]
+    t_end: Option<f64>,
+    /// Trajectory file, `-` for CSV on standard output (the summary then goes to standard
+    /// error) [default: the scenario's [output] path, else trajectory.csv].
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Write every N-th step (the first and last states are always written) [default: 1].
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    every: Option<u64>,
+    /// Trajectory format [default: from the file extension, else csv].
+    #[arg(long, value_enum)]
+    format: Option<Format>,
+    /// Write no trajectory, only the summary.
+    #[arg(long, conflicts_with = "out")]
+    no_output: bool,
+    /// Write trajectories larger than 4 GiB (refused by default, with an --every that fits).
+    #[arg(long)]
+    allow_large_output: bool,
+    /// Refuse runs of more than N steps (exit 2) before the first step.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    max_steps: Option<u64>,
+    /// Write a checkpoint to FILE every --checkpoint-every steps and on SIGINT/SIGTERM.
+    #[arg(long)]
+    checkpoint: Option<PathBuf>,
+    /// Steps between checkpoints [default: 100000].
+    #[arg(long, requires = "checkpoint", value_parser = clap::value_parser!(u64).range(1..))]
+    checkpoint_every: Option<u64>,
+    /// Continue the run saved in a checkpoint FILE, bit for bit as if uninterrupted.
+    #[arg(long, conflicts_with_all = ["file", "method", "step", "t_end", "out", "every", "format", "no_output", "checkpoint"])]
+    resume: Option<PathBuf>,
+    /// Print the summary as one JSON object.
+    #[arg(long)]
+    json: bool,
+}
+
+fn absolute(p: &Path) -> String {
+    std::path::absolute(p)
+        .unwrap_or_else(|_| p.to_path_buf())
+        .display()
+        .to_string()
+}
+
+fn format_key(f: Format) -> &'static str {
+    match f {
+        Format::Csv => "csv",
+        Format::Npy => "npy",
+    }
+}
+
+/// The settings of a new run from the scenario and the command line.
+fn new_settings(args: &RunArgs) -> Result<(Settings, Scenario), Failure> {
+    let sc = match &args.file {
+        Some(path) => scenario::load(path).map_err(Failure::Input)?,
+        None => scenario::builtin(&args.problem).map_err(Failure::Input)?,
+    };
+    let source = match &args.file {
+        Some(path) => Source::File {
+            path: path.display().to_string(),
+            text: std::fs::read_to_string(path).map_err(|e| Failure::Input(format!("{}: {e}", path.display())))?,
+        },
+        None => Source::Builtin(args.problem.clone()),
+    };
+    let method = match &args.method {
+        Some(m) => parse_method(m)?,
+        None => sc.method,
+    };
+    let step = match args.step {
+        Some(h) => check_positive("step", h)?,
+        None => sc.step,
+    };
+    let t_end = match args.t_end {
+        Some(t) if !t.is_finite() => {
+            return Err(Failure::Input(format!("--t-end must be a finite number, found {t}")));
+        }
+        Some(t) if t < sc.initial.t => {
+            return Err(Failure::Input(format!(
+                "--t-end {} is before the start time {}",
+                Num(t),
+                Num(sc.initial.t)
+            )));
+        }
+        Some(t) => t,
+        None => sc.t_end,
+    };
+    let every = args.every.or(sc.output.every).unwrap_or(1);
+    let output = if args.no_output {
+        None
+    } else {
+        let path = args
+            .out
+            .clone()
+            .or(sc.output.path.clone().map(PathBuf::from))
+            .unwrap_or_else(|| "trajectory.csv".into());
+        let format = args.format.or(sc.output.format).unwrap_or_else(|| {
+            if path.extension().is_some_and(|x| x == "npy") {
+                Format::Npy
+            } else {
+                Format::Csv
+            }
+        });
+        let shown = if path == Path::new("-") {
+            "-".into()
+        } else {
+            absolute(&path)
+        };
+        Some((shown, format_key(format).to_string()))
+    };
+    let checkpoint = args
+        .checkpoint
+        .as_ref()
+        .map(|p| (absolute(p), args.checkpoint_every.unwrap_or(CHECKPOINT_EVERY)));
+    Ok((
+        Settings {
+            source,
+            method: method.key().into(),
+            step,
+            t_end,
+            every,
+            output,
+            checkpoint,
+        },
+        sc,
+    ))
+}
+
+/// The scenario of a checkpoint's settings.
+fn scenario_of(settings: &Settings) -> Result<Scenario, Failure> {
+    match &settings.source {
+        Source::Builtin(name) => scenario::builtin(name).map_err(Failure::Input),
+        Source::File { path, text } => {
+            scenario::parse(text, path).map_err(|e| Failure::Input(format!("{path} (as saved in the checkpoint): {e}")))
+        }
+    }
+}
+
+/// Largest change so far of the conserved momentum component (or of all components).
+fn conserved_change(conservation: Conservation, d0: Vec3, d: Vec3) -> f64 {
+    let dm = d - d0;
+    match conservation {
+        Conservation::Free => dm.max_abs(),
+        Conservation::Gravity(g) => dm.dot(g).abs(),
+        Conservation::Driven => f64::NAN,
+    }
+}
+
+fn row(s: &liemid::RigidState, d: &liemid::Diagnostics) -> [f64; 17] {
+    let r = s.rotation.to_row_major();
+    let p = d.spatial_momentum;
+    [
+        s.t, s.pi.x, s.pi.y, s.pi.z, r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], d.energy, p.x, p.y, p.z,
+    ]
+}
+
+/// Run `liemid run`.
+pub fn run(args: RunArgs) -> CmdResult {
+    let resumed = args
+        .resume
+        .as_ref()
+        .map(|p| Checkpoint::read(p))
+        .transpose()
+        .map_err(Failure::Input)?;
+    let (settings, sc) = match &resumed {
+        Some(c) => (c.settings.clone(), scenario_of(&c.settings)?),
+        None => new_settings(&args)?,
+    };
+    let method = RotationMethod::from_key(&settings.method)
+        .ok_or_else(|| Failure::Input(format!("unknown method `{}` in the checkpoint", settings.method)))?;
+    let steps = liemid::step_count(sc.initial.t, settings.t_end, settings.step).map_err(|e| {
+        Failure::Input(format!(
+            "--step {} and --t-end {}: {e}",
+            Num(settings.step),
+            Num(settings.t_end)
+        ))
+    })?;
+    if let Some(max) = args.max_steps {
+        if steps > max {
+            return Err(Failure::Input(format!(
+                "the run would take {steps} steps, more than --max-steps {max}"
+            )));
+        }
+    }
+    let format = match settings.output.as_ref().map(|(_, f)| f.as_str()) {
+        Some("npy") => Format::Npy,
+        _ => Format::Csv,
+    };
+    let every = settings.every;
+    if let Some((path, _)) = &settings.output {
+        let rows = (steps / every + 2) as f64;
+        let bytes = rows * row_bytes(format);
+        if bytes > MAX_TRAJECTORY_BYTES && !args.allow_large_output {
+            let fits = ((steps as f64 * row_bytes(format)) / 1e8).ceil().max(1.0);
+            return Err(Failure::Input(format!(
+                "{path}: the trajectory would take about {:.1} GB ({} rows, every {every} {}), more than \
+                 the 4 GiB limit; write fewer rows (--every {fits:.0} makes about 100 MB) or give \
+                 --allow-large-output",
+                bytes / 1e9,
+                rows as u64,
+                plural(every, "step", "steps"),
+            )));
+        }
+    }
+
+    // Every output is checked before the first step.
+    let input_paths: Vec<PathBuf> = match (&args.file, &settings.source) {
+        (Some(p), _) => vec![p.clone()],
+        (None, Source::File { path, .. }) if resumed.is_none() => vec![PathBuf::from(path)],
+        _ => vec![],
+    };
+    let inputs: Vec<&Path> = input_paths.iter().map(PathBuf::as_path).collect();
+    let mut plan = OutputPlan::new(&inputs);
+    if let Some((path, _)) = &settings.output {
+        if path != "-" {
+            plan.add("--out", Path::new(path)).map_err(Failure::Input)?;
+        }
+    }
+    if let Some((path, _)) = &settings.checkpoint {
+        plan.add("--checkpoint", Path::new(path)).map_err(Failure::Input)?;
+    }
+
+    let system = &sc.system;
+    let conservation = system.conservation();
+    let mut integrator = method.integrator();
+    let (mut run, mut max_conserved) = match &resumed {
+        Some(c) => {
+            integrator
+                .restore_cache(system, c.cache())
+                .map_err(|e| Failure::Input(e.to_string()))?;
+            (c.run(), c.max_conserved_momentum_change)
+        }
+        None => {
+            let run = Run::new(system, sc.initial, settings.t_end, settings.step)
+                .map_err(|e| Failure::Input(format!("{}: {e}", sc.name)))?;
+            (run, 0.0)
+        }
+    };
+    let mut writer = match &settings.output {
+        None => None,
+        Some((path, _)) => Some(
+            match resumed.as_ref().and_then(|c| c.written).filter(|_| path != "-") {
+                Some(written) => TrajectoryWriter::resume(Path::new(path), format, COLUMNS.len(), written),
+                None => TrajectoryWriter::create(Path::new(path), format, &COLUMNS),
+            }
+            .map_err(Failure::Input)?,
+        ),
+    };
+    let to_stdout = settings.output.as_ref().is_some_and(|(p, _)| p == "-");
+    let checkpoint = |run: &Run, cache, max_conserved, writer: &mut Option<TrajectoryWriter>| -> Result<(), String> {
+        let Some((path, _)) = &settings.checkpoint else {
+            return Ok(());
+        };
+        let written = writer.as_mut().map(TrajectoryWriter::sync).transpose()?;
+        Checkpoint::new(&settings, run, cache, max_conserved, written).write(Path::new(path))
+    };
+
+    let interrupt = Interrupt::install();
+    let started = Instant::now();
+    let bar = progress(run.total_steps, "steps", run.total_steps >= 200_000);
+    bar.set_position(run.progress.steps);
+    let initial_momentum = run.progress.initial.spatial_momentum;
+    if resumed.is_none() {
+        if let Some(w) = writer.as_mut() {
+            w.write_row(&row(run.state(), &run.progress.initial))
+                .map_err(Failure::Run)?;
+        }
+    }
+    let checkpoint_every = settings.checkpoint.as_ref().map_or(u64::MAX, |(_, n)| *n);
+    let failure = loop {
+        if run.is_done() {
+            break None;
+        }
+        if let Some((signal, code)) = interrupt.requested() {
+            bar.finish_and_clear();
+            let saved = match checkpoint(&run, integrator.cache(), max_conserved, &mut writer) {
+                Ok(()) => settings
+                    .checkpoint
+                    .as_ref()
+                    .map(|(p, _)| format!("; resume with `liemid run --resume {p}`"))
+                    .unwrap_or_default(),
+                Err(e) => format!("; {e}"),
+            };
+            let kept = writer.map(|w| format!("; {}", w.keep_partial())).unwrap_or_default();
+            let p = &run.progress;
+            return Err(Failure::Signal(
+                code,
+                format!(
+                    "{signal}: stopped at t = {} after {} of {} steps{kept}{saved}",
+                    Num(p.state.t),
+                    p.steps,
+                    run.total_steps
+                ),
+            ));
+        }
+        let d = match run.step(&mut integrator, system) {
+            Ok(d) => d,
+            Err(e) => break Some(format!("{}: {e}", sc.name)),
+        };
+        max_conserved = max_conserved.max(conserved_change(conservation, initial_momentum, d.spatial_momentum));
+        let k = run.progress.steps;
+        if k % every == 0 || run.is_done() {
+            if let Some(w) = writer.as_mut() {
+                if let Err(e) = w.write_row(&row(run.state(), &d)) {
+                    break Some(e);
+                }
+            }
+        }
+        if k % checkpoint_every == 0 && !run.is_done() {
+            if let Err(e) = checkpoint(&run, integrator.cache(), max_conserved, &mut writer) {
+                break Some(e);
+            }
+        }
+        if k % 4096 == 0 {
+            bar.set_position(k);
+        }
+    };
+    bar.finish_and_clear();
+    let wall = started.elapsed().as_secs_f64();
+    if let Some(message) = failure {
+        let kept = writer.map(|w| format!("; {}", w.keep_partial())).unwrap_or_default();
+        return Err(Failure::Run(format!("{message}{kept}")));
+    }
+    let trajectory = writer.map(TrajectoryWriter::finish).transpose().map_err(Failure::Run)?;
+    print_summary(
+        &args,
+        &settings,
+        &sc,
+        &run,
+        method,
+        max_conserved,
+        wall,
+        trajectory,
+        to_stdout,
+    );
+    Ok(())
+}
+
+/// Print the summary (text, or one JSON object with `--json`), to standard error when the
+/// trajectory goes to standard output.
+#[allow(clippy::too_many_arguments)]
+fn print_summary(
+    args: &RunArgs,
+    settings: &Settings,
+    sc: &Scenario,
+    run: &Run,
+    method: RotationMethod,
+    max_conserved: f64,
+    wall: f64,
+    trajectory: Option<(String, u64)>,
+    to_stdout: bool,
+) {
+    let summary = run.summary();
+    let s = &summary.state;
+    let conservation = sc.system.conservation();
+    let n = run.total_steps;
+    let last_step = if n == 0 {
+        0.0
+    } else {
+        run.t_end - (run.t0 + (n - 1) as f64 * run.h)
+    };
+    let energy_note = match conservation {
+        Conservation::Driven => "not conserved: the constant torque does work",
+        _ => "conserved by the dynamics: the error is the method's",
+    };
+    let momentum_note = match conservation {
+        Conservation::Free => "all components conserved (torque-free)".to_string(),
+        Conservation::Gravity(g) => format!(
+            "only the component along gravity [{:.3}, {:.3}, {:.3}] is conserved",
+            g.x, g.y, g.z
+        ),
+        Conservation::Driven => "not conserved: the torque changes it".to_string(),
+    };
+    let warn_energy = !matches!(conservation, Conservation::Driven) && summary.max_energy_error > 1e-2;
+    if warn_energy {
+        eprintln!(
+            "liemid: warning: the relative energy error reached {:.3e}; the step h = {} is probably too \
+             large for this problem",
+            summary.max_energy_error,
+            Num(settings.step)
+        );
+    }
+    if args.json {
+        let out = json!({
+            "problem": sc.name,
+            "method": method.key(),
+            "step": settings.step,
+            "last_step": last_step,
+            "t": s.t,
+            "pi": s.pi.to_array(),
+            "rotation": s.rotation.to_row_major(),
+            "steps": summary.steps,
+            "energy": [summary.initial.energy, summary.last.energy],
+            "energy_conserved": !matches!(conservation, Conservation::Driven),
+            "max_energy_error": summary.max_energy_error,
+            "max_spatial_momentum_change": summary.max_spatial_momentum_change.to_array(),
+            "conserved_momentum": momentum_note,
+            "max_conserved_momentum_change": if max_conserved.is_nan() { json!(null) } else { json!(max_conserved) },
+            "max_orthogonality_defect": summary.max_orthogonality_defect,
+            "wall_time_seconds": wall,
+            "trajectory": trajectory.as_ref().map(|(p, rows)| json!({
+                "path": p,
+                "rows": rows,
+                "format": settings.output.as_ref().map(|(_, f)| f.as_str()),
+            })),
+        });
+        if to_stdout {
+            eprintln!("{out}");
+        } else {
+            println!("{out}");
+        }
+        return;
+    }
+    let mut text = String::new();
+    let mut line = |l: String| {
+        text.push_str(&l);
+        text.push('\n');
+    };
+    let r = s.rotation.m;
+    let dm = summary.max_spatial_momentum_change;
+    let step_text = if n == 1 && last_step < settings.step {
+        format!(
+            "one step of {} (the given step {} is longer than the interval)",
+            Num(last_step),
+            Num(settings.step)
+        )
+    } else if n > 1 && (last_step - settings.step).abs() > 1e-9 * settings.step {
+        format!("h = {} (the last step {})", Num(settings.step), Num(last_step))
+    } else {
+        format!("h = {}", Num(settings.step))
+    };
+    line(format!(
+        "{}: {} with {step_text} to t = {}",
+        sc.name,
+        method.name(),
+        Num(s.t)
+    ));
+    line(format!("steps                          {}", summary.steps));
+    line(format!(
+        "final Pi (kg m^2/s)            [{:.12e}, {:.12e}, {:.12e}]",
+        s.pi.x, s.pi.y, s.pi.z
+    ));
+    for (i, row) in r.iter().enumerate() {
+        let label = if i == 0 { "final R" } else { "" };
+        line(format!(
+            "{label:<30} [{:>19.12e}, {:>19.12e}, {:>19.12e}]",
+            row[0], row[1], row[2]
+        ));
+    }
+    line(format!(
+        "energy (J)                     {:.9e} at the start; {energy_note}",
+        summary.initial.energy
+    ));
+    line(format!(
+        "max relative energy change     {:.3e}",
+        summary.max_energy_error
+    ));
+    line(format!("spatial momentum pi            {momentum_note}"));
+    line(format!(
+        "max change of pi (kg m^2/s)    [{:.3e}, {:.3e}, {:.3e}]",
+        dm.x, dm.y, dm.z
+    ));
+    if let Conservation::Gravity(_) = conservation {
+        line(format!("max change of pi along gravity {max_conserved:.3e}"));
+    }
+    line(format!(
+        "max orthogonality defect       {:.3e}",
+        summary.max_orthogonality_defect
+    ));
+    line(format!("wall time                      {wall:.3} s"));
+    if let Some((p, rows)) = &trajectory {
+        line(format!(
+            "trajectory                     {p} ({rows} {})",
+            plural(*rows, "row", "rows")
+        ));
+    }
+    if to_stdout {
+        eprint!("{text}");
+    } else {
+        print!("{text}");
+    }
+}
