@@ -45,10 +45,30 @@ pub struct Settings {
     pub t_end: f64,
     /// Write every N-th step.
     pub every: u64,
-    /// The trajectory: absolute path (or `-`) and format (`csv`, `npy`).
+    /// The trajectory: path (or `-`) and format (`csv`, `npy`); absolute in a checkpoint.
     pub output: Option<(String, String)>,
-    /// The checkpoint file (absolute path) and its interval in steps.
+    /// The checkpoint file and its interval in steps; absolute in a checkpoint.
     pub checkpoint: Option<(String, u64)>,
+}
+
+impl Settings {
+    /// The same settings with absolute paths, so that a run resumes from any directory.
+    fn with_absolute_paths(&self) -> Settings {
+        let absolute = |p: &str| {
+            if p == "-" {
+                p.to_string()
+            } else {
+                std::path::absolute(p).map_or_else(|_| p.to_string(), |a| a.display().to_string())
+            }
+        };
+        let mut s = self.clone();
+        s.output = s.output.map(|(p, f)| (absolute(&p), f));
+        s.checkpoint = s.checkpoint.map(|(p, n)| (absolute(&p), n));
+        if let Source::File { path, .. } = &mut s.source {
+            *path = absolute(path);
+        }
+        s
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -152,7 +172,7 @@ impl Checkpoint {
         let s = &p.state;
         Checkpoint {
             format: FORMAT.into(),
-            settings: settings.clone(),
+            settings: settings.with_absolute_paths(),
             run: RunRecord {
                 t0: run.t0,
                 t_end: run.t_end,

@@ -125,11 +125,13 @@ pub fn study(
 ) -> Result<Study, liemid::Error> {
     let h_min = steps.iter().copied().fold(f64::INFINITY, f64::min);
     let (ref_state, reference) = reference(scenario, t_end, h_min)?;
+    let bar = crate::interrupt::progress((methods.len() * steps.len()) as u64, "runs", true);
     let results: Vec<MethodErrors> = std::thread::scope(|scope| {
         let handles: Vec<_> = methods
             .iter()
             .map(|&method| {
                 let ref_state = &ref_state;
+                let bar = bar.clone();
                 scope.spawn(move || {
                     let mut momentum = Vec::new();
                     let mut attitude = Vec::new();
@@ -149,6 +151,7 @@ pub fn study(
                                 failure.push(Some(e.to_string()));
                             }
                         }
+                        bar.inc(1);
                     }
                     MethodErrors {
                         name: method.key().into(),
@@ -169,6 +172,7 @@ pub fn study(
             .map(|h| h.join().expect("a convergence thread panicked"))
             .collect()
     });
+    bar.finish_and_clear();
     Ok(Study {
         problem: scenario.name.clone(),
         t_end,

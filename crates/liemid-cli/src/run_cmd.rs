@@ -79,13 +79,6 @@ pub struct RunArgs {
     json: bool,
 }
 
-fn absolute(p: &Path) -> String {
-    std::path::absolute(p)
-        .unwrap_or_else(|_| p.to_path_buf())
-        .display()
-        .to_string()
-}
-
 fn format_key(f: Format) -> &'static str {
     match f {
         Format::Csv => "csv",
@@ -144,17 +137,14 @@ fn new_settings(args: &RunArgs) -> Result<(Settings, Scenario), Failure> {
                 Format::Csv
             }
         });
-        let shown = if path == Path::new("-") {
-            "-".into()
-        } else {
-            absolute(&path)
-        };
-        Some((shown, format_key(format).to_string()))
+        Some((path.display().to_string(), format_key(format).to_string()))
     };
-    let checkpoint = args
-        .checkpoint
-        .as_ref()
-        .map(|p| (absolute(p), args.checkpoint_every.unwrap_or(CHECKPOINT_EVERY)));
+    let checkpoint = args.checkpoint.as_ref().map(|p| {
+        (
+            p.display().to_string(),
+            args.checkpoint_every.unwrap_or(CHECKPOINT_EVERY),
+        )
+    });
     Ok((
         Settings {
             source,
@@ -494,10 +484,11 @@ fn print_summary(
         "energy (J)                     {:.9e} at the start; {energy_note}",
         summary.initial.energy
     ));
-    line(format!(
-        "max relative energy change     {:.3e}",
-        summary.max_energy_error
-    ));
+    let label = match conservation {
+        Conservation::Driven => "max relative energy change     ",
+        _ => "max relative energy error      ",
+    };
+    line(format!("{label}{:.3e}", summary.max_energy_error));
     line(format!("spatial momentum pi            {momentum_note}"));
     line(format!(
         "max change of pi (kg m^2/s)    [{:.3e}, {:.3e}, {:.3e}]",

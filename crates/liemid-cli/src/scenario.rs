@@ -707,7 +707,7 @@ format = "npy"
             (
                 "[0.0454896, 0.0454896, 0.00139968]",
                 "[0.0454896, -0.1, 0.00139968]",
-                "[body] inertia: inertia tensor is not symmetric positive definite: principal moment I2 = -0.1",
+                "[body] inertia: invalid inertia tensor: principal moment I2 = -0.1",
             ),
             (
                 "rotation_vector = [0.05, 0.0, 0.0]",

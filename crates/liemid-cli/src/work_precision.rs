@@ -367,13 +367,16 @@ fn reference(scenario: &Scenario, t_end: f64) -> Result<(RigidState, Reference),
 pub fn study(scenario: &Scenario, t_end: f64, options: &Options) -> Result<Study, String> {
     let (ref_state, reference) = reference(scenario, t_end)?;
     let mut methods = Vec::new();
+    let bar = crate::interrupt::progress(options.entries.len() as u64, "methods", true);
     for entry in &options.entries {
         let curve = match entry {
             Entry::Fixed(m) => curve_fixed(scenario, *m, t_end, &ref_state, options),
             Entry::Dop853 => curve_dop853(scenario, t_end, &ref_state, options),
         };
         methods.push(curve);
+        bar.inc(1);
     }
+    bar.finish_and_clear();
     let targets = [1e-3, 1e-6, 1e-9]
         .iter()
         .map(|&target| {

@@ -1,76 +1,8 @@
 //! End-to-end tests of the `liemid` binary.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn liemid() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_liemid"))
-}
-
-/// A fresh, empty directory for one test.
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("liemid-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn examples() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples")
-}
-
-fn run_in(dir: &Path, args: &[&str]) -> Output {
-    liemid().current_dir(dir).args(args).output().unwrap()
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn json(text: &str) -> serde_json::Value {
-    serde_json::from_str(text).unwrap_or_else(|e| panic!("not JSON ({e}): {text}"))
-}
-
-/// Parse a CSV trajectory: header and rows of 17 numbers.
-fn read_csv(path: &Path) -> Vec<Vec<f64>> {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines();
-    let header = lines.next().unwrap();
-    assert_eq!(
-        header,
-        "t,pi1,pi2,pi3,r11,r12,r13,r21,r22,r23,r31,r32,r33,energy,pix,piy,piz"
-    );
-    lines
-        .map(|l| {
-            let row: Vec<f64> = l.split(',').map(|v| v.parse::<f64>().unwrap()).collect();
-            assert_eq!(row.len(), 17, "{l}");
-            row
-        })
-        .collect()
-}
-
-/// Read a `.npy` trajectory of f64 with 17 columns.
-fn read_npy(path: &Path) -> Vec<Vec<f64>> {
-    let bytes = std::fs::read(path).unwrap();
-    assert_eq!(&bytes[..6], b"\x93NUMPY");
-    let hlen = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
-    let header = std::str::from_utf8(&bytes[10..10 + hlen]).unwrap();
-    assert!(
-        header.contains("'descr': '<f8'") && header.contains("'fortran_order': False"),
-        "{header}"
-    );
-    let shape = &header[header.find("'shape': (").unwrap() + 10..];
-    let rows: usize = shape[..shape.find(',').unwrap()].trim().parse().unwrap();
-    let data = &bytes[10 + hlen..];
-    assert_eq!(data.len(), rows * 17 * 8, "npy data size");
-    data.chunks(17 * 8)
-        .map(|r| r.chunks(8).map(|b| f64::from_le_bytes(b.try_into().unwrap())).collect())
-        .collect()
-}
+use common::*;
 
 #[test]
 fn run_without_a_file_runs_the_fast_top() {
@@ -185,12 +117,6 @@ fn command_line_overrides_and_npy_output() {
     assert!(!dir.join("trajectory.csv").exists());
 }
 
-fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
-    let p = dir.join(name);
-    std::fs::write(&p, text).unwrap();
-    p
-}
-
 const GOOD: &str = "[body]\ninertia = [1.0, 2.0, 3.0]\n[initial]\nangular_velocity = [3.0, 10.0, 2.5]\n\
                     [integrator]\nmethod = \"liemid-ea\"\nstep = 1e-3\nt_end = 1.0\n";
 
@@ -251,7 +177,7 @@ fn bad_input_is_one_line_naming_file_and_key_with_exit_code_2() {
     }
     let o = run_in(&dir, &["many", "--model", "dipoles", "--density", "-1"]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(stderr(&o).contains("`density` = -1"));
+    assert!(stderr(&o).contains("density -1: the dipolar fluid accepts 0 < density <= 1.2"));
     let o = run_in(&dir, &["run", "--every", "0"]);
     assert_eq!(o.status.code(), Some(2));
     let o = run_in(&dir, &["converge", "--methods", "liemid-ea,nope", "--no-plot"]);

@@ -5,8 +5,9 @@ use thiserror::Error;
 /// Everything that can go wrong when building a system or stepping it.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum Error {
-    /// The inertia tensor is not symmetric positive definite (or not finite).
-    #[error("inertia tensor is not symmetric positive definite: {reason}")]
+    /// The inertia tensor is not that of a body: not finite, not symmetric positive definite, or
+    /// its principal moments violate the triangle inequality.
+    #[error("invalid inertia tensor: {reason}")]
     InvalidInertia {
         /// What is wrong with it.
         reason: String,
