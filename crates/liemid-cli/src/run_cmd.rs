@@ -47,7 +47,7 @@ pub struct RunArgs {
     #[arg(long, allow_negative_numbers = true)]
     t_end: Option<f64>,
     /// Trajectory file, `-` for CSV on standard output (the summary then goes to standard
-    /// error) [default: the scenario's [output] path, else trajectory.csv].
+    /// error) [default: the scenario's output path, else trajectory.csv].
     #[arg(long)]
     out: Option<PathBuf>,
     /// Write every N-th step (the first and last states are always written) [default: 1].

@@ -592,3 +592,20 @@ fn a_run_killed_after_a_periodic_checkpoint_resumes_from_it() {
         std::fs::read(dir.join("cut.csv")).unwrap()
     );
 }
+
+#[test]
+fn usage_errors_are_one_line_with_exit_code_2() {
+    let dir = scratch("usage");
+    for (args, expected) in [
+        (&["run", "--every", "0"][..], "--every <EVERY>': 0 must be at least 1"),
+        (&["run", "--bogus"], "unexpected argument '--bogus'"),
+        (
+            &["many", "--model", "nope"],
+            "[possible values: independent, torque-free, dipoles]",
+        ),
+        (&["run", "--resume", "c.json", "--step", "1e-3"], "cannot be used with"),
+    ] {
+        assert_input_error(&run_in(&dir, args), expected);
+    }
+    assert!(files_in(&dir).is_empty());
+}
