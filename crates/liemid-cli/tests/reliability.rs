@@ -189,28 +189,23 @@ fn item_5_partial_csv_files_end_at_a_whole_row_with_a_true_count() {
     let dir = scratch("item5");
     // A file-size limit stands in for a full disk: the write fails part-way.
     let bin = env!("CARGO_BIN_EXE_liemid");
-    let o = Command::new("sh")
-        .current_dir(&dir)
-        .arg("-c")
-        .arg(format!("ulimit -f 100; exec {bin} run --t-end 100 --out t.csv"))
-        .output()
-        .unwrap();
-    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    let err = stderr(&o);
-    assert!(err.contains("File too large") || err.contains("No space"), "{err}");
-    let rows = read_csv(&dir.join("t.csv.partial"));
-    assert_eq!(rows_kept(&err), rows.len() as u64, "{err}");
+    let limited = |out: &str| {
+        let o = Command::new("sh")
+            .current_dir(&dir)
+            .arg("-c")
+            .arg(format!("ulimit -f 100; exec {bin} run --t-end 100 --out {out}"))
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+        let err = stderr(&o);
+        assert!(err.contains("File too large") || err.contains("No space"), "{err}");
+        rows_kept(&err)
+    };
+    let kept = limited("t.csv");
+    assert_eq!(kept, read_csv(&dir.join("t.csv.partial")).len() as u64);
     assert!(std::fs::read(dir.join("t.csv.partial")).unwrap().ends_with(b"\n"));
-    // The same for .npy.
-    let o = Command::new("sh")
-        .current_dir(&dir)
-        .arg("-c")
-        .arg(format!("ulimit -f 100; exec {bin} run --t-end 100 --out t.npy"))
-        .output()
-        .unwrap();
-    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    let rows = read_npy(&dir.join("t.npy.partial"));
-    assert_eq!(rows_kept(&stderr(&o)), rows.len() as u64);
+    let kept = limited("t.npy");
+    assert_eq!(kept, read_npy(&dir.join("t.npy.partial")).len() as u64);
 
     // SIGINT: the file ends at a whole row, and the message counts the rows.
     let child = liemid()
