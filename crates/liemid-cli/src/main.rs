@@ -1,16 +1,10 @@
 //! `liemid`: run rigid-body scenarios, write trajectories, and reproduce the convergence
 //! study of the explicit midpoint Lie paper.
 
-mod baseline;
-mod checkpoint;
-mod converge;
-mod interrupt;
 mod many_cmd;
-mod output;
-mod plot;
 mod run_cmd;
-mod scenario;
-mod work_precision;
+
+use liemid_cli::{converge, output, plot, scenario, work_precision};
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;

@@ -9,10 +9,10 @@ use liemid::many::{Bodies, Interaction, Totals, BYTES_PER_BODY};
 use liemid::problems;
 use serde_json::json;
 
-use crate::interrupt::{progress, Interrupt};
-use crate::output::{plural, OutputPlan, TrajectoryWriter};
-use crate::scenario::Format;
 use crate::{CmdResult, Failure};
+use liemid_cli::interrupt::{progress, Interrupt};
+use liemid_cli::output::{plural, OutputPlan, TrajectoryWriter};
+use liemid_cli::scenario::Format;
 
 /// The densest dipolar fluid accepted: the WCA spheres have diameter 1 and the bodies start
 /// on a simple cubic lattice, so above 1.2 (lattice spacing 0.94) neighbours start deep in
@@ -141,7 +141,7 @@ fn settings(args: &ManyArgs) -> Result<Settings, String> {
         let file = path.display().to_string();
         let text = std::fs::read_to_string(path).map_err(|e| format!("{file}: cannot read: {e}"))?;
         let mut parse = || -> Result<(), String> {
-            let root = crate::scenario::parse_table(&text)?;
+            let root = liemid_cli::scenario::parse_table(&text)?;
             for key in root.keys() {
                 if !["system", "integrator", "output"].contains(&key.as_str()) {
                     let hint = if ["body", "initial", "torque"].contains(&key.as_str()) {
@@ -154,7 +154,7 @@ fn settings(args: &ManyArgs) -> Result<Settings, String> {
                     ));
                 }
             }
-            use crate::scenario::Section;
+            use liemid_cli::scenario::Section;
             if let Some(sys) = Section::new(
                 &root,
                 "system",
@@ -470,7 +470,7 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
     match cli.json.as_deref() {
         Some("-") => println!("{summary}"),
         Some(path) => {
-            crate::output::write_atomically(Path::new(path), (summary.to_string() + "\n").as_bytes())
+            liemid_cli::output::write_atomically(Path::new(path), (summary.to_string() + "\n").as_bytes())
                 .map_err(|e| Failure::Run(format!("{path}: cannot write: {e}")))?;
             println!("wrote {path}");
         }

@@ -9,11 +9,11 @@ use liemid::error::Num;
 use liemid::{RotationMethod, Run, Vec3};
 use serde_json::json;
 
-use crate::checkpoint::{Checkpoint, Settings, Source};
-use crate::interrupt::{progress, Interrupt};
-use crate::output::{plural, OutputPlan, TrajectoryWriter, COLUMNS};
-use crate::scenario::{self, Conservation, Format, Scenario};
 use crate::{check_positive, parse_method, CmdResult, Failure};
+use liemid_cli::checkpoint::{Checkpoint, Settings, Source};
+use liemid_cli::interrupt::{progress, Interrupt};
+use liemid_cli::output::{plural, OutputPlan, TrajectoryWriter, COLUMNS};
+use liemid_cli::scenario::{self, Conservation, Format, Scenario};
 
 /// The largest trajectory `run` writes unless `--allow-large-output` is given (bytes).
 pub const MAX_TRAJECTORY_BYTES: f64 = 4.0 * (1u64 << 30) as f64;

@@ -183,18 +183,13 @@ pub fn describe(name: &str) -> &'static str {
 }
 
 /// A section of the file with the keys it allows; reports unknown keys and bad values.
-pub(crate) struct Section<'a> {
+pub struct Section<'a> {
     name: &'static str,
     table: &'a Table,
 }
 
 impl<'a> Section<'a> {
-    pub(crate) fn new(
-        root: &'a Table,
-        name: &'static str,
-        allowed: &[&str],
-        required: bool,
-    ) -> Result<Option<Self>, String> {
+    pub fn new(root: &'a Table, name: &'static str, allowed: &[&str], required: bool) -> Result<Option<Self>, String> {
         let Some(value) = root.get(name) else {
             return if required {
                 Err(format!("missing section [{name}]"))
@@ -219,7 +214,7 @@ impl<'a> Section<'a> {
         Ok(Some(Section { name, table }))
     }
 
-    pub(crate) fn err(&self, key: &str, what: impl std::fmt::Display) -> String {
+    pub fn err(&self, key: &str, what: impl std::fmt::Display) -> String {
         format!("[{}] {key}: {what}", self.name)
     }
 
@@ -247,7 +242,7 @@ impl<'a> Section<'a> {
         Ok(x)
     }
 
-    pub(crate) fn number(&self, key: &str) -> Result<Option<f64>, String> {
+    pub fn number(&self, key: &str) -> Result<Option<f64>, String> {
         self.table.get(key).map(|v| self.number_of(key, v)).transpose()
     }
 
@@ -288,7 +283,7 @@ impl<'a> Section<'a> {
         Ok(m)
     }
 
-    pub(crate) fn string(&self, key: &str) -> Result<Option<&'a str>, String> {
+    pub fn string(&self, key: &str) -> Result<Option<&'a str>, String> {
         match self.table.get(key) {
             None => Ok(None),
             Some(Value::String(s)) => Ok(Some(s.as_str())),
@@ -296,7 +291,7 @@ impl<'a> Section<'a> {
         }
     }
 
-    pub(crate) fn count(&self, key: &str) -> Result<Option<u64>, String> {
+    pub fn count(&self, key: &str) -> Result<Option<u64>, String> {
         match self.table.get(key) {
             None => Ok(None),
             Some(Value::Integer(i)) if *i >= 1 => Ok(Some(*i as u64)),
@@ -327,7 +322,7 @@ pub fn load(path: &Path) -> Result<Scenario, String> {
 }
 
 /// Parse TOML text into a table; errors are one line with the line number.
-pub(crate) fn parse_table(text: &str) -> Result<Table, String> {
+pub fn parse_table(text: &str) -> Result<Table, String> {
     toml::from_str(text).map_err(|e: toml::de::Error| {
         let line = e
             .span()

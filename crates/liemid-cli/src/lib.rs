@@ -1,0 +1,15 @@
+//! The library behind the `liemid` command, shared with the Python package: scenario files
+//! and built-in problems, output files and checkpoints, the convergence and
+//! work-precision studies (with the DOP853 baseline) and their plots.
+//!
+//! The commands themselves (`run`, `many`, and the front ends of the studies) are in the
+//! binary.
+
+pub mod baseline;
+pub mod checkpoint;
+pub mod converge;
+pub mod interrupt;
+pub mod output;
+pub mod plot;
+pub mod scenario;
+pub mod work_precision;

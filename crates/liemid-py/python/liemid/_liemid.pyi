@@ -1,0 +1,77 @@
+"""Type stubs of the compiled core (flat float64 arrays in and out)."""
+
+from typing import Any, Callable, List, Optional, Sequence, Tuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+Triple = Tuple[float, float, float]
+Adapter = Callable[[list, float], Triple]
+
+def integrate(
+    inertia: List[float],
+    gravity: List[Tuple[float, Triple, Triple]],
+    constant: List[Tuple[Triple, Triple]],
+    torque: Optional[Adapter],
+    potential: Optional[Adapter],
+    attitude_kind: str,
+    attitude_values: List[float],
+    momentum: Tuple[str, Triple],
+    t0: float,
+    t_end: float,
+    step: float,
+    method: str,
+    every: int,
+) -> dict[str, Any]: ...
+def ensemble(
+    inertia: List[float],
+    gravity: List[Tuple[float, Triple, Triple]],
+    constant: List[Tuple[Triple, Triple]],
+    attitude_kind: str,
+    attitudes: NDArray[np.float64],
+    momenta: NDArray[np.float64],
+    momentum_kind: str,
+    t0: float,
+    t_end: float,
+    step: float,
+    method: str,
+    threads: int,
+) -> Tuple[NDArray[np.float64], NDArray[np.float64]]: ...
+def methods() -> List[Tuple[str, str, int, str, str]]: ...
+def check_body(inertia: List[float], gravity: List[Tuple[float, Triple, Triple]], constant: List[Tuple[Triple, Triple]]) -> None: ...
+def problem(name: str) -> Tuple[str, List[float], List[Tuple[float, Triple, Triple]], List[float], Triple, float, float]: ...
+def converge(
+    problem: str, scenario_text: Optional[str], methods: Optional[List[str]], steps: Optional[List[float]], t_end: Optional[float]
+) -> str: ...
+def work_precision(
+    problem: str,
+    scenario_text: Optional[str],
+    methods: Optional[List[str]],
+    t_end: Optional[float],
+    repetitions: int,
+    budget: float,
+    min_error: float,
+    max_points: int,
+) -> str: ...
+
+class ManyBodies:
+    def __init__(
+        self,
+        mass: Sequence[float],
+        inertia: Sequence[float],
+        free: Sequence[bool],
+        position: Sequence[float],
+        momentum: Sequence[float],
+        rotation: Sequence[float],
+        pi: Sequence[float],
+        model: tuple,
+    ) -> None: ...
+    @staticmethod
+    def dipolar_fluid(n: int, density: float, seed: int, cutoff: float) -> "ManyBodies": ...
+    def step(self, h: float, steps: int, threads: int) -> None: ...
+    def totals(self) -> Tuple[float, Triple, Triple]: ...
+    @property
+    def t(self) -> float: ...
+    @property
+    def len(self) -> int: ...
+    def arrays(self) -> Tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]: ...
