@@ -149,7 +149,7 @@ def _potential_adapter(f: PotentialCallable) -> Callable[[list, float], Tuple[fl
 TorqueLike = Union[None, _Torque, TorqueCallable]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class RigidBody:
     """A rigid body with a fixed point (or a free body, with no torque).
 
@@ -208,6 +208,14 @@ class RigidBody:
         pot = _potential_adapter(calls[0].potential) if calls and calls[0].potential is not None else None
         _liemid.check_body(m.reshape(9).tolist(), gravity, constant)
         object.__setattr__(self, "_model", (m.reshape(9).tolist(), gravity, constant, adapter, pot))
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, RigidBody):
+            return NotImplemented
+        return bool(np.array_equal(self.inertia, other.inertia)) and self.torque == other.torque and self.potential is other.potential
+
+    def __hash__(self) -> int:
+        return hash((self.inertia.tobytes(), repr(self.torque)))
 
     @property
     def has_callable(self) -> bool:
