@@ -362,8 +362,8 @@ impl TrajectoryWriter {
         Ok(())
     }
 
-    /// Flush and sync, for a checkpoint: afterwards [`TrajectoryWriter::written`] is what a
-    /// resumed run continues from.
+    /// Flush and sync, for a checkpoint: the rows and bytes returned are what a resumed run
+    /// continues from.
     pub fn sync(&mut self) -> Result<Written, String> {
         self.flush().map_err(|e| format!("writing {}: {e}", self.shown()))?;
         if let Sink::File { file, .. } = &self.sink {

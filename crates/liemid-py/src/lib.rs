@@ -22,6 +22,9 @@ use rayon::prelude::*;
 
 type Triple = (f64, f64, f64);
 
+/// A flat float64 numpy array owned by Python.
+type Array<'py> = Bound<'py, PyArray1<f64>>;
+
 fn v3((x, y, z): Triple) -> Vec3 {
     Vec3::new(x, y, z)
 }
@@ -361,7 +364,7 @@ fn ensemble<'py>(
     step: f64,
     method: &str,
     threads: usize,
-) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>)> {
+) -> PyResult<(Array<'py>, Array<'py>)> {
     let system = PySystem::new(&inertia, gravity, constant, None, None)?;
     let method = parse_method(method)?;
     let attitudes = attitudes.as_slice()?;
@@ -559,7 +562,8 @@ fn work_precision(
             .map(|m| Entry::from_key(m).ok_or_else(|| PyValueError::new_err(format!("methods: unknown method {m:?}"))))
             .collect::<PyResult<_>>()?,
     };
-    if repetitions < 5 || !(budget > 0.0) || !(min_error > 0.0) || max_points == 0 {
+    if repetitions < 5 || budget.is_nan() || budget <= 0.0 || min_error.is_nan() || min_error <= 0.0 || max_points == 0
+    {
         return Err(PyValueError::new_err(
             "repetitions must be at least 5, budget and min_error positive, max_points at least 1",
         ));
@@ -748,15 +752,7 @@ impl ManyBodies {
     }
 
     /// Flat `(positions, momenta, rotations, angular_momenta)`.
-    fn arrays<'py>(
-        &self,
-        py: Python<'py>,
-    ) -> (
-        Bound<'py, PyArray1<f64>>,
-        Bound<'py, PyArray1<f64>>,
-        Bound<'py, PyArray1<f64>>,
-        Bound<'py, PyArray1<f64>>,
-    ) {
+    fn arrays<'py>(&self, py: Python<'py>) -> (Array<'py>, Array<'py>, Array<'py>, Array<'py>) {
         let b = &self.bodies;
         let r: Vec<f64> = b.rotation.iter().flat_map(|m| m.to_row_major()).collect();
         (

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass, field
-from typing import Any, Callable, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -129,8 +129,8 @@ class CallableTorque(_Torque):
     potential: Optional[PotentialCallable] = None
 
 
-def _torque_adapter(f: TorqueCallable) -> Callable[[list, float], Tuple[float, float, float]]:
-    def call(r9: list, t: float) -> Tuple[float, float, float]:
+def _torque_adapter(f: TorqueCallable) -> Callable[[List[float], float], Tuple[float, float, float]]:
+    def call(r9: List[float], t: float) -> Tuple[float, float, float]:
         out = np.asarray(f(np.array(r9, dtype=np.float64).reshape(3, 3), t), dtype=np.float64)
         if out.shape != (3,):
             raise ValueError(f"torque: the callable returned shape {out.shape}, expected (3,)")
@@ -139,8 +139,8 @@ def _torque_adapter(f: TorqueCallable) -> Callable[[list, float], Tuple[float, f
     return call
 
 
-def _potential_adapter(f: PotentialCallable) -> Callable[[list, float], Tuple[float, float, float]]:
-    def call(r9: list, t: float) -> Tuple[float, float, float]:
+def _potential_adapter(f: PotentialCallable) -> Callable[[List[float], float], Tuple[float, float, float]]:
+    def call(r9: List[float], t: float) -> Tuple[float, float, float]:
         return (float(f(np.array(r9, dtype=np.float64).reshape(3, 3), t)), 0.0, 0.0)
 
     return call
@@ -192,9 +192,9 @@ class RigidBody:
             torque = CallableTorque(torque, self.potential)
         elif self.potential is not None:
             raise ValueError("potential: only a callable torque takes a potential (Gravity has its own)")
-        gravity: list = []
-        constant: list = []
-        calls: list = []
+        gravity: List[Any] = []
+        constant: List[Any] = []
+        calls: List[CallableTorque] = []
         for t in _terms(torque) if torque is not None else ():
             if isinstance(t, Gravity):
                 gravity.append((t.mass, t.center_of_mass, t.gravity))
@@ -477,7 +477,7 @@ def ensemble(
     return EnsembleState(t=float(t_end), pi=pi.reshape(n, 3), rotation=r.reshape(n, 3, 3))
 
 
-def methods() -> list:
+def methods() -> List[Dict[str, Any]]:
     """Every integrator: a list of dicts with ``key``, ``name``, ``order``,
     ``torque_evaluations`` (per step) and ``description`` (what it conserves)."""
     return [
@@ -503,7 +503,7 @@ def converge(
     methods: Optional[Sequence[str]] = None,
     steps: Optional[Sequence[float]] = None,
     t_end: Optional[float] = None,
-) -> dict:
+) -> Dict[str, Any]:
     """The convergence study of ``liemid converge`` (the paper's Figure 1): the errors at
     ``t_end`` of every method for a sequence of steps against a reference computed with
     it (RK4 at h/64 of the smallest step, with a Richardson estimate of its own error).
@@ -532,7 +532,7 @@ def work_precision(
     budget: float = 0.5,
     min_error: float = 1e-11,
     max_points: int = 16,
-) -> dict:
+) -> Dict[str, Any]:
     """The work-precision study of ``liemid work-precision``: attitude error at ``t_end``
     against the median CPU time of ``repetitions`` runs, for every method and the DOP853
     (``dop853``) and RK4 baselines. Returns the same data as the CLI's JSON."""

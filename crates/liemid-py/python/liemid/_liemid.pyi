@@ -6,7 +6,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 Triple = Tuple[float, float, float]
-Adapter = Callable[[list, float], Triple]
+Adapter = Callable[[List[float], float], Triple]
 
 def integrate(
     inertia: List[float],
@@ -64,7 +64,7 @@ class ManyBodies:
         momentum: Sequence[float],
         rotation: Sequence[float],
         pi: Sequence[float],
-        model: tuple,
+        model: Tuple[Any, ...],
     ) -> None: ...
     @staticmethod
     def dipolar_fluid(n: int, density: float, seed: int, cutoff: float) -> "ManyBodies": ...

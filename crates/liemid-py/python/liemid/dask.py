@@ -4,7 +4,7 @@ depend on the chunking or the worker, so the bits equal those of a local run."""
 
 from __future__ import annotations
 
-from typing import Any, Optional
+from typing import Any, Dict, Optional
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -14,7 +14,7 @@ from ._core import EnsembleState, RigidBody, _broadcast, _rows, ensemble as _loc
 __all__ = ["ensemble"]
 
 
-def _chunk(body: RigidBody, att_name: str, att: Any, mom_name: str, mom: Any, kwargs: dict) -> EnsembleState:
+def _chunk(body: RigidBody, att_name: str, att: Any, mom_name: str, mom: Any, kwargs: Dict[str, Any]) -> EnsembleState:
     return _local(body, **{att_name: att, mom_name: mom}, **kwargs)
 
 
@@ -43,13 +43,14 @@ def ensemble(
     if (angular_velocities is None) == (angular_momenta is None):
         raise ValueError("give exactly one of angular_velocities or angular_momenta")
     mom_name, mom_value = ("angular_velocities", angular_velocities) if angular_momenta is None else ("angular_momenta", angular_momenta)
+    assert mom_value is not None
     row = {"rotations": (3, 3), "rotation_vectors": (3,), "quaternions": (4,)}[att_name]
     n = _rows((att_value, len(row) + 1), (mom_value, 2))
     att = _broadcast(att_name, att_value, row, n)
     mom = _broadcast(mom_name, mom_value, (3,), n)
     if chunk_size < 1:
         raise ValueError(f"chunk_size: must be at least 1, found {chunk_size}")
-    kwargs = dict(t_end=t_end, step=step, method=method, t0=t0, threads=threads_per_task)
+    kwargs: Dict[str, Any] = dict(t_end=t_end, step=step, method=method, t0=t0, threads=threads_per_task)
     starts = range(0, n, chunk_size)
     futures = [
         client.submit(_chunk, body, att_name, att[s : s + chunk_size], mom_name, mom[s : s + chunk_size], kwargs, pure=False)

@@ -13,7 +13,7 @@ thread count. For one body it is LIEMID[EA].
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Optional, Tuple, Union
+from typing import Any, Optional, Tuple, Union
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -33,7 +33,7 @@ class Independent:
     gravity: Tuple[float, float, float] = (0.0, 0.0, 0.0)
     center_of_mass: Tuple[float, float, float] = (0.0, 0.0, 0.0)
 
-    def _spec(self) -> tuple:
+    def _spec(self) -> Tuple[Any, ...]:
         return ("independent", _vec3("gravity", self.gravity), _vec3("center_of_mass", self.center_of_mass))
 
 
@@ -51,8 +51,10 @@ class Dipoles:
     box_length: Optional[float] = None
     switch_start: Optional[float] = None
 
-    def _spec(self) -> tuple:
-        opt = lambda name, v: None if v is None else _number(name, v)  # noqa: E731
+    def _spec(self) -> Tuple[Any, ...]:
+        def opt(name: str, v: Optional[float]) -> Optional[float]:
+            return None if v is None else _number(name, v)
+
         return (
             "dipoles",
             _vec3("moment", self.moment),
