@@ -9,6 +9,8 @@
 //!   ([`HeavyTop`], [`FreeBody`], [`ConstantTorque`], [`TorqueFn`]) and [`Diagnostics`].
 //! - [`rotation`]: one type per method ([`LieMidpointAlternating`], …) behind
 //!   [`RotationIntegrator`], and [`RotationMethod`] for selection by name.
+//! - [`free_flow`]: the exact torque-free flow ([`FreeFlow`]: closed form for symmetric
+//!   bodies, Jacobi elliptic functions for asymmetric ones).
 //! - [`midpoint`]: the midpoint equation `(1/h) I Ψ = exp(−Ψ/2) P` and its Newton solver.
 //! - [`composition`]: symmetric compositions (Suzuki, Yoshida, Kahan-Li) of EA or Verlet
 //!   up to eighth order.
@@ -38,6 +40,7 @@
 pub mod composition;
 pub mod driver;
 pub mod error;
+pub mod free_flow;
 pub mod inertia;
 pub mod interactions;
 #[cfg(all(feature = "simd", target_arch = "x86_64"))]
@@ -55,6 +58,7 @@ pub mod vector;
 pub use composition::{Composition, Scheme};
 pub use driver::{advance, integrate, integrate_to, observed_order, step_count, Run, RunSummary, MAX_STEPS};
 pub use error::{Error, Result};
+pub use free_flow::FreeFlow;
 pub use inertia::{Inertia, InertiaOperator, PrincipalInertia};
 pub use linalg::{Mat3, Vec3};
 pub use rigid::{
