@@ -199,10 +199,19 @@ fn errors(state: &RigidState, reference: &RigidState) -> (f64, f64) {
 }
 
 /// The first step of a method's sequence on a problem whose fastest rate is `rate`:
-/// `Ω h ≈ 2` for the basic methods, twice that for the compositions (their stages are
-/// shorter), and `Ω h ≈ 1` for RK4.
+/// `Ω h ≈ 2` for the basic methods, eight times that for the compositions (their stages are
+/// shorter), and `Ω h ≈ 1` for RK4. The exact-flow family has no limit from the spin (its
+/// free motion is exact at any step): it starts at `Ω h ≈ 64`.
 fn first_step(method: RotationMethod, rate: f64) -> f64 {
+    let exact = matches!(
+        method,
+        RotationMethod::LieMidpointExact
+            | RotationMethod::LieMidpointExact4
+            | RotationMethod::LieMidpointExact6
+            | RotationMethod::LieMidpointExact8
+    );
     match method.order() {
+        _ if exact => 64.0 / rate,
         _ if method == RotationMethod::RungeKutta4 => 1.0 / rate,
         1 | 2 => 2.0 / rate,
         _ => 16.0 / rate,

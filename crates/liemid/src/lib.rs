@@ -66,6 +66,6 @@ pub use rigid::{
 };
 pub use rotation::{
     AnyRotationIntegrator, AustinKrishnaprasadWang, KryslEndresNewmark, LieMidpointAlternating, LieMidpointE1,
-    LieMidpointE2, LieMidpointImplicit, MethodCache, RotationIntegrator, RotationMethod, RungeKutta4Quaternion,
-    SimoWong,
+    LieMidpointE2, LieMidpointExact, LieMidpointImplicit, MethodCache, RotationIntegrator, RotationMethod,
+    RungeKutta4Quaternion, SimoWong,
 };

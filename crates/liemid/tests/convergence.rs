@@ -51,11 +51,20 @@ fn observed_orders_on_the_torque_dominated_top() {
         // Step ranges where each method is in its asymptotic regime and its error stays
         // well above the round-off floor (about 5e-14): four halvings up to order 4; the
         // sixth- and eighth-order compositions reach that floor within two halvings.
+        // The exact-flow family is more accurate at the same step (its free motion has no
+        // error): EX6 starts at twice EA6's step; EX8 is pre-asymptotic at 0.5 (ratio 200)
+        // and at the round-off floor at 0.0625, so it has two points, 0.25 and 0.125.
+        let exact = matches!(
+            method,
+            RotationMethod::LieMidpointExact6 | RotationMethod::LieMidpointExact8
+        );
         let hs = match method.order() {
             1 | 2 => halvings(1e-2, 5),
             4 if method == RotationMethod::RungeKutta4 => halvings(2e-2, 5),
             4 => halvings(1e-1, 5),
+            6 if exact => halvings(1.25e-1, 3),
             6 => halvings(6.25e-2, 3),
+            _ if exact => halvings(2.5e-1, 2),
             _ => halvings(2.5e-1, 3),
         };
         let (om, or, errs) = orders(method, &top, &ea8, &hs);
@@ -136,7 +145,9 @@ fn fast_top_ea_reproduces_the_paper_table_and_leads_the_line_up() {
         ),
         &reference,
     );
-    for method in RotationMethod::ALL
+    // The paper's claim is about its line-up; LIEMID[EX], with the exact free flow, is far
+    // ahead of all of them (tests/exact_method.rs).
+    for method in RotationMethod::PAPER
         .into_iter()
         .filter(|m| m.order() == 2 && *m != RotationMethod::LieMidpointAlternating)
     {

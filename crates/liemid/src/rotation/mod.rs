@@ -5,12 +5,14 @@
 //! dispatches to them.
 
 mod akw;
+mod exact;
 mod liemid;
 mod newmark;
 mod rk4;
 mod simo_wong;
 
 pub use akw::AustinKrishnaprasadWang;
+pub use exact::LieMidpointExact;
 pub use liemid::{LieMidpointAlternating, LieMidpointE1, LieMidpointE2, LieMidpointImplicit};
 pub use newmark::KryslEndresNewmark;
 pub use rk4::RungeKutta4Quaternion;
@@ -198,11 +200,20 @@ pub enum RotationMethod {
     LieMidpointAlternating6,
     /// EA composed by Kahan and Li's 17-stage scheme: eighth order.
     LieMidpointAlternating8,
+    /// [`LieMidpointExact`]: impulses around the exact torque-free flow.
+    LieMidpointExact,
+    /// EX composed by Suzuki's 5-stage scheme: fourth order.
+    LieMidpointExact4,
+    /// EX composed by Kahan and Li's 9-stage scheme: sixth order.
+    LieMidpointExact6,
+    /// EX composed by Kahan and Li's 17-stage scheme: eighth order.
+    LieMidpointExact8,
 }
 
 impl RotationMethod {
-    /// Every method: the paper's line-up, the RK4 baseline and the EA compositions.
-    pub const ALL: [RotationMethod; 12] = [
+    /// Every method: the paper's line-up, the RK4 baseline, the EA compositions and the
+    /// exact-flow family.
+    pub const ALL: [RotationMethod; 16] = [
         RotationMethod::LieMidpointE1,
         RotationMethod::LieMidpointE2,
         RotationMethod::LieMidpointAlternating,
@@ -215,6 +226,10 @@ impl RotationMethod {
         RotationMethod::LieMidpointAlternating4Yoshida,
         RotationMethod::LieMidpointAlternating6,
         RotationMethod::LieMidpointAlternating8,
+        RotationMethod::LieMidpointExact,
+        RotationMethod::LieMidpointExact4,
+        RotationMethod::LieMidpointExact6,
+        RotationMethod::LieMidpointExact8,
     ];
 
     /// The paper's Figure 1 line-up plus the RK4 baseline.
@@ -245,6 +260,10 @@ impl RotationMethod {
             RotationMethod::LieMidpointAlternating4Yoshida => "liemid-ea4y",
             RotationMethod::LieMidpointAlternating6 => "liemid-ea6",
             RotationMethod::LieMidpointAlternating8 => "liemid-ea8",
+            RotationMethod::LieMidpointExact => "liemid-ex",
+            RotationMethod::LieMidpointExact4 => "liemid-ex4",
+            RotationMethod::LieMidpointExact6 => "liemid-ex6",
+            RotationMethod::LieMidpointExact8 => "liemid-ex8",
         }
     }
 
@@ -273,15 +292,16 @@ impl RotationMethod {
             RotationMethod::LieMidpointE1
             | RotationMethod::LieMidpointE2
             | RotationMethod::LieMidpointAlternating
-            | RotationMethod::KryslEndresNewmark => "1",
+            | RotationMethod::KryslEndresNewmark
+            | RotationMethod::LieMidpointExact => "1",
             RotationMethod::LieMidpointImplicit
             | RotationMethod::AustinKrishnaprasadWang
             | RotationMethod::SimoWong => "1 per Newton iteration",
             RotationMethod::RungeKutta4 => "4",
-            RotationMethod::LieMidpointAlternating4 => "5",
+            RotationMethod::LieMidpointAlternating4 | RotationMethod::LieMidpointExact4 => "5",
             RotationMethod::LieMidpointAlternating4Yoshida => "3",
-            RotationMethod::LieMidpointAlternating6 => "9",
-            RotationMethod::LieMidpointAlternating8 => "17",
+            RotationMethod::LieMidpointAlternating6 | RotationMethod::LieMidpointExact6 => "9",
+            RotationMethod::LieMidpointAlternating8 | RotationMethod::LieMidpointExact8 => "17",
         }
     }
 
@@ -315,6 +335,12 @@ impl RotationMethod {
             RotationMethod::LieMidpointAlternating4Yoshida => "EA composed by Yoshida's triple jump; keeps what EA keeps",
             RotationMethod::LieMidpointAlternating6 => "EA composed by Kahan-Li's 9-stage scheme; keeps what EA keeps",
             RotationMethod::LieMidpointAlternating8 => "EA composed by Kahan-Li's 17-stage scheme; keeps what EA keeps",
+            RotationMethod::LieMidpointExact => {
+                "half impulses around the exact torque-free flow; symplectic, symmetric; keeps what EA keeps; exact torque-free"
+            }
+            RotationMethod::LieMidpointExact4 => "EX composed by Suzuki's 5-stage scheme; keeps what EX keeps",
+            RotationMethod::LieMidpointExact6 => "EX composed by Kahan-Li's 9-stage scheme; keeps what EX keeps",
+            RotationMethod::LieMidpointExact8 => "EX composed by Kahan-Li's 17-stage scheme; keeps what EX keeps",
         }
     }
 
@@ -334,12 +360,20 @@ impl RotationMethod {
             RotationMethod::LieMidpointAlternating4Yoshida => ea_composition(Scheme::YOSHIDA4, "LIEMID[EA]4Y"),
             RotationMethod::LieMidpointAlternating6 => ea_composition(Scheme::KAHAN_LI6, "LIEMID[EA]6"),
             RotationMethod::LieMidpointAlternating8 => ea_composition(Scheme::KAHAN_LI8, "LIEMID[EA]8"),
+            RotationMethod::LieMidpointExact => AnyRotationIntegrator::Ex(LieMidpointExact::new()),
+            RotationMethod::LieMidpointExact4 => ex_composition(Scheme::SUZUKI4, "LIEMID[EX]4"),
+            RotationMethod::LieMidpointExact6 => ex_composition(Scheme::KAHAN_LI6, "LIEMID[EX]6"),
+            RotationMethod::LieMidpointExact8 => ex_composition(Scheme::KAHAN_LI8, "LIEMID[EX]8"),
         }
     }
 }
 
 fn ea_composition(scheme: Scheme, name: &'static str) -> AnyRotationIntegrator {
     AnyRotationIntegrator::Composed(Composition::new(LieMidpointAlternating::new(), scheme, name))
+}
+
+fn ex_composition(scheme: Scheme, name: &'static str) -> AnyRotationIntegrator {
+    AnyRotationIntegrator::ComposedEx(Composition::new(LieMidpointExact::new(), scheme, name))
 }
 
 /// Any of the crate's rotation integrators, chosen at run time.
@@ -363,6 +397,10 @@ pub enum AnyRotationIntegrator {
     Rk4(RungeKutta4Quaternion),
     /// A symmetric composition of EA.
     Composed(Composition<LieMidpointAlternating>),
+    /// LIEMID\[EX\].
+    Ex(LieMidpointExact),
+    /// A symmetric composition of EX.
+    ComposedEx(Composition<LieMidpointExact>),
 }
 
 macro_rules! dispatch {
@@ -377,6 +415,8 @@ macro_rules! dispatch {
             AnyRotationIntegrator::Nmb($m) => $e,
             AnyRotationIntegrator::Rk4($m) => $e,
             AnyRotationIntegrator::Composed($m) => $e,
+            AnyRotationIntegrator::Ex($m) => $e,
+            AnyRotationIntegrator::ComposedEx($m) => $e,
         }
     };
 }
@@ -406,6 +446,8 @@ impl AnyRotationIntegrator {
             AnyRotationIntegrator::Akw(m) => MethodCache::from_torque(m.cache.snapshot()),
             AnyRotationIntegrator::Nmb(m) => MethodCache::from_torque(m.cache.snapshot()),
             AnyRotationIntegrator::Composed(m) => MethodCache::from_torque(m.base().cache.snapshot()),
+            AnyRotationIntegrator::Ex(m) => MethodCache::from_torque(m.cache.snapshot()),
+            AnyRotationIntegrator::ComposedEx(m) => MethodCache::from_torque(m.base().cache.snapshot()),
             AnyRotationIntegrator::Rk4(m) => {
                 m.last
                     .map_or(MethodCache::Empty, |(rotation, quaternion)| MethodCache::Quaternion {
@@ -448,6 +490,8 @@ impl AnyRotationIntegrator {
             AnyRotationIntegrator::Akw(m) => Some(&mut m.cache),
             AnyRotationIntegrator::Nmb(m) => Some(&mut m.cache),
             AnyRotationIntegrator::Composed(m) => Some(&mut m.base_mut().cache),
+            AnyRotationIntegrator::Ex(m) => Some(&mut m.cache),
+            AnyRotationIntegrator::ComposedEx(m) => Some(&mut m.base_mut().cache),
             _ => None,
         };
         match (torque_cache, cache) {
