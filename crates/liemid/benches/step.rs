@@ -64,6 +64,30 @@ fn per_step(c: &mut Criterion) {
     group.finish();
 }
 
+/// The exact torque-free flow alone, 1000 calls of `h = 1e-4` from the fast top's state:
+/// the symmetric closed form (the top itself) and the elliptic asymmetric case (the same
+/// momentum on a body with moments (1, 2, 3) times the top's scale).
+fn free_flow(c: &mut Criterion) {
+    let top = problems::fast_top();
+    let h = 1e-4;
+    let mut group = c.benchmark_group("exact free flow, 1000 calls");
+    group.throughput(Throughput::Elements(STEPS));
+    let symmetric = liemid::FreeFlow::new(top.system.inertia()).unwrap();
+    let asymmetric = liemid::FreeFlow::new(&liemid::Inertia::principal([0.02, 0.03, 0.045]).unwrap()).unwrap();
+    for (name, flow) in [("symmetric", symmetric), ("asymmetric", asymmetric)] {
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                let (mut p, mut r) = (top.initial.pi + Vec3::new(0.05, 0.02, 0.0), top.initial.rotation);
+                for _ in 0..STEPS {
+                    (p, r) = flow.flow(p, &r, black_box(h));
+                }
+                (p, r)
+            })
+        });
+    }
+    group.finish();
+}
+
 /// How an ablated EA step finds its increments (a const parameter, so that each variant is
 /// compiled on its own, as EA is):
 /// - `SOLVED`: both midpoint solves to round-off (EA itself, written out);
@@ -135,5 +159,5 @@ fn ea_ablation(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, per_step, ea_ablation);
+criterion_group!(benches, per_step, free_flow, ea_ablation);
 criterion_main!(benches);
