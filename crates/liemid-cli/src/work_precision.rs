@@ -212,7 +212,13 @@ fn first_step(method: RotationMethod, rate: f64) -> f64 {
     );
     match method.order() {
         _ if exact => 64.0 / rate,
-        _ if method == RotationMethod::RungeKutta4 => 1.0 / rate,
+        _ if matches!(
+            method,
+            RotationMethod::RungeKutta4 | RotationMethod::RungeKuttaMuntheKaas4
+        ) =>
+        {
+            1.0 / rate
+        }
         1 | 2 => 2.0 / rate,
         _ => 16.0 / rate,
     }

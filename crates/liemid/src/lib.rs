@@ -67,5 +67,5 @@ pub use rigid::{
 pub use rotation::{
     AnyRotationIntegrator, AustinKrishnaprasadWang, KryslEndresNewmark, LieMidpointAlternating, LieMidpointE1,
     LieMidpointE2, LieMidpointExact, LieMidpointImplicit, MethodCache, RotationIntegrator, RotationMethod,
-    RungeKutta4Quaternion, SimoWong,
+    RungeKutta4Quaternion, RungeKuttaMuntheKaas4, SimoWong,
 };

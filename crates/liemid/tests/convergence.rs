@@ -60,7 +60,13 @@ fn observed_orders_on_the_torque_dominated_top() {
         );
         let hs = match method.order() {
             1 | 2 => halvings(1e-2, 5),
-            4 if method == RotationMethod::RungeKutta4 => halvings(2e-2, 5),
+            4 if matches!(
+                method,
+                RotationMethod::RungeKutta4 | RotationMethod::RungeKuttaMuntheKaas4
+            ) =>
+            {
+                halvings(2e-2, 5)
+            }
             4 => halvings(1e-1, 5),
             6 if exact => halvings(1.25e-1, 3),
             6 => halvings(6.25e-2, 3),

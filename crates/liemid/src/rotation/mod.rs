@@ -15,7 +15,7 @@ pub use akw::AustinKrishnaprasadWang;
 pub use exact::LieMidpointExact;
 pub use liemid::{LieMidpointAlternating, LieMidpointE1, LieMidpointE2, LieMidpointImplicit};
 pub use newmark::KryslEndresNewmark;
-pub use rk4::RungeKutta4Quaternion;
+pub use rk4::{RungeKutta4Quaternion, RungeKuttaMuntheKaas4};
 pub use simo_wong::SimoWong;
 
 use crate::composition::{Composition, Scheme};
@@ -208,12 +208,14 @@ pub enum RotationMethod {
     LieMidpointExact6,
     /// EX composed by Kahan and Li's 17-stage scheme: eighth order.
     LieMidpointExact8,
+    /// [`RungeKuttaMuntheKaas4`]: the Lie-group RK4 baseline.
+    RungeKuttaMuntheKaas4,
 }
 
 impl RotationMethod {
     /// Every method: the paper's line-up, the RK4 baseline, the EA compositions and the
     /// exact-flow family.
-    pub const ALL: [RotationMethod; 16] = [
+    pub const ALL: [RotationMethod; 17] = [
         RotationMethod::LieMidpointE1,
         RotationMethod::LieMidpointE2,
         RotationMethod::LieMidpointAlternating,
@@ -230,6 +232,7 @@ impl RotationMethod {
         RotationMethod::LieMidpointExact4,
         RotationMethod::LieMidpointExact6,
         RotationMethod::LieMidpointExact8,
+        RotationMethod::RungeKuttaMuntheKaas4,
     ];
 
     /// The paper's Figure 1 line-up plus the RK4 baseline.
@@ -264,6 +267,7 @@ impl RotationMethod {
             RotationMethod::LieMidpointExact4 => "liemid-ex4",
             RotationMethod::LieMidpointExact6 => "liemid-ex6",
             RotationMethod::LieMidpointExact8 => "liemid-ex8",
+            RotationMethod::RungeKuttaMuntheKaas4 => "rkmk4",
         }
     }
 
@@ -297,7 +301,7 @@ impl RotationMethod {
             RotationMethod::LieMidpointImplicit
             | RotationMethod::AustinKrishnaprasadWang
             | RotationMethod::SimoWong => "1 per Newton iteration",
-            RotationMethod::RungeKutta4 => "4",
+            RotationMethod::RungeKutta4 | RotationMethod::RungeKuttaMuntheKaas4 => "4",
             RotationMethod::LieMidpointAlternating4 | RotationMethod::LieMidpointExact4 => "5",
             RotationMethod::LieMidpointAlternating4Yoshida => "3",
             RotationMethod::LieMidpointAlternating6 | RotationMethod::LieMidpointExact6 => "9",
@@ -341,6 +345,9 @@ impl RotationMethod {
             RotationMethod::LieMidpointExact4 => "EX composed by Suzuki's 5-stage scheme; keeps what EX keeps",
             RotationMethod::LieMidpointExact6 => "EX composed by Kahan-Li's 9-stage scheme; keeps what EX keeps",
             RotationMethod::LieMidpointExact8 => "EX composed by Kahan-Li's 17-stage scheme; keeps what EX keeps",
+            RotationMethod::RungeKuttaMuntheKaas4 => {
+                "Runge-Kutta-Munthe-Kaas 4: RK4 in exponential coordinates on SO(3); conserves nothing exactly"
+            }
         }
     }
 
@@ -364,6 +371,7 @@ impl RotationMethod {
             RotationMethod::LieMidpointExact4 => ex_composition(Scheme::SUZUKI4, "LIEMID[EX]4"),
             RotationMethod::LieMidpointExact6 => ex_composition(Scheme::KAHAN_LI6, "LIEMID[EX]6"),
             RotationMethod::LieMidpointExact8 => ex_composition(Scheme::KAHAN_LI8, "LIEMID[EX]8"),
+            RotationMethod::RungeKuttaMuntheKaas4 => AnyRotationIntegrator::Rkmk4(RungeKuttaMuntheKaas4::new()),
         }
     }
 }
@@ -401,6 +409,8 @@ pub enum AnyRotationIntegrator {
     Ex(LieMidpointExact),
     /// A symmetric composition of EX.
     ComposedEx(Composition<LieMidpointExact>),
+    /// RKMK4.
+    Rkmk4(RungeKuttaMuntheKaas4),
 }
 
 macro_rules! dispatch {
@@ -417,6 +427,7 @@ macro_rules! dispatch {
             AnyRotationIntegrator::Composed($m) => $e,
             AnyRotationIntegrator::Ex($m) => $e,
             AnyRotationIntegrator::ComposedEx($m) => $e,
+            AnyRotationIntegrator::Rkmk4($m) => $e,
         }
     };
 }
@@ -455,9 +466,10 @@ impl AnyRotationIntegrator {
                         quaternion,
                     })
             }
-            AnyRotationIntegrator::E1(_) | AnyRotationIntegrator::I(_) | AnyRotationIntegrator::Sw(_) => {
-                MethodCache::Empty
-            }
+            AnyRotationIntegrator::E1(_)
+            | AnyRotationIntegrator::I(_)
+            | AnyRotationIntegrator::Sw(_)
+            | AnyRotationIntegrator::Rkmk4(_) => MethodCache::Empty,
         }
     }
 
