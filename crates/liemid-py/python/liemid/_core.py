@@ -321,8 +321,10 @@ def integrate(
         End time and step (s); the last step lands on ``t_end``.
     method : str
         A key of ``liemid.methods()``: ``liemid-ea`` (default), ``liemid-e1``, ``liemid-e2``,
-        ``liemid-i``, ``akw``, ``simo-wong``, ``nmb``, ``rk4``, ``liemid-ea4``, ``-ea4y``,
-        ``-ea6``, ``-ea8``.
+        ``liemid-i``, ``akw``, ``simo-wong``, ``nmb``, ``rk4``, ``rkmk4``, ``liemid-ea4``,
+        ``-ea4y``, ``-ea6``, ``-ea8``, and ``liemid-ex`` (impulses around the exact
+        torque-free flow: exact torque-free, far more accurate on fast spinning bodies),
+        ``-ex4``, ``-ex6``, ``-ex8``.
     rotation, rotation_vector, quaternion : array_like, optional
         The initial attitude, one of: a (3, 3) rotation matrix (orthogonality defect at most
         1e-6), a (3,) rotation vector (rad), a (4,) unit quaternion [w, x, y, z]; default the
