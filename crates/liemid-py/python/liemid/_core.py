@@ -421,6 +421,29 @@ def _rows(*arrays: Any) -> int:
     return max(sizes) if sizes else 1
 
 
+def _ensemble_states(
+    rotations: Optional[ArrayLike],
+    rotation_vectors: Optional[ArrayLike],
+    quaternions: Optional[ArrayLike],
+    angular_velocities: Optional[ArrayLike],
+    angular_momenta: Optional[ArrayLike],
+) -> Tuple[str, FloatArray, str, FloatArray]:
+    """The attitudes and momenta of an ensemble, broadcast to N rows: (attitude argument
+    name, (N, ...) array, momentum argument name, (N, 3) array)."""
+    given = [(k, v) for k, v in (("rotations", rotations), ("rotation_vectors", rotation_vectors), ("quaternions", quaternions)) if v is not None]
+    if len(given) > 1:
+        raise ValueError(f"give one of rotations, rotation_vectors, quaternions, not {given[0][0]} and {given[1][0]}")
+    name, value = given[0] if given else ("rotations", np.eye(3))
+    if (angular_velocities is None) == (angular_momenta is None):
+        raise ValueError("give exactly one of angular_velocities (rad/s, body frame) or angular_momenta (kg m²/s, body frame)")
+    mom_name = "angular_velocities" if angular_momenta is None else "angular_momenta"
+    mvalue = angular_velocities if angular_momenta is None else angular_momenta
+    row = {"rotations": (3, 3), "rotation_vectors": (3,), "quaternions": (4,)}[name]
+    n = _rows((value, len(row) + 1), (mvalue, 2))
+    assert mvalue is not None
+    return name, _broadcast(name, value, row, n), mom_name, _broadcast(mom_name, mvalue, (3,), n)
+
+
 def ensemble(
     body: RigidBody,
     rotations: Optional[ArrayLike] = None,
@@ -451,15 +474,9 @@ def ensemble(
         raise ValueError("body: an ensemble needs a built-in torque (Gravity, ConstantTorque or sums), not a Python callable")
     if not isinstance(threads, (int, np.integer)) or threads < 0:
         raise ValueError(f"threads: expected a whole number >= 0, found {threads!r}")
-    mkind, mvalue = _momentum(angular_velocities, angular_momenta)
-    given = [(k, v) for k, v in (("rotations", rotations), ("rotation_vectors", rotation_vectors), ("quaternions", quaternions)) if v is not None]
-    if len(given) > 1:
-        raise ValueError(f"give one of rotations, rotation_vectors, quaternions, not {given[0][0]} and {given[1][0]}")
-    name, value = given[0] if given else ("rotations", np.eye(3))
-    row = {"rotations": (3, 3), "rotation_vectors": (3,), "quaternions": (4,)}[name]
-    n = _rows((value, len(row) + 1), (mvalue, 2))
-    att = _broadcast(name, value, row, n)
-    mom = _broadcast("angular_velocities" if mkind == "angular_velocity" else "angular_momenta", mvalue, (3,), n)
+    name, att, mom_name, mom = _ensemble_states(rotations, rotation_vectors, quaternions, angular_velocities, angular_momenta)
+    n = att.shape[0]
+    mkind = "angular_velocity" if mom_name == "angular_velocities" else "angular_momentum"
     kind = {"rotations": "matrix", "rotation_vectors": "rotation_vector", "quaternions": "quaternion"}[name]
     inertia9, gravity, constant, _, _ = body._model
     pi, r = _liemid.ensemble(

@@ -9,7 +9,7 @@ from typing import Any, Dict, Optional
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ._core import EnsembleState, RigidBody, _broadcast, _rows, ensemble as _local
+from ._core import EnsembleState, RigidBody, _ensemble_states, ensemble as _local
 
 __all__ = ["ensemble"]
 
@@ -36,18 +36,8 @@ def ensemble(
 ) -> EnsembleState:
     """``liemid.ensemble`` on the workers of a ``dask.distributed.Client``: the same
     arguments, plus ``chunk_size`` bodies per task and ``threads_per_task``."""
-    given = [(k, v) for k, v in (("rotations", rotations), ("rotation_vectors", rotation_vectors), ("quaternions", quaternions)) if v is not None]
-    if len(given) > 1:
-        raise ValueError(f"give one of rotations, rotation_vectors, quaternions, not {given[0][0]} and {given[1][0]}")
-    att_name, att_value = given[0] if given else ("rotations", np.eye(3))
-    if (angular_velocities is None) == (angular_momenta is None):
-        raise ValueError("give exactly one of angular_velocities or angular_momenta")
-    mom_name, mom_value = ("angular_velocities", angular_velocities) if angular_momenta is None else ("angular_momenta", angular_momenta)
-    assert mom_value is not None
-    row = {"rotations": (3, 3), "rotation_vectors": (3,), "quaternions": (4,)}[att_name]
-    n = _rows((att_value, len(row) + 1), (mom_value, 2))
-    att = _broadcast(att_name, att_value, row, n)
-    mom = _broadcast(mom_name, mom_value, (3,), n)
+    att_name, att, mom_name, mom = _ensemble_states(rotations, rotation_vectors, quaternions, angular_velocities, angular_momenta)
+    n = att.shape[0]
     if chunk_size < 1:
         raise ValueError(f"chunk_size: must be at least 1, found {chunk_size}")
     kwargs: Dict[str, Any] = dict(t_end=t_end, step=step, method=method, t0=t0, threads=threads_per_task)
