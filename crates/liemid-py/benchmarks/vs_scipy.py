@@ -41,8 +41,8 @@ def main() -> None:
 
     # liemid: the fastest method and step reaching the target.
     best = None
-    for method in ("liemid-ea", "liemid-ea4", "liemid-ea6", "liemid-ea8"):
-        h = 8e-3
+    for method in ("liemid-ea", "liemid-ea4", "liemid-ea6", "liemid-ea8", "liemid-ex", "liemid-ex4", "liemid-ex6", "liemid-ex8"):
+        h = 0.1 if "-ex" in method else 8e-3
         while h > 1e-6:
             try:
                 sol = TOP.integrate(method=method, step=h, t_end=T_END, every=10**9)
