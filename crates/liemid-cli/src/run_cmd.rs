@@ -88,16 +88,20 @@ fn format_key(f: Format) -> &'static str {
 
 /// The settings of a new run from the scenario and the command line.
 fn new_settings(args: &RunArgs) -> Result<(Settings, Scenario), Failure> {
-    let sc = match &args.file {
-        Some(path) => scenario::load(path).map_err(Failure::Input)?,
-        None => scenario::builtin(&args.problem).map_err(Failure::Input)?,
-    };
-    let source = match &args.file {
-        Some(path) => Source::File {
-            path: path.display().to_string(),
-            text: std::fs::read_to_string(path).map_err(|e| Failure::Input(format!("{}: {e}", path.display())))?,
-        },
-        None => Source::Builtin(args.problem.clone()),
+    // A file is read once: the checkpoint keeps the very text that was parsed.
+    let (sc, source) = match &args.file {
+        Some(path) => {
+            let (sc, text) = scenario::load_with_text(path).map_err(Failure::Input)?;
+            let source = Source::File {
+                path: path.display().to_string(),
+                text,
+            };
+            (sc, source)
+        }
+        None => (
+            scenario::builtin(&args.problem).map_err(Failure::Input)?,
+            Source::Builtin(args.problem.clone()),
+        ),
     };
     let method = match &args.method {
         Some(m) => parse_method(m)?,
@@ -169,13 +173,14 @@ fn scenario_of(settings: &Settings) -> Result<Scenario, Failure> {
     }
 }
 
-/// Largest change so far of the conserved momentum component (or of all components).
-fn conserved_change(conservation: Conservation, d0: Vec3, d: Vec3) -> f64 {
+/// The change of the conserved momentum component (the largest component when all are
+/// conserved); `None` under a constant torque, which conserves none.
+fn conserved_change(conservation: Conservation, d0: Vec3, d: Vec3) -> Option<f64> {
     let dm = d - d0;
     match conservation {
-        Conservation::Free => dm.max_abs(),
-        Conservation::Gravity(g) => dm.dot(g).abs(),
-        Conservation::Driven => f64::NAN,
+        Conservation::Free => Some(dm.max_abs()),
+        Conservation::Gravity(g) => Some(dm.dot(g).abs()),
+        Conservation::Driven => None,
     }
 }
 
@@ -330,7 +335,9 @@ pub fn run(args: RunArgs) -> CmdResult {
             Ok(d) => d,
             Err(e) => break Some(format!("{}: {e}", sc.name)),
         };
-        max_conserved = max_conserved.max(conserved_change(conservation, initial_momentum, d.spatial_momentum));
+        if let Some(change) = conserved_change(conservation, initial_momentum, d.spatial_momentum) {
+            max_conserved = max_conserved.max(change);
+        }
         let k = run.progress.steps;
         if k % every == 0 || run.is_done() {
             if let Some(w) = writer.as_mut() {
@@ -428,7 +435,10 @@ fn print_summary(
             "max_energy_error": summary.max_energy_error,
             "max_spatial_momentum_change": summary.max_spatial_momentum_change.to_array(),
             "conserved_momentum": momentum_note,
-            "max_conserved_momentum_change": if max_conserved.is_nan() { json!(null) } else { json!(max_conserved) },
+            "max_conserved_momentum_change": match conservation {
+                Conservation::Driven => json!(null),
+                _ => json!(max_conserved),
+            },
             "max_orthogonality_defect": summary.max_orthogonality_defect,
             "wall_time_seconds": wall,
             "trajectory": trajectory.as_ref().map(|(p, rows)| json!({

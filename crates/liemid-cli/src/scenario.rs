@@ -316,9 +316,15 @@ impl<'a> Section<'a> {
 
 /// Parse a scenario file; errors are one line naming the file, the key and the problem.
 pub fn load(path: &Path) -> Result<Scenario, String> {
+    load_with_text(path).map(|(scenario, _)| scenario)
+}
+
+/// [`load`], also returning the text that was parsed.
+pub fn load_with_text(path: &Path) -> Result<(Scenario, String), String> {
     let file = path.display().to_string();
     let text = std::fs::read_to_string(path).map_err(|e| format!("{file}: cannot read: {e}"))?;
-    parse(&text, &file).map_err(|e| format!("{file}: {e}"))
+    let scenario = parse(&text, &file).map_err(|e| format!("{file}: {e}"))?;
+    Ok((scenario, text))
 }
 
 /// Parse TOML text into a table; errors are one line with the line number.
@@ -338,13 +344,7 @@ fn line_of(text: &str, offset: usize) -> usize {
 
 /// Parse scenario text (`name` labels the scenario).
 pub fn parse(text: &str, name: &str) -> Result<Scenario, String> {
-    let root: Table = toml::from_str(text).map_err(|e| {
-        let line = e
-            .span()
-            .map(|s| format!("line {}: ", line_of(text, s.start)))
-            .unwrap_or_default();
-        format!("{line}{}", e.message().lines().next().unwrap_or("invalid TOML"))
-    })?;
+    let root = parse_table(text)?;
     for key in root.keys() {
         if !["body", "initial", "torque", "integrator", "output"].contains(&key.as_str()) {
             let hint = if key == "system" {

@@ -40,6 +40,17 @@ fn rows_kept(text: &str) -> u64 {
     text[..end].rsplit(' ').next().unwrap().parse().unwrap()
 }
 
+/// Send SIGINT to `child` after `ms` milliseconds and collect its output.
+fn interrupt_after(child: std::process::Child, ms: u64) -> std::process::Output {
+    std::thread::sleep(Duration::from_millis(ms));
+    assert!(Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap()
+        .success());
+    child.wait_with_output().unwrap()
+}
+
 #[test]
 fn item_1_devices_fifos_and_symlinks_are_never_replaced() {
     let dir = scratch("item1");
@@ -214,13 +225,7 @@ fn item_5_partial_csv_files_end_at_a_whole_row_with_a_true_count() {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    std::thread::sleep(Duration::from_millis(400));
-    assert!(Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap()
-        .success());
-    let o = child.wait_with_output().unwrap();
+    let o = interrupt_after(child, 400);
     assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
     let rows = read_csv(&dir.join("sig.csv.partial"));
     assert!(rows.len() > 1);
@@ -463,6 +468,9 @@ fn item_12_summaries_say_what_is_conserved_and_in_which_units() {
     let o = run_in(&dir, &["run", p.to_str().unwrap(), "--no-output", "--json"]);
     let j = json(&stdout(&o));
     assert_eq!(j["energy_conserved"], false);
+    // Nothing is conserved under a constant torque: no conserved-momentum figure (it used to
+    // read 0).
+    assert!(j["max_conserved_momentum_change"].is_null(), "{j}");
     let o = run_in(&dir, &["run", p.to_str().unwrap(), "--no-output"]);
     let out = stdout(&o);
     assert!(
@@ -509,13 +517,7 @@ fn a_run_interrupted_by_sigint_and_resumed_is_the_uninterrupted_run_bit_for_bit(
             .stderr(Stdio::piped())
             .spawn()
             .unwrap();
-        std::thread::sleep(Duration::from_millis(delay));
-        assert!(Command::new("kill")
-            .args(["-INT", &child.id().to_string()])
-            .status()
-            .unwrap()
-            .success());
-        let o = child.wait_with_output().unwrap();
+        let o = interrupt_after(child, delay);
         assert_eq!(
             o.status.code(),
             Some(130),
