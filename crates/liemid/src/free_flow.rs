@@ -127,10 +127,7 @@ impl FreeFlow {
             return (pi, *rotation);
         }
         let (p_end, turn) = match &self.axes {
-            None => {
-                let (p, turn) = self.principal_flow(pi, h);
-                (p, turn)
-            }
+            None => self.principal_flow(pi, h),
             Some((q, m)) => {
                 // In principal axes: Qᵀ Π; the turn back in the body frame: Q t Qᵀ.
                 let (p, turn) = self.principal_flow(m.tr_mul_vec(pi), h);

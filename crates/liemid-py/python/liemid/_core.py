@@ -226,14 +226,19 @@ class RigidBody:
         return (RigidBody, (self.inertia, self.torque, self.potential))
 
 
-def _attitude(rotation: Any, rotation_vector: Any, quaternion: Any, n: Optional[int] = None) -> Tuple[str, FloatArray]:
-    """The one attitude given (default identity), as (kind, values)."""
-    given = [(k, v) for k, v in (("rotation", rotation), ("rotation_vector", rotation_vector), ("quaternion", quaternion)) if v is not None]
+def _one_of(named: Sequence[Tuple[str, Any]], default: Tuple[str, Any]) -> Tuple[str, Any]:
+    """The one argument of `named` that is given, or `default`; an error names two given."""
+    given = [(k, v) for k, v in named if v is not None]
     if len(given) > 1:
-        raise ValueError(f"give one of rotation, rotation_vector, quaternion, not {given[0][0]} and {given[1][0]}")
-    if not given:
-        return "matrix", np.eye(3).reshape(9)
-    name, value = given[0]
+        names = ", ".join(k for k, _ in named)
+        raise ValueError(f"give one of {names}, not {given[0][0]} and {given[1][0]}")
+    return given[0] if given else default
+
+
+def _attitude(rotation: Any, rotation_vector: Any, quaternion: Any) -> Tuple[str, FloatArray]:
+    """The one attitude given (default identity), as (kind, values)."""
+    named = (("rotation", rotation), ("rotation_vector", rotation_vector), ("quaternion", quaternion))
+    name, value = _one_of(named, ("rotation", np.eye(3)))
     shape = {"rotation": (3, 3), "rotation_vector": (3,), "quaternion": (4,)}[name]
     kind = "matrix" if name == "rotation" else name
     return kind, _array(name, value, shape).reshape(-1)
@@ -430,10 +435,8 @@ def _ensemble_states(
 ) -> Tuple[str, FloatArray, str, FloatArray]:
     """The attitudes and momenta of an ensemble, broadcast to N rows: (attitude argument
     name, (N, ...) array, momentum argument name, (N, 3) array)."""
-    given = [(k, v) for k, v in (("rotations", rotations), ("rotation_vectors", rotation_vectors), ("quaternions", quaternions)) if v is not None]
-    if len(given) > 1:
-        raise ValueError(f"give one of rotations, rotation_vectors, quaternions, not {given[0][0]} and {given[1][0]}")
-    name, value = given[0] if given else ("rotations", np.eye(3))
+    named = (("rotations", rotations), ("rotation_vectors", rotation_vectors), ("quaternions", quaternions))
+    name, value = _one_of(named, ("rotations", np.eye(3)))
     if (angular_velocities is None) == (angular_momenta is None):
         raise ValueError("give exactly one of angular_velocities (rad/s, body frame) or angular_momenta (kg m²/s, body frame)")
     mom_name = "angular_velocities" if angular_momenta is None else "angular_momenta"
