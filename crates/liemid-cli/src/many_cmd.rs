@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use liemid::error::Num;
-use liemid::many::{Bodies, Interaction, Totals, BYTES_PER_BODY};
+use liemid::many::{Bodies, FreeRotation, Interaction, Totals};
 use liemid::problems;
 use serde_json::json;
 
@@ -24,7 +24,7 @@ const THREADS_PER_CORE: usize = 4;
 
 /// Memory a run needs per body, beyond the state: forces, cell lists and the model's
 /// parameters, with a margin (bytes).
-const WORKING_BYTES_PER_BODY: usize = 2 * BYTES_PER_BODY;
+const WORKING_BYTES_PER_BODY: usize = 2 * liemid::many::BYTES_PER_BODY;
 
 /// Columns of the totals file.
 const TOTALS_COLUMNS: [&str; 8] = ["t", "energy", "px", "py", "pz", "lx", "ly", "lz"];
@@ -46,6 +46,24 @@ pub enum Model {
     TorqueFree,
     /// A dipolar fluid: point dipoles with WCA repulsion in a periodic box.
     Dipoles,
+}
+
+/// How each body turns between the impulses (`--rotation`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Rotation {
+    /// The torque-free midpoint Lie rotation in two half steps, as in LIEMID[EA].
+    Midpoint,
+    /// The exact torque-free flow, as in LIEMID[EX] (no Newton solve).
+    Exact,
+}
+
+impl Rotation {
+    fn free_rotation(self) -> FreeRotation {
+        match self {
+            Rotation::Midpoint => FreeRotation::Midpoint,
+            Rotation::Exact => FreeRotation::Exact,
+        }
+    }
 }
 
 impl Model {
@@ -79,6 +97,10 @@ pub struct ManyArgs {
     /// Step [default: 1e-4 for tops, 1e-3 otherwise].
     #[arg(long, allow_negative_numbers = true)]
     pub step: Option<f64>,
+    /// The free rotation between the impulses [default: midpoint]: the midpoint Lie rule
+    /// (as in LIEMID[EA]) or the exact torque-free flow (as in LIEMID[EX]).
+    #[arg(long, value_enum)]
+    pub rotation: Option<Rotation>,
     /// Threads [default: all cores]; results are identical for any count.
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     pub threads: Option<u64>,
@@ -113,6 +135,7 @@ pub struct ManyArgs {
 /// The settings of a run, from the scenario file and the command line.
 struct Settings {
     model: Model,
+    rotation: FreeRotation,
     bodies: usize,
     seed: u64,
     density: f64,
@@ -127,6 +150,7 @@ struct Settings {
 fn settings(args: &ManyArgs) -> Result<Settings, String> {
     let mut s = Settings {
         model: Model::Independent,
+        rotation: FreeRotation::Midpoint,
         bodies: 1000,
         seed: 1,
         density: 0.3,
@@ -186,9 +210,18 @@ fn settings(args: &ManyArgs) -> Result<Settings, String> {
                 s.cutoff = sys.number("cutoff")?;
                 s.switch_start = sys.number("switch_start")?;
             }
-            if let Some(integ) = Section::new(&root, "integrator", &["step", "t_end"], false)? {
+            if let Some(integ) = Section::new(&root, "integrator", &["step", "t_end", "rotation"], false)? {
                 s.step = integ.number("step")?;
                 s.t_end = integ.number("t_end")?;
+                if let Some(r) = integ.string("rotation")? {
+                    s.rotation = match r {
+                        "midpoint" => FreeRotation::Midpoint,
+                        "exact" => FreeRotation::Exact,
+                        other => {
+                            return Err(integ.err("rotation", format!("unknown rotation \"{other}\" (midpoint, exact)")))
+                        }
+                    };
+                }
             }
             if let Some(out) = Section::new(&root, "output", &["path", "every"], false)? {
                 s.out = out.string("path")?.map(PathBuf::from);
@@ -202,6 +235,9 @@ fn settings(args: &ManyArgs) -> Result<Settings, String> {
     }
     if let Some(m) = args.model {
         s.model = m;
+    }
+    if let Some(r) = args.rotation {
+        s.rotation = r.free_rotation();
     }
     if let Some(n) = args.bodies {
         s.bodies = n as usize;
@@ -254,6 +290,9 @@ fn run_model<I: Interaction>(
     (h, t_end, steps): (f64, f64, u64),
     interrupt: &Interrupt,
 ) -> Result<Outcome, Failure> {
+    bodies
+        .set_free_rotation(args.rotation)
+        .map_err(|e| Failure::Run(e.to_string()))?;
     bodies.evaluate(model);
     let first = bodies.totals(model);
     let mut out = match &args.out {
@@ -354,14 +393,15 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
             )));
         }
     }
-    let needed = n as f64 * (BYTES_PER_BODY + WORKING_BYTES_PER_BODY) as f64;
+    let per_body = args.rotation.bytes_per_body() + WORKING_BYTES_PER_BODY;
+    let needed = n as f64 * per_body as f64;
     if let Some(available) = available_memory() {
         if needed > 0.8 * available as f64 {
             return Err(input(format!(
                 "--bodies {n}: the bodies need about {:.1} GB ({} bytes each with working storage), more \
                  than 80% of the {:.1} GB of memory available",
                 needed / 1e9,
-                BYTES_PER_BODY + WORKING_BYTES_PER_BODY,
+                per_body,
                 available as f64 / 1e9
             )));
         }
@@ -452,6 +492,7 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
     }
     let summary = json!({
         "model": args.model.key(),
+        "rotation": args.rotation.key(),
         "bodies": bodies.len(),
         "steps": steps,
         "step": h,
@@ -460,7 +501,7 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
         "threads": threads,
         "stepping_seconds": seconds,
         "body_steps_per_second": throughput,
-        "bytes_per_body": BYTES_PER_BODY,
+        "bytes_per_body": bodies.bytes_per_body(),
         "energy": [first.energy, last.energy],
         "max_relative_energy_error": max_de,
         "energy_error_sampled_every": args.every,
@@ -479,8 +520,10 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
     if cli.json.as_deref() != Some("-") {
         let nb = bodies.len() as u64;
         println!(
-            "{}: {nb} {}, {steps} {} of {} to t = {} on {threads} {}: {:.3} s stepping, {:.3e} body-steps/s",
+            "{} ({} rotation): {nb} {}, {steps} {} of {} to t = {} on {threads} {}: {:.3} s stepping, \
+             {:.3e} body-steps/s",
             args.model.key(),
+            args.rotation.key(),
             plural(nb, "body", "bodies"),
             plural(steps, "step", "steps"),
             Num(h),
@@ -502,7 +545,10 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
             "change of total angular momentum  [{:.3e}, {:.3e}, {:.3e}]",
             dl.x, dl.y, dl.z
         );
-        println!("state memory                      {BYTES_PER_BODY} bytes per body");
+        println!(
+            "state memory                      {} bytes per body",
+            bodies.bytes_per_body()
+        );
     }
     Ok(())
 }

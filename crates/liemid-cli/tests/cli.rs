@@ -405,6 +405,77 @@ fn work_precision_reports_errors_times_and_torque_counts() {
 }
 
 #[test]
+fn many_with_the_exact_rotation_keeps_energy_to_round_off_for_any_thread_count() {
+    // Torque-free asymmetric rotors: the exact rotation is the flow itself, so the energy is
+    // kept to round-off where the midpoint rotation's error is the step's; the totals file
+    // is byte for byte the same on 1 and 3 threads.
+    let dir = scratch("many-exact");
+    let mut totals = Vec::new();
+    for threads in ["1", "3"] {
+        let file = format!("totals-{threads}.csv");
+        let o = run_in(
+            &dir,
+            &[
+                "many",
+                "--model",
+                "torque-free",
+                "--rotation",
+                "exact",
+                "--bodies",
+                "600",
+                "--t-end",
+                "0.2",
+                "--step",
+                "0.01",
+                "--threads",
+                threads,
+                "--json",
+                "-",
+                "--out",
+                &file,
+            ],
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+        let s = json(&stdout(&o));
+        assert_eq!(s["rotation"], "exact");
+        assert!(s["max_relative_energy_error"].as_f64().unwrap() < 1e-14, "{s}");
+        totals.push(std::fs::read(dir.join(file)).unwrap());
+    }
+    assert_eq!(totals[0], totals[1], "totals differ between 1 and 3 threads");
+    let o = run_in(
+        &dir,
+        &[
+            "many",
+            "--model",
+            "torque-free",
+            "--bodies",
+            "600",
+            "--t-end",
+            "0.2",
+            "--step",
+            "0.01",
+            "--json",
+            "-",
+        ],
+    );
+    let s = json(&stdout(&o));
+    assert_eq!(s["rotation"], "midpoint");
+    assert!(s["max_relative_energy_error"].as_f64().unwrap() > 1e-12, "{s}");
+    let scenario = write(
+        &dir,
+        "bad.toml",
+        "[system]\nmodel = \"torque-free\"\n[integrator]\nrotation = \"spline\"\n",
+    );
+    let o = run_in(&dir, &["many", "--scenario", scenario.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("rotation") && stderr(&o).contains("midpoint, exact"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
 fn many_reports_throughput_and_conservation() {
     let dir = scratch("many");
     let o = run_in(

@@ -734,6 +734,29 @@ impl ManyBodies {
         result.map_err(|e| py_error(py, &e, ""))
     }
 
+    /// Choose the free rotation between the impulses: "midpoint" (as in LIEMID[EA]) or
+    /// "exact" (the exact torque-free flow, as in LIEMID[EX]).
+    fn set_rotation(&mut self, kind: &str) -> PyResult<()> {
+        let kind = match kind {
+            "midpoint" => liemid::many::FreeRotation::Midpoint,
+            "exact" => liemid::many::FreeRotation::Exact,
+            other => {
+                return Err(PyValueError::new_err(format!(
+                    "rotation: unknown rotation {other:?} (\"midpoint\", \"exact\")"
+                )))
+            }
+        };
+        self.bodies
+            .set_free_rotation(kind)
+            .map_err(|e| PyValueError::new_err(format!("rotation: {e}")))
+    }
+
+    /// The free rotation between the impulses ("midpoint" or "exact").
+    #[getter]
+    fn rotation(&self) -> &'static str {
+        self.bodies.free_rotation().key()
+    }
+
     /// `(energy, linear momentum, angular momentum)` of the whole system.
     fn totals(&self) -> (f64, Triple, Triple) {
         let t = with_model!(self, m => self.bodies.totals(m));

@@ -65,3 +65,30 @@ def test_many_errors_name_the_argument() -> None:
         many.System([1.0], [1, 1, 3], np.zeros(3), np.eye(3), np.zeros(3))
     with pytest.raises(ValueError, match="density"):
         many.System.dipolar_fluid(10, density=-1.0)
+
+
+def test_exact_rotation_is_liemid_ex_and_thread_independent() -> None:
+    g = TOP.body.torque
+    assert isinstance(g, liemid.Gravity)
+    moments = np.diag(TOP.body.inertia)
+    sys_ = many.System(
+        [g.mass], moments, np.zeros((1, 3)), TOP.rotation[np.newaxis], TOP.angular_momentum[np.newaxis],
+        free=False, model=many.Independent(gravity=g.gravity, center_of_mass=g.center_of_mass),
+        rotation="exact",
+    )
+    assert sys_.rotation == "exact"
+    sys_.step(1e-3, 100)
+    ex = TOP.integrate(t_end=0.1, method="liemid-ex", step=1e-3)
+    _, _, r, pi = sys_.arrays()
+    norm = np.linalg.norm(ex.pi[-1])
+    assert np.max(np.abs(pi[0] - ex.pi[-1])) <= 1e-14 * norm
+    assert np.max(np.abs(r[0] - ex.rotation[-1])) <= 1e-14
+    a = many.System.dipolar_fluid(216, density=0.3, seed=2, rotation="exact")
+    b = many.System.dipolar_fluid(216, density=0.3, seed=2)
+    b.rotation = "exact"
+    a.step(1e-3, 20, threads=1)
+    b.step(1e-3, 20, threads=2)
+    for x, y in zip(a.arrays(), b.arrays()):
+        assert x.tobytes() == y.tobytes()
+    with pytest.raises(ValueError, match=r'rotation: unknown rotation "spline"'):
+        b.rotation = "spline"

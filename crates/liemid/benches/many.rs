@@ -1,12 +1,13 @@
 //! Throughput of the many-body splitting integrator, in body-steps per second, with 1 and 2
-//! threads, against the memory-bandwidth floor of copying the state arrays once.
+//! threads, against the memory-bandwidth floor of copying the state arrays once, and the
+//! exact free rotation against the midpoint rotation.
 //!
 //! `cargo bench -p liemid --bench many`
 
 use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use liemid::many::{Bodies, CHUNK};
+use liemid::many::{Bodies, FreeRotation, CHUNK};
 use liemid::problems;
 use rayon::prelude::*;
 
@@ -58,6 +59,30 @@ fn throughput(c: &mut Criterion) {
                 BenchmarkId::new(format!("torque-free, {threads} threads"), n),
                 &n,
                 |b, _| b.iter(|| pool.install(|| state.step(&free, 1e-3).unwrap())),
+            );
+        }
+    }
+    // The exact free rotation against the midpoint rotation, 1 thread: asymmetric rotors
+    // (the elliptic flow) and heavy tops (symmetric, closed form).
+    for n in [10_000usize] {
+        group.throughput(Throughput::Elements(n as u64));
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        let (rotors, free) = problems::torque_free_ensemble(n, 1);
+        let (tops, gravity) = problems::top_ensemble(n, 1);
+        for kind in [FreeRotation::Midpoint, FreeRotation::Exact] {
+            let mut state = rotors.clone();
+            state.set_free_rotation(kind).unwrap();
+            group.bench_with_input(
+                BenchmarkId::new(format!("torque-free asymmetric, {} rotation, 1 thread", kind.key()), n),
+                &n,
+                |b, _| b.iter(|| pool.install(|| state.step(&free, 1e-3).unwrap())),
+            );
+            let mut state = tops.clone();
+            state.set_free_rotation(kind).unwrap();
+            group.bench_with_input(
+                BenchmarkId::new(format!("symmetric tops, {} rotation, 1 thread", kind.key()), n),
+                &n,
+                |b, _| b.iter(|| pool.install(|| state.step(&gravity, 1e-4).unwrap())),
             );
         }
     }

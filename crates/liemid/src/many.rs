@@ -18,6 +18,10 @@
 //! p ← p + (h/2) F,  Π ← Π + (h/2) T              (impulse at the end)
 //! ```
 //!
+//! With [`FreeRotation::Exact`] ([`Bodies::set_free_rotation`]) the torque-free rotation
+//! is the exact flow ([`FreeFlow`]) instead of the two midpoint half steps: for one body it
+//! is then LIEMID\[EX\], with the same structure and no Newton solve.
+//!
 //! For one body with a torque it is exactly LIEMID\[EA\]; it is symplectic and time
 //! reversible, and keeps the total linear and angular momentum (orbital plus spin) of any
 //! translation- and rotation-invariant interaction to round-off. Work is split into
@@ -29,6 +33,8 @@ use std::sync::Mutex;
 
 use crate::composition::Scheme;
 use crate::error::{Error, Result};
+use crate::free_flow::FreeFlow;
+use crate::inertia::Inertia;
 use crate::inertia::PrincipalInertia;
 use crate::linalg::{Mat3, Vec3};
 use crate::midpoint;
@@ -61,6 +67,43 @@ pub struct Bodies {
     /// Time.
     pub t: f64,
     forces_valid: bool,
+    /// The exact torque-free flow of each body, when [`FreeRotation::Exact`] is chosen
+    /// (empty otherwise).
+    flows: Vec<FreeFlow>,
+    rotation_kind: FreeRotation,
+}
+
+/// How [`Bodies::step`] moves each body between the impulses.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FreeRotation {
+    /// The torque-free midpoint Lie rotation, two half steps as in LIEMID\[EA\] (one
+    /// Newton solve each; SIMD lanes with the `simd` feature).
+    #[default]
+    Midpoint,
+    /// The exact torque-free flow ([`FreeFlow`]), as in LIEMID\[EX\]: no Newton solve,
+    /// no error in the free spin.
+    Exact,
+}
+
+impl FreeRotation {
+    /// The name on the command line and in files.
+    #[must_use]
+    pub fn key(self) -> &'static str {
+        match self {
+            FreeRotation::Midpoint => "midpoint",
+            FreeRotation::Exact => "exact",
+        }
+    }
+
+    /// Bytes of state per body: [`BYTES_PER_BODY`], plus the flow's constants for
+    /// [`FreeRotation::Exact`].
+    #[must_use]
+    pub fn bytes_per_body(self) -> usize {
+        match self {
+            FreeRotation::Midpoint => BYTES_PER_BODY,
+            FreeRotation::Exact => BYTES_PER_BODY + std::mem::size_of::<FreeFlow>(),
+        }
+    }
 }
 
 /// Bytes of state per body.
@@ -290,6 +333,37 @@ impl Bodies {
         self.mass.is_empty()
     }
 
+    /// The free rotation the step uses.
+    #[must_use]
+    pub fn free_rotation(&self) -> FreeRotation {
+        self.rotation_kind
+    }
+
+    /// Choose the free rotation of [`Bodies::step`] (the default is
+    /// [`FreeRotation::Midpoint`]); for [`FreeRotation::Exact`] each body's flow is built
+    /// here and for every body pushed later.
+    ///
+    /// # Errors
+    /// Not expected: the moments were checked when the bodies were pushed.
+    pub fn set_free_rotation(&mut self, kind: FreeRotation) -> Result<()> {
+        self.flows.clear();
+        if kind == FreeRotation::Exact {
+            self.flows.reserve(self.len());
+            for g in &self.inertia {
+                self.flows
+                    .push(FreeFlow::new(&Inertia::principal(g.moments.to_array())?)?);
+            }
+        }
+        self.rotation_kind = kind;
+        Ok(())
+    }
+
+    /// Bytes of state per body with the chosen free rotation.
+    #[must_use]
+    pub fn bytes_per_body(&self) -> usize {
+        self.rotation_kind.bytes_per_body()
+    }
+
     /// Add a body; mass and moments must be positive and finite, the state finite.
     #[allow(clippy::too_many_arguments)]
     pub fn push(
@@ -309,7 +383,7 @@ impl Bodies {
                 reason: "must be finite and positive",
             });
         }
-        crate::inertia::Inertia::principal(moments.to_array())?;
+        let tensor = Inertia::principal(moments.to_array())?;
         let t = self.t;
         for (field, ok) in [
             ("position", position.is_finite()),
@@ -322,6 +396,9 @@ impl Bodies {
             }
         }
         self.mass.push(mass);
+        if self.rotation_kind == FreeRotation::Exact {
+            self.flows.push(FreeFlow::new(&tensor)?);
+        }
         self.inertia.push(PrincipalInertia::new(moments));
         self.free.push(free);
         self.position.push(position);
@@ -389,6 +466,7 @@ impl Bodies {
         let (inertia, free, mass) = (&self.inertia, &self.free, &self.mass);
         let lanes = lanes_available();
         let local = interaction.is_local();
+        let exact = (self.rotation_kind == FreeRotation::Exact).then_some(self.flows.as_slice());
         let all = Chunk {
             momentum: &mut self.momentum,
             pi: &mut self.pi,
@@ -398,9 +476,10 @@ impl Bodies {
             torque: &mut self.torque,
         };
         // One pass over each chunk: the start impulse, the drift of free bodies, and the
-        // torque-free midpoint Lie rotation (two half steps as in EA), four bodies at a
-        // time in SIMD lanes where they take the common path; for a local interaction also
-        // the new forces and torques and the end impulse, so the step sweeps memory once.
+        // torque-free rotation (exact, or the midpoint Lie rule in two half steps as in EA,
+        // four bodies at a time in SIMD lanes where they take the common path); for a local
+        // interaction also the new forces and torques and the end impulse, so the step
+        // sweeps memory once.
         for_each_chunk(all, |start, c| {
             let (p, pi, x, r) = (c.momentum, c.pi, c.position, c.rotation);
             let n = p.len();
@@ -411,7 +490,13 @@ impl Bodies {
                     x[k] += p[k] * (h / mass[k]);
                 }
             }
-            let mut k = 0;
+            if let Some(flows) = exact {
+                for k in 0..n {
+                    let (p_end, r_end) = flows[start + k].flow(Vec3::load_split(&pi[k]), &r[k], h);
+                    (pi[k], r[k]) = (p_end, r_end);
+                }
+            }
+            let mut k = if exact.is_some() { n } else { 0 };
             while k < n {
                 let end = (k + GROUP).min(n);
                 let (i, j) = (start + k, start + end);

@@ -2,10 +2,12 @@
 //! of an isolated dipolar cluster, thread-count independence, and the dipole forces and
 //! torques against finite differences of the energy.
 
+use liemid::free_flow::FreeFlow;
+use liemid::inertia::Inertia;
 use liemid::interactions::{Dipoles, Independent};
-use liemid::many::{Bodies, Interaction};
+use liemid::many::{Bodies, FreeRotation, Interaction};
 use liemid::random::Rng;
-use liemid::{problems, so3, LieMidpointAlternating, Mat3, RotationIntegrator, Vec3};
+use liemid::{problems, so3, LieMidpointAlternating, LieMidpointExact, Mat3, RotationIntegrator, Vec3};
 
 /// `n` free dipolar spheres on a jittered cubic lattice of spacing `a`, random attitudes,
 /// random momenta and spins.
@@ -87,15 +89,20 @@ fn isolated_dipoles_keep_momenta_to_round_off_and_energy_bounded() {
 }
 
 fn run_with_threads(threads: usize) -> Bodies {
+    run_with_threads_and_rotation(threads, FreeRotation::Midpoint, Vec3::new(0.1, 0.1, 0.1))
+}
+
+fn run_with_threads_and_rotation(threads: usize, rotation: FreeRotation, moments: Vec3) -> Bodies {
     let dipoles = Dipoles::new(Vec3::new(0.0, 0.0, 1.0), 1.0, 1.0, Some(3.0), Some(9.1)).unwrap();
     let mut b = Bodies::new();
+    b.set_free_rotation(rotation).unwrap();
     let mut rng = Rng::new(7);
     for i in 0..729 {
         let (x, y, z) = (i % 9, (i / 9) % 9, i / 81);
         let pos = Vec3::new(x as f64, y as f64, z as f64) * (9.1 / 9.0);
         let p = Vec3::new(rng.normal(), rng.normal(), rng.normal()) * 0.5;
-        b.push(1.0, Vec3::new(0.1, 0.1, 0.1), true, pos, p, rng.rotation(), Vec3::ZERO)
-            .unwrap();
+        let pi = Vec3::new(rng.normal(), rng.normal(), rng.normal()) * 0.05;
+        b.push(1.0, moments, true, pos, p, rng.rotation(), pi).unwrap();
     }
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
     pool.install(|| {
@@ -119,6 +126,88 @@ fn results_are_identical_for_one_and_two_threads() {
     assert!(a.force == b.force && a.torque == b.torque, "forces differ");
     // And the bodies did move.
     assert!(a.position[0] != Vec3::ZERO);
+}
+
+#[test]
+fn exact_rotation_results_are_identical_for_one_two_and_three_threads() {
+    let moments = Vec3::new(0.08, 0.1, 0.12);
+    let a = run_with_threads_and_rotation(1, FreeRotation::Exact, moments);
+    for threads in [2, 3] {
+        let b = run_with_threads_and_rotation(threads, FreeRotation::Exact, moments);
+        assert!(
+            a.position == b.position && a.momentum == b.momentum && a.rotation == b.rotation && a.pi == b.pi,
+            "{threads} threads differ from one"
+        );
+    }
+    // The exact rotation is really in use: the midpoint run differs.
+    let m = run_with_threads_and_rotation(1, FreeRotation::Midpoint, moments);
+    assert!(m.rotation != a.rotation);
+}
+
+#[test]
+fn exact_splitting_for_one_body_is_liemid_ex() {
+    let top = problems::fast_top();
+    let mut bodies = Bodies::new();
+    bodies.set_free_rotation(FreeRotation::Exact).unwrap();
+    let moments = top.system.inertia.principal_moments().unwrap();
+    bodies
+        .push(
+            top.system.mass,
+            moments,
+            false,
+            Vec3::ZERO,
+            Vec3::ZERO,
+            top.initial.rotation,
+            top.initial.pi,
+        )
+        .unwrap();
+    let gravity = Independent {
+        gravity: top.system.gravity,
+        center_of_mass: top.system.center_of_mass,
+    };
+    let mut ex = LieMidpointExact::new();
+    let mut state = top.initial;
+    for _ in 0..1000 {
+        bodies.step(&gravity, 1e-3).unwrap();
+        ex.step(&top.system, &mut state, 1e-3).unwrap();
+    }
+    let dp = (bodies.pi[0] - state.pi).max_abs() / state.pi.norm();
+    let dr = (bodies.rotation[0] - state.rotation).max_abs();
+    assert!(dp <= 1e-15 && dr <= 1e-15, "splitting vs EX: {dp:e} {dr:e}");
+}
+
+#[test]
+fn exact_rotation_of_torque_free_asymmetric_bodies_is_exact_at_a_large_step() {
+    // Torque-free, the exact splitting is the flow itself: ten steps of 0.5 equal one flow
+    // over 5 (to the round-off of composing ten flows).
+    let mut rng = Rng::new(3);
+    let mut b = Bodies::new();
+    b.set_free_rotation(FreeRotation::Exact).unwrap();
+    let moments = [
+        Vec3::new(1.0, 2.0, 3.0),
+        Vec3::new(3.0, 1.0, 2.5),
+        Vec3::new(2.0, 2.0, 1.0),
+    ];
+    for m in moments {
+        let pi = Vec3::new(rng.normal(), rng.normal(), rng.normal()) * 5.0;
+        b.push(1.0, m, false, Vec3::ZERO, Vec3::ZERO, rng.rotation(), pi)
+            .unwrap();
+    }
+    let start = b.clone();
+    let torque_free = Independent {
+        gravity: Vec3::ZERO,
+        center_of_mass: Vec3::ZERO,
+    };
+    for _ in 0..10 {
+        b.step(&torque_free, 0.5).unwrap();
+    }
+    for (i, m) in moments.iter().enumerate() {
+        let flow = FreeFlow::new(&Inertia::principal(m.to_array()).unwrap()).unwrap();
+        let (pi, r) = flow.flow(start.pi[i], &start.rotation[i], 5.0);
+        let dp = (b.pi[i] - pi).max_abs() / pi.norm();
+        let dr = (b.rotation[i] - r).max_abs();
+        assert!(dp < 1e-13 && dr < 1e-13, "body {i}: {dp:e} {dr:e}");
+    }
 }
 
 #[test]

@@ -91,6 +91,11 @@ class System:
     free : bool or (N,) array_like of bool
         Free bodies translate; rotors turn about a fixed pivot (default: free).
     model : Independent or Dipoles
+    rotation : {"midpoint", "exact"}
+        How each body turns between the impulses: the torque-free midpoint Lie rule in two
+        half steps (as LIEMID[EA], the default) or the exact torque-free flow (as
+        LIEMID[EX]: no error in the free spin, no Newton solve; costlier per step for
+        asymmetric bodies).
     """
 
     def __init__(
@@ -104,6 +109,7 @@ class System:
         momenta: Optional[ArrayLike] = None,
         free: Union[bool, ArrayLike] = True,
         model: Union[Independent, Dipoles] = Independent(),
+        rotation: str = "midpoint",
     ) -> None:
         m = np.asarray(masses, dtype=np.float64)
         if m.ndim != 1:
@@ -120,15 +126,30 @@ class System:
             _broadcast("angular_momenta", angular_momenta, (3,), n).reshape(-1).tolist(),
             model._spec(),
         )
+        self.rotation = rotation
 
     @classmethod
-    def dipolar_fluid(cls, n: int, *, density: float = 0.3, seed: int = 1, cutoff: float = 3.0) -> "System":
+    def dipolar_fluid(
+        cls, n: int, *, density: float = 0.3, seed: int = 1, cutoff: float = 3.0, rotation: str = "midpoint"
+    ) -> "System":
         """The built-in dipolar fluid of ``liemid many --model dipoles``: ``n`` bodies at
         number ``density`` in a periodic box, random orientations and momenta from
         ``seed``."""
         self = cls.__new__(cls)
         self._inner = _liemid.ManyBodies.dipolar_fluid(int(n), _number("density", density), int(seed), _number("cutoff", cutoff))
+        self.rotation = rotation
         return self
+
+    @property
+    def rotation(self) -> str:
+        """The free rotation between the impulses, ``"midpoint"`` or ``"exact"``."""
+        return str(self._inner.rotation)
+
+    @rotation.setter
+    def rotation(self, kind: str) -> None:
+        if not isinstance(kind, str):
+            raise TypeError(f"rotation: expected \"midpoint\" or \"exact\", found {type(kind).__name__}")
+        self._inner.set_rotation(kind)
 
     def step(self, h: float, steps: int = 1, *, threads: int = 0) -> None:
         """Take ``steps`` steps of ``h`` (GIL released; ``threads`` 0 for all cores)."""
