@@ -135,7 +135,7 @@ pub struct Scenario {
 }
 
 /// The built-in problem names.
-pub const PROBLEMS: [&str; 4] = ["fast-top", "slow-top", "free-body", "torque-top"];
+pub const PROBLEMS: [&str; 5] = ["fast-top", "slow-top", "free-body", "torque-top", "asymmetric-top"];
 
 /// A built-in problem as a scenario (LIEMID\[EA\], h = 1e-4 for the tops).
 pub fn builtin(name: &str) -> Result<Scenario, String> {
@@ -150,6 +150,10 @@ pub fn builtin(name: &str) -> Result<Scenario, String> {
         }
         "torque-top" => {
             let p = problems::torque_dominated_top();
+            (ScenarioSystem::Gravity(p.system), p.initial, p.t_end, 1e-3)
+        }
+        "asymmetric-top" => {
+            let p = problems::asymmetric_top();
             (ScenarioSystem::Gravity(p.system), p.initial, p.t_end, 1e-3)
         }
         "free-body" => {
@@ -178,6 +182,7 @@ pub fn describe(name: &str) -> &'static str {
         "slow-top" => problems::slow_top().description,
         "torque-top" => problems::torque_dominated_top().description,
         "free-body" => problems::free_body().description,
+        "asymmetric-top" => problems::asymmetric_top().description,
         _ => "",
     }
 }

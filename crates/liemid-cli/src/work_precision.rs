@@ -201,7 +201,8 @@ fn errors(state: &RigidState, reference: &RigidState) -> (f64, f64) {
 /// The first step of a method's sequence on a problem whose fastest rate is `rate`:
 /// `Ω h ≈ 2` for the basic methods, eight times that for the compositions (their stages are
 /// shorter), and `Ω h ≈ 1` for RK4. The exact-flow family has no limit from the spin (its
-/// free motion is exact at any step): it starts at `Ω h ≈ 64`.
+/// free motion is exact at any step), nor has Fassò's splitting (exact for a symmetric body,
+/// its error set by the asymmetry): they start at `Ω h ≈ 64`.
 fn first_step(method: RotationMethod, rate: f64) -> f64 {
     let exact = matches!(
         method,
@@ -209,6 +210,8 @@ fn first_step(method: RotationMethod, rate: f64) -> f64 {
             | RotationMethod::LieMidpointExact4
             | RotationMethod::LieMidpointExact6
             | RotationMethod::LieMidpointExact8
+            | RotationMethod::LieMidpointFasso
+            | RotationMethod::LieMidpointFasso4
     );
     match method.order() {
         _ if exact => 64.0 / rate,

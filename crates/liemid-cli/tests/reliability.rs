@@ -426,7 +426,7 @@ fn item_11_messages_name_the_cause_in_plain_numbers_and_names() {
     );
     let out = stdout(&o);
     assert!(
-        out.contains("torque-free: 1 body,") && out.contains("every 1 step)"),
+        out.contains("torque-free (midpoint rotation): 1 body,") && out.contains("every 1 step)"),
         "{out}"
     );
     let o = run_in(

@@ -82,6 +82,29 @@ pub fn torque_dominated_top() -> RigidProblem<HeavyTop> {
     }
 }
 
+/// A torque-dominated asymmetric top, where the free spin is slow against the torque and
+/// the exact flow gains little over the midpoint rule: `I = diag(5, 4, 1.5)`, `m = 1`,
+/// centre of mass `(0, 0, 1)`, `g = 9.81`, `R₀ = exp(0.3 e₁)`, `Ω₀ = (0, 0, 30)`, to `t = 1`.
+#[must_use]
+pub fn asymmetric_top() -> RigidProblem<HeavyTop> {
+    let inertia = Inertia::principal([5.0, 4.0, 1.5]).expect("positive");
+    let system = HeavyTop::new(inertia, 1.0, Vec3::new(0.0, 0.0, 1.0), Vec3::new(0.0, 0.0, -9.81)).expect("finite");
+    let initial = RigidState::from_angular_velocity(
+        0.0,
+        &inertia,
+        Vec3::new(0.0, 0.0, 30.0),
+        so3::exp(Vec3::new(0.3, 0.0, 0.0)),
+    );
+    RigidProblem {
+        name: "asymmetric-top",
+        description:
+            "torque-dominated asymmetric top: I = diag(5, 4, 1.5), m = 1, X = (0, 0, 1), spin 30 rad/s, t = 1 s",
+        system,
+        initial,
+        t_end: 1.0,
+    }
+}
+
 /// A free asymmetric body spun about its intermediate axis (the tennis-racket or
 /// Dzhanibekov flip): `I = diag(1, 2, 3)`, `Ω₀ = (0.01, 10, 0)`, to `t = 10`.
 #[must_use]

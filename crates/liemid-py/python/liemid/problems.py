@@ -1,5 +1,5 @@
 """The built-in problems, as in ``liemid problems``: the paper's fast and slow Lagrangian
-tops, a torque-dominated top and a free asymmetric body (the tennis-racket flip)."""
+tops, a torque-dominated symmetric and an asymmetric top and a free asymmetric body (the tennis-racket flip)."""
 
 from __future__ import annotations
 
@@ -11,9 +11,9 @@ import numpy as np
 from . import _liemid
 from ._core import FloatArray, Gravity, RigidBody, Solution, integrate
 
-__all__ = ["Problem", "fast_top", "slow_top", "torque_top", "free_body", "get", "NAMES"]
+__all__ = ["Problem", "fast_top", "slow_top", "torque_top", "asymmetric_top", "free_body", "get", "NAMES"]
 
-NAMES = ("fast-top", "slow-top", "free-body", "torque-top")
+NAMES = ("fast-top", "slow-top", "free-body", "torque-top", "asymmetric-top")
 
 
 @dataclass(frozen=True)
@@ -72,6 +72,11 @@ def slow_top() -> Problem:
 def torque_top() -> Problem:
     """A torque-dominated top, where first-order methods show their order."""
     return get("torque-top")
+
+
+def asymmetric_top() -> Problem:
+    """A torque-dominated asymmetric top (I = diag(5, 4, 1.5), spin 30 rad/s)."""
+    return get("asymmetric-top")
 
 
 def free_body() -> Problem:

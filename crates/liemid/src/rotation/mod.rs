@@ -208,6 +208,11 @@ pub enum RotationMethod {
     LieMidpointExact6,
     /// EX composed by Kahan and Li's 17-stage scheme: eighth order.
     LieMidpointExact8,
+    /// [`LieMidpointExact::fasso`]: impulses around Fassò's symmetric + asymmetric
+    /// splitting of the free motion.
+    LieMidpointFasso,
+    /// FS composed by Suzuki's 5-stage scheme: fourth order.
+    LieMidpointFasso4,
     /// [`RungeKuttaMuntheKaas4`]: the Lie-group RK4 baseline.
     RungeKuttaMuntheKaas4,
 }
@@ -215,7 +220,7 @@ pub enum RotationMethod {
 impl RotationMethod {
     /// Every method: the paper's line-up, the RK4 baseline, the EA compositions and the
     /// exact-flow family.
-    pub const ALL: [RotationMethod; 17] = [
+    pub const ALL: [RotationMethod; 19] = [
         RotationMethod::LieMidpointE1,
         RotationMethod::LieMidpointE2,
         RotationMethod::LieMidpointAlternating,
@@ -232,6 +237,8 @@ impl RotationMethod {
         RotationMethod::LieMidpointExact4,
         RotationMethod::LieMidpointExact6,
         RotationMethod::LieMidpointExact8,
+        RotationMethod::LieMidpointFasso,
+        RotationMethod::LieMidpointFasso4,
         RotationMethod::RungeKuttaMuntheKaas4,
     ];
 
@@ -267,6 +274,8 @@ impl RotationMethod {
             RotationMethod::LieMidpointExact4 => "liemid-ex4",
             RotationMethod::LieMidpointExact6 => "liemid-ex6",
             RotationMethod::LieMidpointExact8 => "liemid-ex8",
+            RotationMethod::LieMidpointFasso => "liemid-fs",
+            RotationMethod::LieMidpointFasso4 => "liemid-fs4",
             RotationMethod::RungeKuttaMuntheKaas4 => "rkmk4",
         }
     }
@@ -297,12 +306,15 @@ impl RotationMethod {
             | RotationMethod::LieMidpointE2
             | RotationMethod::LieMidpointAlternating
             | RotationMethod::KryslEndresNewmark
-            | RotationMethod::LieMidpointExact => "1",
+            | RotationMethod::LieMidpointExact
+            | RotationMethod::LieMidpointFasso => "1",
             RotationMethod::LieMidpointImplicit
             | RotationMethod::AustinKrishnaprasadWang
             | RotationMethod::SimoWong => "1 per Newton iteration",
             RotationMethod::RungeKutta4 | RotationMethod::RungeKuttaMuntheKaas4 => "4",
-            RotationMethod::LieMidpointAlternating4 | RotationMethod::LieMidpointExact4 => "5",
+            RotationMethod::LieMidpointAlternating4
+            | RotationMethod::LieMidpointExact4
+            | RotationMethod::LieMidpointFasso4 => "5",
             RotationMethod::LieMidpointAlternating4Yoshida => "3",
             RotationMethod::LieMidpointAlternating6 | RotationMethod::LieMidpointExact6 => "9",
             RotationMethod::LieMidpointAlternating8 | RotationMethod::LieMidpointExact8 => "17",
@@ -345,6 +357,10 @@ impl RotationMethod {
             RotationMethod::LieMidpointExact4 => "EX composed by Suzuki's 5-stage scheme; keeps what EX keeps",
             RotationMethod::LieMidpointExact6 => "EX composed by Kahan-Li's 9-stage scheme; keeps what EX keeps",
             RotationMethod::LieMidpointExact8 => "EX composed by Kahan-Li's 17-stage scheme; keeps what EX keeps",
+            RotationMethod::LieMidpointFasso => {
+                "half impulses around Fasso's symmetric + asymmetric split of the free motion; symplectic, symmetric; keeps what EA keeps"
+            }
+            RotationMethod::LieMidpointFasso4 => "FS composed by Suzuki's 5-stage scheme; keeps what FS keeps",
             RotationMethod::RungeKuttaMuntheKaas4 => {
                 "Runge-Kutta-Munthe-Kaas 4: RK4 in exponential coordinates on SO(3); conserves nothing exactly"
             }
@@ -371,6 +387,12 @@ impl RotationMethod {
             RotationMethod::LieMidpointExact4 => ex_composition(Scheme::SUZUKI4, "LIEMID[EX]4"),
             RotationMethod::LieMidpointExact6 => ex_composition(Scheme::KAHAN_LI6, "LIEMID[EX]6"),
             RotationMethod::LieMidpointExact8 => ex_composition(Scheme::KAHAN_LI8, "LIEMID[EX]8"),
+            RotationMethod::LieMidpointFasso => AnyRotationIntegrator::Ex(LieMidpointExact::fasso()),
+            RotationMethod::LieMidpointFasso4 => AnyRotationIntegrator::ComposedEx(Composition::new(
+                LieMidpointExact::fasso(),
+                Scheme::SUZUKI4,
+                "LIEMID[FS]4",
+            )),
             RotationMethod::RungeKuttaMuntheKaas4 => AnyRotationIntegrator::Rkmk4(RungeKuttaMuntheKaas4::new()),
         }
     }
