@@ -212,6 +212,8 @@ fn first_step(method: RotationMethod, rate: f64) -> f64 {
             | RotationMethod::LieMidpointExact8
             | RotationMethod::LieMidpointFasso
             | RotationMethod::LieMidpointFasso4
+            | RotationMethod::LieMidpointFasso6
+            | RotationMethod::LieMidpointFasso8
     );
     match method.order() {
         _ if exact => 64.0 / rate,

@@ -53,10 +53,15 @@ fn observed_orders_on_the_torque_dominated_top() {
         // sixth- and eighth-order compositions reach that floor within two halvings.
         // The exact-flow family is more accurate at the same step (its free motion has no
         // error): EX6 starts at twice EA6's step; EX8 is pre-asymptotic at 0.5 (ratio 200)
-        // and at the round-off floor at 0.0625, so it has two points, 0.25 and 0.125.
+        // and at the round-off floor at 0.0625, so it has two points, 0.25 and 0.125. The
+        // fast top is symmetric, so Fassò's splitting is the exact flow and FS is EX here
+        // (its orders on an asymmetric top are in `exact_method.rs`).
         let exact = matches!(
             method,
-            RotationMethod::LieMidpointExact6 | RotationMethod::LieMidpointExact8
+            RotationMethod::LieMidpointExact6
+                | RotationMethod::LieMidpointExact8
+                | RotationMethod::LieMidpointFasso6
+                | RotationMethod::LieMidpointFasso8
         );
         let hs = match method.order() {
             1 | 2 => halvings(1e-2, 5),

@@ -213,6 +213,10 @@ pub enum RotationMethod {
     LieMidpointFasso,
     /// FS composed by Suzuki's 5-stage scheme: fourth order.
     LieMidpointFasso4,
+    /// FS composed by Kahan and Li's 9-stage scheme: sixth order.
+    LieMidpointFasso6,
+    /// FS composed by Kahan and Li's 17-stage scheme: eighth order.
+    LieMidpointFasso8,
     /// [`RungeKuttaMuntheKaas4`]: the Lie-group RK4 baseline.
     RungeKuttaMuntheKaas4,
 }
@@ -220,7 +224,7 @@ pub enum RotationMethod {
 impl RotationMethod {
     /// Every method: the paper's line-up, the RK4 baseline, the EA compositions and the
     /// exact-flow family.
-    pub const ALL: [RotationMethod; 19] = [
+    pub const ALL: [RotationMethod; 21] = [
         RotationMethod::LieMidpointE1,
         RotationMethod::LieMidpointE2,
         RotationMethod::LieMidpointAlternating,
@@ -239,6 +243,8 @@ impl RotationMethod {
         RotationMethod::LieMidpointExact8,
         RotationMethod::LieMidpointFasso,
         RotationMethod::LieMidpointFasso4,
+        RotationMethod::LieMidpointFasso6,
+        RotationMethod::LieMidpointFasso8,
         RotationMethod::RungeKuttaMuntheKaas4,
     ];
 
@@ -276,6 +282,8 @@ impl RotationMethod {
             RotationMethod::LieMidpointExact8 => "liemid-ex8",
             RotationMethod::LieMidpointFasso => "liemid-fs",
             RotationMethod::LieMidpointFasso4 => "liemid-fs4",
+            RotationMethod::LieMidpointFasso6 => "liemid-fs6",
+            RotationMethod::LieMidpointFasso8 => "liemid-fs8",
             RotationMethod::RungeKuttaMuntheKaas4 => "rkmk4",
         }
     }
@@ -316,8 +324,12 @@ impl RotationMethod {
             | RotationMethod::LieMidpointExact4
             | RotationMethod::LieMidpointFasso4 => "5",
             RotationMethod::LieMidpointAlternating4Yoshida => "3",
-            RotationMethod::LieMidpointAlternating6 | RotationMethod::LieMidpointExact6 => "9",
-            RotationMethod::LieMidpointAlternating8 | RotationMethod::LieMidpointExact8 => "17",
+            RotationMethod::LieMidpointAlternating6
+            | RotationMethod::LieMidpointExact6
+            | RotationMethod::LieMidpointFasso6 => "9",
+            RotationMethod::LieMidpointAlternating8
+            | RotationMethod::LieMidpointExact8
+            | RotationMethod::LieMidpointFasso8 => "17",
         }
     }
 
@@ -361,6 +373,8 @@ impl RotationMethod {
                 "half impulses around Fasso's symmetric + asymmetric split of the free motion; symplectic, symmetric; keeps what EA keeps"
             }
             RotationMethod::LieMidpointFasso4 => "FS composed by Suzuki's 5-stage scheme; keeps what FS keeps",
+            RotationMethod::LieMidpointFasso6 => "FS composed by Kahan-Li's 9-stage scheme; keeps what FS keeps",
+            RotationMethod::LieMidpointFasso8 => "FS composed by Kahan-Li's 17-stage scheme; keeps what FS keeps",
             RotationMethod::RungeKuttaMuntheKaas4 => {
                 "Runge-Kutta-Munthe-Kaas 4: RK4 in exponential coordinates on SO(3); conserves nothing exactly"
             }
@@ -388,11 +402,9 @@ impl RotationMethod {
             RotationMethod::LieMidpointExact6 => ex_composition(Scheme::KAHAN_LI6, "LIEMID[EX]6"),
             RotationMethod::LieMidpointExact8 => ex_composition(Scheme::KAHAN_LI8, "LIEMID[EX]8"),
             RotationMethod::LieMidpointFasso => AnyRotationIntegrator::Ex(LieMidpointExact::fasso()),
-            RotationMethod::LieMidpointFasso4 => AnyRotationIntegrator::ComposedEx(Composition::new(
-                LieMidpointExact::fasso(),
-                Scheme::SUZUKI4,
-                "LIEMID[FS]4",
-            )),
+            RotationMethod::LieMidpointFasso4 => fs_composition(Scheme::SUZUKI4, "LIEMID[FS]4"),
+            RotationMethod::LieMidpointFasso6 => fs_composition(Scheme::KAHAN_LI6, "LIEMID[FS]6"),
+            RotationMethod::LieMidpointFasso8 => fs_composition(Scheme::KAHAN_LI8, "LIEMID[FS]8"),
             RotationMethod::RungeKuttaMuntheKaas4 => AnyRotationIntegrator::Rkmk4(RungeKuttaMuntheKaas4::new()),
         }
     }
@@ -404,6 +416,10 @@ fn ea_composition(scheme: Scheme, name: &'static str) -> AnyRotationIntegrator {
 
 fn ex_composition(scheme: Scheme, name: &'static str) -> AnyRotationIntegrator {
     AnyRotationIntegrator::ComposedEx(Composition::new(LieMidpointExact::new(), scheme, name))
+}
+
+fn fs_composition(scheme: Scheme, name: &'static str) -> AnyRotationIntegrator {
+    AnyRotationIntegrator::ComposedEx(Composition::new(LieMidpointExact::fasso(), scheme, name))
 }
 
 /// Any of the crate's rotation integrators, chosen at run time.
