@@ -223,12 +223,12 @@ fn one_line(m: &str) -> String {
 
 fn methods() {
     println!(
-        "{:<10} {:<11} {:>5}  {:<22} conserves",
+        "{:<11} {:<12} {:>5}  {:<22} conserves",
         "name", "method", "order", "torque evals/step"
     );
     for m in RotationMethod::ALL {
         println!(
-            "{:<10} {:<11} {:>5}  {:<22} {}",
+            "{:<11} {:<12} {:>5}  {:<22} {}",
             m.key(),
             m.name(),
             m.order(),

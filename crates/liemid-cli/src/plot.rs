@@ -1,5 +1,7 @@
-//! Log-log plots of the convergence study: momentum and attitude error against the step,
-//! one line and marker per method, with reference slopes 1 and 2.
+//! Log-log plots of the convergence study (momentum and attitude error against the step,
+//! with reference slopes 1 and 2) and of the work-precision study (errors against CPU
+//! time). Each family of methods has a colour, each order a marker, the baselines are
+//! black and grey, and the legend has a strip of its own beside the panels.
 
 use std::path::Path;
 use std::sync::Once;
@@ -25,19 +27,151 @@ fn e<E: std::fmt::Display>(err: E) -> String {
     format!("plot: {err}")
 }
 
-/// Tableau-10 colours: distinguishable on white, in print and for most colour-blind readers.
-const COLORS: [RGBColor; 10] = [
-    RGBColor(31, 119, 180),
-    RGBColor(255, 127, 14),
-    RGBColor(44, 160, 44),
-    RGBColor(214, 39, 40),
-    RGBColor(148, 103, 189),
-    RGBColor(140, 86, 75),
-    RGBColor(227, 119, 194),
-    RGBColor(127, 127, 127),
-    RGBColor(188, 189, 34),
-    RGBColor(23, 190, 207),
-];
+/// Tableau-10 colours, one per family (distinguishable on white, in print and for most
+/// colour-blind readers); the baselines are black and greys.
+mod palette {
+    use plotters::style::RGBColor;
+    pub const BLUE: RGBColor = RGBColor(31, 119, 180);
+    pub const ORANGE: RGBColor = RGBColor(255, 127, 14);
+    pub const GREEN: RGBColor = RGBColor(44, 160, 44);
+    pub const RED: RGBColor = RGBColor(214, 39, 40);
+    pub const PURPLE: RGBColor = RGBColor(148, 103, 189);
+    pub const BROWN: RGBColor = RGBColor(140, 86, 75);
+    pub const PINK: RGBColor = RGBColor(227, 119, 194);
+    pub const OLIVE: RGBColor = RGBColor(188, 189, 34);
+    pub const CYAN: RGBColor = RGBColor(23, 190, 207);
+    pub const BLACK: RGBColor = RGBColor(0, 0, 0);
+    pub const GREY: RGBColor = RGBColor(140, 140, 140);
+    pub const DARK_GREY: RGBColor = RGBColor(80, 80, 80);
+}
+
+/// The marker of a series: one per order of accuracy.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Marker {
+    /// First order.
+    Cross,
+    /// Second order.
+    Circle,
+    /// Fourth order (hollow for a second scheme of the same order).
+    Triangle { hollow: bool },
+    /// Sixth order.
+    Square,
+    /// Eighth order.
+    Diamond,
+}
+
+/// How a series is drawn: colour by family, marker by order, dashes for a second baseline.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Look {
+    color: RGBColor,
+    marker: Marker,
+    width: u32,
+    dashed: bool,
+}
+
+/// The look of a series from its label: `LIEMID[EA]6` is the EA family (blue) at order 6
+/// (square); the FS family is dashed; DOP853 is black, RK4 grey and dashed, RKMK4 dark
+/// grey.
+fn look(label: &str) -> Look {
+    use palette::*;
+    let (family, suffix) = match label.find(']') {
+        Some(i) => label.split_at(i + 1),
+        None => (label, ""),
+    };
+    let marker_of = |order: u32, hollow: bool| match order {
+        1 => Marker::Cross,
+        2 => Marker::Circle,
+        4 => Marker::Triangle { hollow },
+        6 => Marker::Square,
+        _ => Marker::Diamond,
+    };
+    let base = |color, first_order: bool| {
+        let digits: String = suffix.chars().take_while(char::is_ascii_digit).collect();
+        let order = digits.parse().unwrap_or(if first_order { 1 } else { 2 });
+        let hollow = suffix.len() > digits.len();
+        Look {
+            color,
+            marker: marker_of(order, hollow),
+            width: if label == "LIEMID[EA]" { 3 } else { 2 },
+            dashed: false,
+        }
+    };
+    let baseline = |color, marker, dashed| Look {
+        color,
+        marker,
+        width: 2,
+        dashed,
+    };
+    match family {
+        "LIEMID[EA]" => base(BLUE, false),
+        "LIEMID[EX]" => base(RED, false),
+        // Dashed: on a symmetric body FS is EX, and the red shows between the dashes.
+        "LIEMID[FS]" => Look {
+            dashed: true,
+            ..base(PURPLE, false)
+        },
+        "LIEMID[E1]" => base(ORANGE, true),
+        "LIEMID[E2]" => base(OLIVE, true),
+        "LIEMID[I]" => base(GREEN, false),
+        "AKW" => base(BROWN, false),
+        "SW" => base(PINK, false),
+        "NMB" => base(CYAN, false),
+        "DOP853" => baseline(BLACK, Marker::Diamond, false),
+        "RK4" => baseline(GREY, Marker::Triangle { hollow: false }, true),
+        "RKMK4" => baseline(DARK_GREY, Marker::Triangle { hollow: true }, false),
+        _ => baseline(DARK_GREY, Marker::Circle, true),
+    }
+}
+
+/// The marker of `look` at `c` (data or pixel coordinates), drawn in pixels about it.
+fn marker<'a, C: Clone + 'a, DB: DrawingBackend + 'a>(look: Look, c: C) -> DynElement<'a, DB, C> {
+    let style = ShapeStyle::from(look.color).stroke_width(look.width);
+    let at = EmptyElement::at(c);
+    match look.marker {
+        Marker::Cross => (at + Cross::new((0, 0), 5, style)).into_dyn(),
+        Marker::Circle => (at + Circle::new((0, 0), 4, style.filled())).into_dyn(),
+        Marker::Triangle { hollow: false } => (at + TriangleMarker::new((0, 0), 5, style.filled())).into_dyn(),
+        Marker::Triangle { hollow: true } => (at + TriangleMarker::new((0, 0), 5, style)).into_dyn(),
+        Marker::Square => (at + Rectangle::new([(-4, -4), (4, 4)], style.filled())).into_dyn(),
+        Marker::Diamond => (at + Polygon::new(vec![(0, -6), (5, 0), (0, 6), (-5, 0)], style.filled())).into_dyn(),
+    }
+}
+
+/// The legend of every series (and the reference slopes) in its own strip beside the
+/// panels, so that it never covers data.
+fn legend<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, labels: &[String], slopes: bool) -> Result<(), String> {
+    let row = 22;
+    let top = 60;
+    let font = ("sans-serif", 14).into_font();
+    for (k, label) in labels.iter().enumerate() {
+        let l = look(label);
+        let y = top + row * k as i32;
+        let style = ShapeStyle::from(l.color).stroke_width(l.width);
+        if l.dashed {
+            area.draw(&PathElement::new(vec![(10, y), (18, y)], style)).map_err(e)?;
+            area.draw(&PathElement::new(vec![(26, y), (34, y)], style)).map_err(e)?;
+        } else {
+            area.draw(&PathElement::new(vec![(10, y), (34, y)], style)).map_err(e)?;
+        }
+        area.draw(&marker(l, (22, y))).map_err(e)?;
+        area.draw(&Text::new(label.clone(), (42, y - 8), font.clone()))
+            .map_err(e)?;
+    }
+    if slopes {
+        let style = ShapeStyle::from(BLACK.mix(0.6)).stroke_width(1);
+        for (k, p) in [1, 2].iter().enumerate() {
+            let y = top + row * (labels.len() + k) as i32;
+            area.draw(&PathElement::new(vec![(10, y), (16, y)], style)).map_err(e)?;
+            area.draw(&PathElement::new(vec![(22, y), (28, y)], style)).map_err(e)?;
+            area.draw(&Text::new(format!("slope {p}"), (42, y - 8), font.clone()))
+                .map_err(e)?;
+        }
+    }
+    Ok(())
+}
+
+/// Width of the legend strip right of the panels (pixels).
+const LEGEND_WIDTH: u32 = 190;
 
 /// Log-axis tick label: only 1, 2 and 5 times a power of ten, so labels never crowd.
 fn nice_label(v: &f64) -> String {
@@ -105,51 +239,27 @@ fn panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, axes: &Axes, series:
         .draw()
         .map_err(e)?;
 
-    for (i, (label, points)) in series.iter().enumerate() {
-        let color = COLORS[i % COLORS.len()];
-        // The paper's method stands out.
-        let width = if label == "LIEMID[EA]" { 3 } else { 2 };
-        let style = ShapeStyle::from(color).stroke_width(width);
-        let marker = i % 4;
-        let shape = move |c: (f64, f64)| -> DynElement<'static, DB, (f64, f64)> {
-            match marker {
-                0 => Circle::new(c, 4, style.filled()).into_dyn(),
-                1 => TriangleMarker::new(c, 5, style.filled()).into_dyn(),
-                2 => Cross::new(c, 5, style).into_dyn(),
-                _ => Circle::new(c, 4, style).into_dyn(),
-            }
-        };
-        chart
-            .draw_series(LineSeries::new(points.clone(), style))
-            .map_err(e)?
-            .label(label.as_str())
-            .legend(move |(x, y)| {
-                let m: DynElement<'static, DB, (i32, i32)> = match marker {
-                    0 => Circle::new((x + 10, y), 4, style.filled()).into_dyn(),
-                    1 => TriangleMarker::new((x + 10, y), 5, style.filled()).into_dyn(),
-                    2 => Cross::new((x + 10, y), 5, style).into_dyn(),
-                    _ => Circle::new((x + 10, y), 4, style).into_dyn(),
-                };
-                EmptyElement::at((0, 0)) + PathElement::new(vec![(x, y), (x + 20, y)], style) + m
-            });
-        chart.draw_series(points.iter().map(|&p| shape(p))).map_err(e)?;
+    for (label, points) in series {
+        let l = look(label);
+        let style = ShapeStyle::from(l.color).stroke_width(l.width);
+        if l.dashed {
+            chart
+                .draw_series(DashedLineSeries::new(points.clone(), 8, 5, style))
+                .map_err(e)?;
+        } else {
+            chart.draw_series(LineSeries::new(points.clone(), style)).map_err(e)?;
+        }
+        let area = chart.plotting_area();
+        for &p in points {
+            area.draw(&marker(l, p)).map_err(e)?;
+        }
     }
-    for (p, line) in &slopes {
+    for (_, line) in &slopes {
         let style = ShapeStyle::from(BLACK.mix(0.6)).stroke_width(1);
         chart
             .draw_series(DashedLineSeries::new(line.clone(), 6, 4, style))
-            .map_err(e)?
-            .label(format!("slope {p}"))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style));
+            .map_err(e)?;
     }
-    chart
-        .configure_series_labels()
-        .label_font(("sans-serif", 13))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::LowerRight)
-        .draw()
-        .map_err(e)?;
     Ok(())
 }
 
@@ -157,7 +267,10 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, study: &Study) -> Resu
     root.fill(&WHITE).map_err(e)?;
     let title = format!("{}: error at t = {} s against the step", study.problem, study.t_end);
     let root = root.titled(&title, ("sans-serif", 24)).map_err(e)?;
-    let panels = root.split_evenly((1, 2));
+    let (plots, strip) = root.split_horizontally(root.dim_in_pixel().0 - LEGEND_WIDTH);
+    let labels: Vec<String> = study.methods.iter().map(|m| m.label.clone()).collect();
+    legend(&strip, &labels, true)?;
+    let panels = plots.split_evenly((1, 2));
     let collect = |f: &dyn Fn(&crate::converge::MethodErrors, usize) -> Option<f64>| -> Vec<Series> {
         study
             .methods
@@ -194,7 +307,10 @@ fn draw_work<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, study: &WorkStudy
     root.fill(&WHITE).map_err(e)?;
     let title = format!("{}: work-precision to t = {} s", study.problem, study.t_end);
     let root = root.titled(&title, ("sans-serif", 24)).map_err(e)?;
-    let panels = root.split_evenly((1, 2));
+    let (plots, strip) = root.split_horizontally(root.dim_in_pixel().0 - LEGEND_WIDTH);
+    let labels: Vec<String> = study.methods.iter().map(|m| m.label.clone()).collect();
+    legend(&strip, &labels, false)?;
+    let panels = plots.split_evenly((1, 2));
     let series = |f: &dyn Fn(&crate::work_precision::Point) -> f64| -> Vec<Series> {
         study
             .methods
@@ -247,10 +363,50 @@ fn render<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, figure: &Figure) -> 
 /// Write the plot as SVG or PNG, chosen by the extension of `path`.
 pub fn write(path: &Path, figure: &Figure) -> Result<(), String> {
     register_font();
-    let size = (1400, 620);
+    let size = (1400 + LEGEND_WIDTH, 640);
     match path.extension().and_then(|x| x.to_str()) {
         Some("svg") => render(SVGBackend::new(path, size).into_drawing_area(), figure),
         Some("png") => render(BitMapBackend::new(path, size).into_drawing_area(), figure),
         _ => Err(format!("plot: {}: use a .svg or .png file name", path.display())),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use liemid::RotationMethod;
+
+    #[test]
+    fn every_method_has_its_own_look_colour_by_family_marker_by_order() {
+        let mut labels: Vec<&str> = RotationMethod::ALL.iter().map(|m| m.name()).collect();
+        labels.push("DOP853");
+        let looks: Vec<Look> = labels.iter().map(|l| look(l)).collect();
+        for (i, a) in looks.iter().enumerate() {
+            for (j, b) in looks.iter().enumerate().skip(i + 1) {
+                assert!(
+                    (a.color, a.marker, a.dashed) != (b.color, b.marker, b.dashed),
+                    "{} and {} look the same",
+                    labels[i],
+                    labels[j]
+                );
+            }
+        }
+        let of = |l: &str| look(l);
+        // One colour per family, one marker per order.
+        assert_eq!(of("LIEMID[EA]").color, of("LIEMID[EA]8").color);
+        assert_ne!(of("LIEMID[EA]").color, of("LIEMID[EX]").color);
+        assert_eq!(of("LIEMID[EA]6").marker, of("LIEMID[EX]6").marker);
+        assert_ne!(of("LIEMID[EA]4").marker, of("LIEMID[EA]6").marker);
+        assert_eq!(of("LIEMID[E1]").marker, Marker::Cross);
+        // Baselines black and grey.
+        assert_eq!(of("DOP853").color, palette::BLACK);
+        for b in ["RK4", "RKMK4"] {
+            let c = of(b).color;
+            assert!(c.0 == c.1 && c.1 == c.2 && c.0 > 0, "{b} is not grey");
+        }
+        // No method falls back to the unknown look.
+        for l in &labels {
+            assert_ne!(of(l), look("?"), "{l} has no look of its own");
+        }
     }
 }
