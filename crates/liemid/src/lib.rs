@@ -53,6 +53,7 @@ pub mod random;
 pub mod rigid;
 pub mod rotation;
 pub mod so3;
+pub mod spin;
 pub mod vector;
 
 pub use composition::{Composition, Scheme};
