@@ -24,7 +24,7 @@
 //! *Symplectic integrators for spin systems*, Phys. Rev. E 89 (2014).
 
 use super::hamiltonian::{Rates, SpinSystem};
-use super::sweep::{update_bonds, update_sites};
+use super::sweep::{team, Shared};
 use crate::linalg::Vec3;
 use crate::so3::rodrigues;
 
@@ -35,57 +35,192 @@ fn turn(v: Vec3, a: f64, b: f64, x: Vec3) -> Vec3 {
     x + vx * a + v.cross(vx) * b
 }
 
-/// The exact flow of the on-site terms over `h`.
-pub(crate) fn onsite(rates: &Rates, commute: bool, spins: &mut [Vec3], h: f64) {
-    if rates.anisotropy == 0.0 && rates.field == Vec3::ZERO {
-        return;
-    }
+/// The exact flow of the on-site terms of one spin over `h`.
+#[inline(always)]
+fn onsite_turn(rates: &Rates, commute: bool, s: Vec3, h: f64) -> Vec3 {
     let (axis, k, b) = (rates.axis, rates.anisotropy, rates.field);
     if commute {
-        update_sites(spins, |_, s| {
-            let v = (axis * (k * s.dot(axis)) + b) * h;
-            let (ca, cb) = rodrigues(v.norm_squared());
-            turn(v, ca, cb, s)
-        });
+        let v = (axis * (k * s.dot(axis)) + b) * h;
+        let (ca, cb) = rodrigues(v.norm_squared());
+        turn(v, ca, cb, s)
     } else {
         let half = b * (0.5 * h);
         let (za, zb) = rodrigues(half.norm_squared());
-        update_sites(spins, |_, s| {
-            let s = turn(half, za, zb, s);
-            let v = axis * (k * s.dot(axis) * h);
-            let (ca, cb) = rodrigues(v.norm_squared());
-            turn(half, za, zb, turn(v, ca, cb, s))
-        });
+        let s = turn(half, za, zb, s);
+        let v = axis * (k * s.dot(axis) * h);
+        let (ca, cb) = rodrigues(v.norm_squared());
+        turn(half, za, zb, turn(v, ca, cb, s))
     }
 }
 
-/// The exact flow of the bonds of colour `c` over `h`.
-pub(crate) fn bonds(system: &SpinSystem, rates: &Rates, c: usize, spins: &mut [Vec3], h: f64) {
-    let rate = rates.exchange * h;
-    if rate == 0.0 {
+/// The exact flow of one bond over `h` (`rate = γJ/(μ_s μ_B)`).
+#[inline(always)]
+fn bond_turn(rate: f64, si: Vec3, sj: Vec3, h: f64) -> (Vec3, Vec3) {
+    let v = (si + sj) * (rate * h);
+    let (a, b) = rodrigues(v.norm_squared());
+    (turn(v, a, b, si), turn(v, a, b, sj))
+}
+
+/// A piece of a fused sweep over the bonds of colour 0.
+#[derive(Clone, Copy)]
+enum Piece {
+    /// The on-site flow of both spins over this time.
+    Site(f64),
+    /// The bond's flow over this time.
+    Bond(f64),
+}
+
+/// One pass over the spins.
+enum Sweep<'p> {
+    /// The on-site flow of every spin over this time.
+    Site(f64),
+    /// The flow of the bonds of a colour over this time.
+    Colour(usize, f64),
+    /// Pieces applied in turn to each bond of colour 0 (a perfect matching).
+    Fused(&'p [Piece]),
+}
+
+/// The sweeps of `Φ_{γ_{s−1} h} ∘ … ∘ Φ_{γ_0 h}` (Strang steps), in order.
+///
+/// With `perfect` (colour 0 covers every site: every periodic lattice of even sizes, and
+/// open ones with an even count along the first axis), the on-site flows next to colour 0,
+/// and the two colour-0 sweeps where one stage ends and the next begins, become one fused
+/// sweep: per spin the same operations in the same order, so bit for bit the same result,
+/// with fewer passes over memory and fewer barriers between threads.
+fn schedule(m: usize, perfect: bool, h: f64, gammas: impl Iterator<Item = f64>, mut emit: impl FnMut(Sweep<'_>)) {
+    let mut stages = gammas.map(|g| g * h).peekable();
+    if !perfect {
+        for tau in stages {
+            emit(Sweep::Site(0.5 * tau));
+            if m > 0 {
+                for c in 0..m - 1 {
+                    emit(Sweep::Colour(c, 0.5 * tau));
+                }
+                emit(Sweep::Colour(m - 1, tau));
+                for c in (0..m - 1).rev() {
+                    emit(Sweep::Colour(c, 0.5 * tau));
+                }
+            }
+            emit(Sweep::Site(0.5 * tau));
+        }
         return;
     }
-    update_bonds(system.lattice.colour(c), spins, |si, sj| {
-        let v = (si + sj) * rate;
-        let (a, b) = rodrigues(v.norm_squared());
-        (turn(v, a, b, si), turn(v, a, b, sj))
+    // The closing on-site half step of the previous stage, not yet swept.
+    let mut carried: Option<f64> = None;
+    while let Some(tau) = stages.next() {
+        let next = stages.peek().copied();
+        if m == 1 {
+            // O(τ/2) B(τ) O(τ/2); the closing half joins the next stage's sweep.
+            let mut pieces = [Piece::Site(0.0); 4];
+            let mut k = 0;
+            if let Some(c) = carried.take() {
+                pieces[k] = Piece::Site(c);
+                k += 1;
+            }
+            pieces[k] = Piece::Site(0.5 * tau);
+            pieces[k + 1] = Piece::Bond(tau);
+            k += 2;
+            match next {
+                None => {
+                    pieces[k] = Piece::Site(0.5 * tau);
+                    k += 1;
+                }
+                Some(_) => carried = Some(0.5 * tau),
+            }
+            emit(Sweep::Fused(&pieces[..k]));
+            continue;
+        }
+        if carried.is_none() {
+            emit(Sweep::Fused(&[Piece::Site(0.5 * tau), Piece::Bond(0.5 * tau)]));
+        }
+        for c in 1..m - 1 {
+            emit(Sweep::Colour(c, 0.5 * tau));
+        }
+        emit(Sweep::Colour(m - 1, tau));
+        for c in (1..m - 1).rev() {
+            emit(Sweep::Colour(c, 0.5 * tau));
+        }
+        match next {
+            Some(t) => {
+                emit(Sweep::Fused(&[
+                    Piece::Bond(0.5 * tau),
+                    Piece::Site(0.5 * tau),
+                    Piece::Site(0.5 * t),
+                    Piece::Bond(0.5 * t),
+                ]));
+                carried = Some(0.5 * t);
+            }
+            None => emit(Sweep::Fused(&[Piece::Bond(0.5 * tau), Piece::Site(0.5 * tau)])),
+        }
+    }
+}
+
+/// The composition `Φ_{γ_{s−1} h} ∘ … ∘ Φ_{γ_0 h}` of Strang steps (one step of `h` for
+/// `gammas = [1]`), by a team of the pool's threads that split every sweep into fixed
+/// contiguous shares and meet at a barrier after each.
+pub(crate) fn composed(
+    system: &SpinSystem,
+    spins: &mut [Vec3],
+    h: f64,
+    gammas: impl Iterator<Item = f64> + Clone + Sync,
+) {
+    run(system, spins, h, gammas, true);
+}
+
+fn run(system: &SpinSystem, spins: &mut [Vec3], h: f64, gammas: impl Iterator<Item = f64> + Clone + Sync, fuse: bool) {
+    let rates = system.rates();
+    let commute = system.onsite_commutes();
+    let lattice = &system.lattice;
+    let m = lattice.colours();
+    let n = spins.len();
+    let perfect = fuse && m > 0 && 2 * lattice.colour(0).len() == n;
+    let onsite_terms = !(rates.anisotropy == 0.0 && rates.field == Vec3::ZERO);
+    let rate = rates.exchange;
+    let rates = &rates;
+    let shared = Shared::new(spins);
+    team(n, |part, barrier| {
+        schedule(m, perfect, h, gammas.clone(), |sweep| {
+            match sweep {
+                Sweep::Site(t) => {
+                    if !onsite_terms {
+                        return;
+                    }
+                    // SAFETY: this part's sites, alone until the barrier.
+                    unsafe { shared.update_site_range(part.range(n), &|s| onsite_turn(rates, commute, s, t)) };
+                }
+                Sweep::Colour(c, t) => {
+                    let bonds = lattice.colour(c);
+                    // SAFETY: this part's bonds of a matching, alone until the barrier.
+                    unsafe {
+                        shared.update_bond_range(&bonds[part.range(bonds.len())], &|a, b| bond_turn(rate, a, b, t))
+                    };
+                }
+                Sweep::Fused(pieces) => {
+                    let bonds = lattice.colour(0);
+                    let f = |mut si: Vec3, mut sj: Vec3| {
+                        for p in pieces {
+                            match *p {
+                                Piece::Site(t) if onsite_terms => {
+                                    si = onsite_turn(rates, commute, si, t);
+                                    sj = onsite_turn(rates, commute, sj, t);
+                                }
+                                Piece::Site(_) => {}
+                                Piece::Bond(t) => (si, sj) = bond_turn(rate, si, sj, t),
+                            }
+                        }
+                        (si, sj)
+                    };
+                    // SAFETY: as for a colour.
+                    unsafe { shared.update_bond_range(&bonds[part.range(bonds.len())], &f) };
+                }
+            }
+            barrier.wait();
+        });
     });
 }
 
-/// One Strang step `Φ_h` (see the module documentation).
-pub(crate) fn strang(system: &SpinSystem, spins: &mut [Vec3], h: f64) {
-    let rates = system.rates();
-    let commute = system.onsite_commutes();
-    let m = system.lattice.colours();
-    onsite(&rates, commute, spins, 0.5 * h);
-    if m > 0 {
-        for c in 0..m - 1 {
-            bonds(system, &rates, c, spins, 0.5 * h);
-        }
-        bonds(system, &rates, m - 1, spins, h);
-        for c in (0..m - 1).rev() {
-            bonds(system, &rates, c, spins, 0.5 * h);
-        }
-    }
-    onsite(&rates, commute, spins, 0.5 * h);
+/// Strang steps sweep by sweep, without fusing the on-site flows into the colour-0
+/// sweeps (for tests of the fused path).
+pub(crate) fn composed_unfused(system: &SpinSystem, spins: &mut [Vec3], h: f64, gammas: &[f64]) {
+    run(system, spins, h, gammas.iter().copied(), false);
 }

@@ -67,43 +67,138 @@ pub(crate) fn update_sites(spins: &mut [Vec3], f: impl Fn(usize, Vec3) -> Vec3 +
     }
 }
 
-/// A pointer to the spins shared by the workers of one bond colour.
+/// A pointer to the spins shared by the workers of one sweep.
 #[derive(Clone, Copy)]
-struct Shared(*mut Vec3);
-// SAFETY: used only by `update_bonds`, whose bonds form a matching: no two bonds touch the
-// same site, so no two workers read or write the same element.
+pub(crate) struct Shared(*mut Vec3, usize);
+// SAFETY: used only through `Shared::update_bond_range` and `Shared::update_site_range`,
+// whose callers give each worker disjoint bonds of a matching
+// or disjoint sites, so no two workers read or write the same element in one sweep, and
+// sweeps are separated by a barrier.
 unsafe impl Send for Shared {}
 unsafe impl Sync for Shared {}
 
-/// `(s[i], s[j]) ← f(s[i], s[j])` for every bond `[i, j]` of a matching (no two bonds share
-/// a site, which [`super::Lattice`] guarantees for each colour).
-pub(crate) fn update_bonds(
-    bonds: &[[u32; 2]],
-    spins: &mut [Vec3],
-    f: impl Fn(Vec3, Vec3) -> (Vec3, Vec3) + Sync + Send,
-) {
-    let n = spins.len();
-    let shared = Shared(spins.as_mut_ptr());
-    let run = move |chunk: &[[u32; 2]]| {
-        let ptr = shared;
-        for b in chunk {
+impl Shared {
+    /// The spins, shared.
+    pub(crate) fn new(spins: &mut [Vec3]) -> Self {
+        Shared(spins.as_mut_ptr(), spins.len())
+    }
+
+    /// `(s[i], s[j]) ← f(s[i], s[j])` for the bonds of a matching.
+    ///
+    /// # Safety
+    /// No other thread may touch these bonds' sites until the next barrier, and the
+    /// spins must outlive the call.
+    #[inline]
+    pub(crate) unsafe fn update_bond_range(&self, bonds: &[[u32; 2]], f: &impl Fn(Vec3, Vec3) -> (Vec3, Vec3)) {
+        for b in bonds {
             let (i, j) = (b[0] as usize, b[1] as usize);
-            assert!(i < n && j < n && i != j);
-            // SAFETY: i and j are in bounds (checked) and distinct, and no other bond of
-            // the matching touches them, so these are the only accesses to the two
-            // elements while the sweep runs.
+            assert!(i < self.1 && j < self.1 && i != j);
+            // SAFETY: in bounds (checked), distinct, and owned by this worker (the caller's
+            // contract).
             unsafe {
-                let (a, c) = f(*ptr.0.add(i), *ptr.0.add(j));
-                *ptr.0.add(i) = a;
-                *ptr.0.add(j) = c;
+                let (a, c) = f(*self.0.add(i), *self.0.add(j));
+                *self.0.add(i) = a;
+                *self.0.add(j) = c;
             }
         }
-    };
-    #[cfg(feature = "parallel")]
-    if bonds.len() > CHUNK {
-        use rayon::prelude::*;
-        bonds.par_chunks(CHUNK).for_each(run);
-        return;
     }
-    run(bonds);
+
+    /// `s[i] ← f(s[i])` for `i` in `range`.
+    ///
+    /// # Safety
+    /// As for [`Shared::update_bond_range`], for these sites.
+    #[inline]
+    pub(crate) unsafe fn update_site_range(&self, range: std::ops::Range<usize>, f: &impl Fn(Vec3) -> Vec3) {
+        assert!(range.end <= self.1);
+        for i in range {
+            // SAFETY: in bounds (checked) and owned by this worker.
+            unsafe { *self.0.add(i) = f(*self.0.add(i)) };
+        }
+    }
+}
+
+/// A worker's share of a sweep: part `index` of `count`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Part {
+    index: usize,
+    count: usize,
+}
+
+impl Part {
+    /// The contiguous share of `len` items of this part (fixed by the part count alone).
+    #[inline]
+    pub(crate) fn range(&self, len: usize) -> std::ops::Range<usize> {
+        (self.index * len / self.count)..((self.index + 1) * len / self.count)
+    }
+}
+
+/// A barrier that spins (then yields) instead of sleeping: the sweeps it separates take
+/// tens of microseconds, less than a sleeping thread needs to wake.
+pub(crate) struct SpinBarrier {
+    threads: usize,
+    arrived: std::sync::atomic::AtomicUsize,
+    generation: std::sync::atomic::AtomicUsize,
+}
+
+impl SpinBarrier {
+    fn new(threads: usize) -> Self {
+        SpinBarrier {
+            threads,
+            arrived: std::sync::atomic::AtomicUsize::new(0),
+            generation: std::sync::atomic::AtomicUsize::new(0),
+        }
+    }
+
+    /// Wait until every thread has arrived; what each wrote before is visible to all after.
+    pub(crate) fn wait(&self) {
+        use std::sync::atomic::Ordering;
+        if self.threads == 1 {
+            return;
+        }
+        let generation = self.generation.load(Ordering::Acquire);
+        if self.arrived.fetch_add(1, Ordering::AcqRel) + 1 == self.threads {
+            self.arrived.store(0, Ordering::Relaxed);
+            self.generation.fetch_add(1, Ordering::Release);
+        } else {
+            let mut spins = 0u32;
+            while self.generation.load(Ordering::Acquire) == generation {
+                if spins < 4096 {
+                    std::hint::spin_loop();
+                    spins += 1;
+                } else {
+                    std::thread::yield_now();
+                }
+            }
+        }
+    }
+}
+
+/// Sites below which a team is one thread (the barriers would cost more than they save).
+pub const TEAM_SITES: usize = 2048;
+
+/// Run `work` once on every thread of the current pool (one thread for fewer than
+/// [`TEAM_SITES`] sites or without the `parallel` feature), each with its [`Part`] and a
+/// shared barrier for the sweeps it separates. Each part's share is fixed by the part
+/// count, and each element is computed the same way whoever computes it, so the result
+/// does not depend on the number of threads.
+pub(crate) fn team(sites: usize, work: impl Fn(Part, &SpinBarrier) + Sync) {
+    #[cfg(feature = "parallel")]
+    {
+        let threads = rayon::current_num_threads();
+        if threads > 1 && sites >= TEAM_SITES {
+            let barrier = SpinBarrier::new(threads);
+            rayon::broadcast(|ctx| {
+                work(
+                    Part {
+                        index: ctx.index(),
+                        count: ctx.num_threads(),
+                    },
+                    &barrier,
+                )
+            });
+            return;
+        }
+    }
+    let _ = sites;
+    work(Part { index: 0, count: 1 }, &SpinBarrier::new(1));
 }
