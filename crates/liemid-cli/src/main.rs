@@ -3,6 +3,7 @@
 
 mod many_cmd;
 mod run_cmd;
+mod spins_cmd;
 
 use liemid_cli::{converge, output, plot, scenario, work_precision};
 
@@ -25,7 +26,8 @@ Examples:
   liemid converge --methods liemid-ea,liemid-i --steps 1e-3,5e-4,2.5e-4 --json -
   liemid work-precision                        CPU time vs error, against DOP853 and RK4
   liemid many --model dipoles --bodies 10000   a dipolar fluid on all cores
-  liemid methods";
+  liemid spins --problem square-64             spin dynamics on a 64x64 lattice
+  liemid methods [--spins]";
 
 /// The command line (its help text is the `about` below).
 #[derive(Parser, Debug)]
@@ -67,10 +69,25 @@ enum Command {
         liemid many --model dipoles --bodies 4000 --t-end 1 --threads 2 --json -"
     )]
     Many(many_cmd::ManyArgs),
+    /// Atomistic spin dynamics on a lattice: run a scenario, or `spins work-precision`.
+    #[command(after_help = "Examples:\n  liemid spins --problem square-64 --json -\n  \
+        liemid spins examples/spins_square.toml --final final.npy --snapshot spins.png\n  \
+        liemid spins work-precision --threads 1 --json spin-wp.json")]
+    Spins(spins_cmd::SpinsArgs),
     /// List the integrators: name, order, torque evaluations, what they conserve.
-    Methods,
+    Methods(MethodsArgs),
     /// List the built-in problems.
     Problems,
+}
+
+#[derive(Args, Debug)]
+struct MethodsArgs {
+    /// The spin-dynamics methods of `liemid spins` instead of the rigid-body ones.
+    #[arg(long)]
+    spins: bool,
+    /// As JSON (with `--spins`).
+    #[arg(long, requires = "spins")]
+    json: bool,
 }
 
 #[derive(Args, Debug)]
@@ -171,8 +188,13 @@ fn main() -> ExitCode {
         Command::Converge(args) => converge_cmd(args),
         Command::WorkPrecision(args) => work_precision_cmd(args),
         Command::Many(args) => many_cmd::many(&args),
-        Command::Methods => {
-            methods();
+        Command::Spins(args) => spins_cmd::spins(args),
+        Command::Methods(args) => {
+            if args.spins {
+                spins_cmd::methods(args.json);
+            } else {
+                methods();
+            }
             Ok(())
         }
         Command::Problems => {
@@ -260,20 +282,7 @@ fn load_scenario(file: Option<&Path>, problem: &str) -> Result<Scenario, Failure
     }
 }
 
-fn plot_paths(base: &Path) -> Vec<PathBuf> {
-    match base.extension().and_then(|x| x.to_str()) {
-        Some("svg") | Some("png") => vec![base.to_path_buf()],
-        _ => {
-            let with = |ext: &str| {
-                let mut s = base.as_os_str().to_owned();
-                s.push(".");
-                s.push(ext);
-                PathBuf::from(s)
-            };
-            vec![with("svg"), with("png")]
-        }
-    }
-}
+use plot::plot_paths;
 
 fn converge_cmd(args: ConvergeArgs) -> CmdResult {
     let sc = load_scenario(args.scenario.as_deref(), &args.problem)?;

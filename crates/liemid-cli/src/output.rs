@@ -164,7 +164,7 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> io::Result<()> {
     std::fs::rename(&partial, path)
 }
 
-fn npy_header(rows: u64, columns: usize) -> Vec<u8> {
+pub(crate) fn npy_header(rows: u64, columns: usize) -> Vec<u8> {
     let dict = format!("{{'descr': '<f8', 'fortran_order': False, 'shape': ({rows}, {columns}), }}");
     let mut h = Vec::with_capacity(NPY_HEADER);
     h.extend_from_slice(b"\x93NUMPY\x01\x00");

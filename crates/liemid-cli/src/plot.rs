@@ -117,6 +117,19 @@ fn look(label: &str) -> Look {
         "SW" => base(PINK, false),
         "NMB" => base(CYAN, false),
         "DOP853" => baseline(BLACK, Marker::Diamond, false),
+        // The spin methods: the splitting family blue by order, the midpoint rule green,
+        // the field's baselines (Heun, Depondt-Mertens, RK4) in orange, olive and grey.
+        "split" | "split4" | "split6" | "split8" => {
+            let order = family.trim_start_matches("split").parse().unwrap_or(2);
+            Look {
+                marker: marker_of(order, false),
+                ..base(BLUE, false)
+            }
+        }
+        "midpoint" => base(GREEN, false),
+        "heun" => base(ORANGE, false),
+        "depondt" => base(OLIVE, false),
+        "rk4" => baseline(GREY, Marker::Triangle { hollow: false }, true),
         "RK4" => baseline(GREY, Marker::Triangle { hollow: false }, true),
         "RKMK4" => baseline(DARK_GREY, Marker::Triangle { hollow: true }, false),
         _ => baseline(DARK_GREY, Marker::Circle, true),
@@ -345,18 +358,125 @@ fn draw_work<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, study: &WorkStudy
     Ok(())
 }
 
+/// The files a plot option names: `NAME` writes `NAME.svg` and `NAME.png`; a name ending
+/// in `.svg` or `.png` writes that one.
+pub fn plot_paths(base: &Path) -> Vec<std::path::PathBuf> {
+    match base.extension().and_then(|x| x.to_str()) {
+        Some("svg") | Some("png") => vec![base.to_path_buf()],
+        _ => {
+            let with = |ext: &str| {
+                let mut s = base.as_os_str().to_owned();
+                s.push(".");
+                s.push(ext);
+                std::path::PathBuf::from(s)
+            };
+            vec![with("svg"), with("png")]
+        }
+    }
+}
+
+fn draw_spin_work<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    study: &crate::spin_study::SpinStudy,
+) -> Result<(), String> {
+    root.fill(&WHITE).map_err(e)?;
+    let title = format!(
+        "{}: {} spins, work-precision to t = {} ps",
+        study.problem, study.spins, study.t_end
+    );
+    let root = root.titled(&title, ("sans-serif", 24)).map_err(e)?;
+    let (plots, strip) = root.split_horizontally(root.dim_in_pixel().0 - LEGEND_WIDTH);
+    let labels: Vec<String> = study.methods.iter().map(|m| m.name.clone()).collect();
+    legend(&strip, &labels, false)?;
+    let panels = plots.split_evenly((1, 2));
+    let series = |f: &dyn Fn(&crate::spin_study::SpinPoint) -> f64| -> Vec<Series> {
+        study
+            .methods
+            .iter()
+            .map(|c| {
+                let pts = c
+                    .points
+                    .iter()
+                    .map(|p| (p.seconds, f(p)))
+                    .filter(|p| p.0 > 0.0 && p.1 > 0.0);
+                (c.name.clone(), pts.collect())
+            })
+            .collect()
+    };
+    let axes = |title, y_desc| Axes {
+        title,
+        x_desc: "CPU time (s)",
+        y_desc,
+        slopes: false,
+    };
+    panel(
+        &panels[0],
+        &axes("largest energy error along the run", "max |E - E0| / |E0|"),
+        &series(&|p| p.max_relative_energy_error),
+    )?;
+    panel(
+        &panels[1],
+        &axes("spins at t_end", "max |S_i - S_i,ref|"),
+        &series(&|p| p.spin_error),
+    )?;
+    root.present().map_err(e)?;
+    Ok(())
+}
+
+/// A PNG of a 2-D lattice's spins: the in-plane angle `atan2(S_y, S_x)` as hue, darker
+/// where the spin points out of the plane (`|S_z|` near 1).
+///
+/// # Errors
+/// A drawing or file error.
+pub fn spin_snapshot(path: &Path, size: &[usize; 3], spins: &[liemid::Vec3], title: &str) -> Result<(), String> {
+    register_font();
+    let (nx, ny) = (size[0], size[1]);
+    let cell = (640 / nx.max(ny)).clamp(1, 16) as u32;
+    let (w, h) = (nx as u32 * cell, ny as u32 * cell);
+    let root = BitMapBackend::new(path, (w + 40, h + 70)).into_drawing_area();
+    root.fill(&WHITE).map_err(e)?;
+    root.draw(&Text::new(title.to_string(), (20, 10), ("sans-serif", 16).into_font()))
+        .map_err(e)?;
+    for y in 0..ny {
+        for x in 0..nx {
+            let s = spins[x + nx * y];
+            let hue = (s.y.atan2(s.x) / (2.0 * std::f64::consts::PI)).rem_euclid(1.0);
+            let in_plane = (s.x * s.x + s.y * s.y).sqrt().min(1.0);
+            let color = HSLColor(hue, 0.9, 0.15 + 0.45 * in_plane);
+            // Row y = 0 at the bottom, as in a plot.
+            let (px, py) = (20 + x as i32 * cell as i32, 40 + (ny - 1 - y) as i32 * cell as i32);
+            root.draw(&Rectangle::new(
+                [(px, py), (px + cell as i32, py + cell as i32)],
+                color.filled(),
+            ))
+            .map_err(e)?;
+        }
+    }
+    root.draw(&Text::new(
+        "hue: in-plane angle of S; dark: S out of plane".to_string(),
+        (20, 48 + h as i32),
+        ("sans-serif", 13).into_font(),
+    ))
+    .map_err(e)?;
+    root.present().map_err(e)?;
+    Ok(())
+}
+
 /// A figure the tool can draw.
 pub enum Figure<'a> {
     /// The convergence study.
     Convergence(&'a Study),
     /// The work-precision study.
     WorkPrecision(&'a WorkStudy),
+    /// The spin work-precision study.
+    SpinWorkPrecision(&'a crate::spin_study::SpinStudy),
 }
 
 fn render<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, figure: &Figure) -> Result<(), String> {
     match figure {
         Figure::Convergence(s) => draw(root, s),
         Figure::WorkPrecision(s) => draw_work(root, s),
+        Figure::SpinWorkPrecision(s) => draw_spin_work(root, s),
     }
 }
 

@@ -272,7 +272,7 @@ impl<'a> Section<'a> {
         ))
     }
 
-    fn vec3(&self, key: &str) -> Result<Option<Vec3>, String> {
+    pub fn vec3(&self, key: &str) -> Result<Option<Vec3>, String> {
         self.table.get(key).map(|v| self.vec3_of(key, v)).transpose()
     }
 
@@ -294,6 +294,38 @@ impl<'a> Section<'a> {
             Some(Value::String(s)) => Ok(Some(s.as_str())),
             Some(other) => Err(self.err(key, format!("expected a string, found {}", other.type_str()))),
         }
+    }
+
+    /// A boolean.
+    pub fn boolean(&self, key: &str) -> Result<Option<bool>, String> {
+        match self.table.get(key) {
+            None => Ok(None),
+            Some(Value::Boolean(b)) => Ok(Some(*b)),
+            Some(other) => Err(self.err(key, format!("expected true or false, found {}", other.type_str()))),
+        }
+    }
+
+    /// An array of whole numbers of at least 1, of 1 to 3 entries.
+    pub fn counts(&self, key: &str) -> Result<Option<Vec<u64>>, String> {
+        let Some(v) = self.table.get(key) else {
+            return Ok(None);
+        };
+        let Value::Array(a) = v else {
+            return Err(self.err(
+                key,
+                format!("expected an array of whole numbers, found {}", v.type_str()),
+            ));
+        };
+        if a.is_empty() || a.len() > 3 {
+            return Err(self.err(key, format!("expected 1 to 3 entries, found {}", a.len())));
+        }
+        a.iter()
+            .map(|x| match x {
+                Value::Integer(i) if *i >= 1 => Ok(*i as u64),
+                other => Err(self.err(key, format!("expected whole numbers of at least 1, found {other}"))),
+            })
+            .collect::<Result<Vec<u64>, String>>()
+            .map(Some)
     }
 
     pub fn count(&self, key: &str) -> Result<Option<u64>, String> {

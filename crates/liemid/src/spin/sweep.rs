@@ -174,6 +174,7 @@ impl SpinBarrier {
 }
 
 /// Sites below which a team is one thread (the barriers would cost more than they save).
+#[cfg_attr(not(feature = "parallel"), allow(dead_code))]
 pub const TEAM_SITES: usize = 2048;
 
 /// Run `work` once on every thread of the current pool (one thread for fewer than
