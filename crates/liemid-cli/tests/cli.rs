@@ -594,3 +594,131 @@ fn many_reports_throughput_and_conservation() {
         stderr(&o)
     );
 }
+
+#[test]
+fn spins_runs_the_contract_scenario_and_writes_its_outputs() {
+    let dir = scratch("spins");
+    // The issue's scenario contract, from a .npy start, with every output.
+    let start: Vec<f64> = (0..16 * 16)
+        .flat_map(|i| {
+            let a = 0.1 * (i as f64).sin();
+            [a, 0.05 * (i as f64).cos(), 1.0]
+        })
+        .collect();
+    std::fs::write(dir.join("start.npy"), liemid_cli::npy::matrix_bytes(256, 3, &start)).unwrap();
+    let scenario = write(
+        &dir,
+        "spins.toml",
+        "[lattice]\nkind = \"square\"\nsize = [16, 16]\nperiodic = true\n\
+         [hamiltonian]\nexchange = 1.0\nanisotropy = 0.1\nanisotropy_axis = [0.0, 0.0, 1.0]\nfield = [0.0, 0.0, 0.0]\nmu_s = 1.0\n\
+         [dynamics]\ndamping = 0.0\nmethod = \"split\"\nstep = 1e-2\nt_end = 1.0\n\
+         [initial]\nfile = \"start.npy\"\n",
+    );
+    let o = run_in(
+        &dir,
+        &[
+            "spins",
+            scenario.to_str().unwrap(),
+            "--final",
+            "final.npy",
+            "--json",
+            "-",
+            "--out",
+            "ts.csv",
+            "--snapshot",
+            "snap.png",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = json(&stdout(&o));
+    assert_eq!(s["steps"], 100);
+    assert_eq!(s["spins"], 256);
+    for key in [
+        "max_relative_energy_error",
+        "max_norm_error",
+        "sz_total_change",
+        "spin_steps_per_second",
+    ] {
+        assert!(s[key].as_f64().is_some(), "{key} missing: {s}");
+    }
+    assert!(s["max_norm_error"].as_f64().unwrap() < 1e-14);
+    assert!(s["sz_total_change"].as_f64().unwrap() < 1e-12);
+    let last = liemid_cli::npy::read_matrix(&dir.join("final.npy"), 3).unwrap();
+    assert_eq!(last.len(), 256);
+    assert!(last
+        .iter()
+        .all(|r| ((r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt() - 1.0).abs() < 1e-14));
+    let text = std::fs::read_to_string(dir.join("ts.csv")).unwrap();
+    assert_eq!(text.lines().next(), Some("t,energy,mx,my,mz"));
+    assert_eq!(text.lines().count(), 1 + 1 + 100 / 10);
+    assert!(std::fs::metadata(dir.join("snap.png")).unwrap().len() > 1000);
+    // Every thread count gives the same final spins, byte for byte.
+    let o = run_in(
+        &dir,
+        &[
+            "spins",
+            scenario.to_str().unwrap(),
+            "--threads",
+            "1",
+            "--final",
+            "one.npy",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(
+        std::fs::read(dir.join("one.npy")).unwrap(),
+        std::fs::read(dir.join("final.npy")).unwrap()
+    );
+    // Methods as JSON.
+    let o = run_in(&dir, &["methods", "--spins", "--json"]);
+    let list = json(&stdout(&o));
+    let names: Vec<&str> = list
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m["name"].as_str().unwrap())
+        .collect();
+    assert!(
+        names.contains(&"split") && names.contains(&"midpoint") && names.contains(&"rk4"),
+        "{names:?}"
+    );
+    assert!(list.as_array().unwrap().iter().all(|m| m["order"].as_u64().is_some()));
+}
+
+#[test]
+fn spins_input_errors_name_the_key_and_exit_2() {
+    let dir = scratch("spins-errors");
+    for (text, expected) in [
+        ("[lattice]\nkind = \"hex\"\nsize = [4, 4]\n", "[lattice] kind"),
+        ("[lattice]\nkind = \"square\"\nsize = [4]\n", "two sizes"),
+        (
+            "[lattice]\nkind = \"square\"\nsize = [4, 4]\n[dynamics]\nmethod = \"leapfrog\"\n",
+            "unknown spin method",
+        ),
+        (
+            "[lattice]\nkind = \"square\"\nsize = [4, 4]\n[hamiltonian]\nmu_s = -1.0\n",
+            "mu_s",
+        ),
+        (
+            "[lattice]\nkind = \"square\"\nsize = [4, 4]\n[initial]\nfile = \"missing.npy\"\n",
+            "[initial] file",
+        ),
+        (
+            "[lattice]\nkind = \"square\"\nsize = [4, 4]\n[body]\ninertia = [1, 2, 3]\n",
+            "liemid run",
+        ),
+        (
+            "[lattice]\nkind = \"square\"\nsize = [4, 4]\n[dynamics]\ndamping = 0.1\nmethod = \"split\"\n",
+            "undamped",
+        ),
+    ] {
+        let f = write(&dir, "bad.toml", text);
+        let o = run_in(&dir, &["spins", f.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(2), "{text}: {}", stderr(&o));
+        assert!(stderr(&o).contains(expected), "{text}: {}", stderr(&o));
+        assert_eq!(stderr(&o).trim().lines().count(), 1, "{}", stderr(&o));
+    }
+    let o = run_in(&dir, &["spins", "--problem", "nope"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("square-64"));
+}

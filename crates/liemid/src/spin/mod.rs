@@ -234,9 +234,8 @@ impl SpinIntegrator {
             SpinMethod::Splitting | SpinMethod::Splitting4 | SpinMethod::Splitting6 | SpinMethod::Splitting8 => {
                 let scheme = self.method.scheme();
                 let stages = scheme.map_or(1, |s| s.stages());
-                let gammas = (0..steps).flat_map(move |_| {
-                    (0..stages).map(move |k| (scheme.map_or(1.0, |s| s.gamma(k)), k + 1 == stages))
-                });
+                let gammas = (0..steps)
+                    .flat_map(move |_| (0..stages).map(move |k| (scheme.map_or(1.0, |s| s.gamma(k)), k + 1 == stages)));
                 splitting::composed(system, spins, h, gammas);
             }
             _ => {

@@ -173,7 +173,12 @@ fn schedule(
         let closing = [Piece::Bond(0.5 * tau), Piece::Site(0.5 * tau)];
         match (next, last) {
             (Some(t), false) => {
-                emit(Sweep::Fused(&[closing[0], closing[1], Piece::Site(0.5 * t), Piece::Bond(0.5 * t)]));
+                emit(Sweep::Fused(&[
+                    closing[0],
+                    closing[1],
+                    Piece::Site(0.5 * t),
+                    Piece::Bond(0.5 * t),
+                ]));
                 carried = Some((0.5 * t, false));
             }
             (Some(t), true) => {
@@ -205,7 +210,13 @@ pub(crate) fn composed(
     run(system, spins, h, gammas, true);
 }
 
-fn run(system: &SpinSystem, spins: &mut [Vec3], h: f64, gammas: impl Iterator<Item = (f64, bool)> + Clone + Sync, fuse: bool) {
+fn run(
+    system: &SpinSystem,
+    spins: &mut [Vec3],
+    h: f64,
+    gammas: impl Iterator<Item = (f64, bool)> + Clone + Sync,
+    fuse: bool,
+) {
     let rates = system.rates();
     let commute = system.onsite_commutes();
     let lattice = &system.lattice;
@@ -266,5 +277,11 @@ fn run(system: &SpinSystem, spins: &mut [Vec3], h: f64, gammas: impl Iterator<It
 /// sweeps (for tests of the fused path).
 pub(crate) fn composed_unfused(system: &SpinSystem, spins: &mut [Vec3], h: f64, gammas: &[f64]) {
     let n = gammas.len();
-    run(system, spins, h, gammas.iter().enumerate().map(|(k, &g)| (g, k + 1 == n)), false);
+    run(
+        system,
+        spins,
+        h,
+        gammas.iter().enumerate().map(|(k, &g)| (g, k + 1 == n)),
+        false,
+    );
 }
