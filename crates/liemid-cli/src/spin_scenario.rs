@@ -83,7 +83,9 @@ pub fn load(path: &Path) -> Result<SpinScenario, String> {
     let file = path.display().to_string();
     let text = std::fs::read_to_string(path).map_err(|e| format!("{file}: cannot read: {e}"))?;
     let dir = path.parent().unwrap_or(Path::new("."));
-    let name = path.file_stem().map_or(file.clone(), |s| s.to_string_lossy().into_owned());
+    let name = path
+        .file_stem()
+        .map_or(file.clone(), |s| s.to_string_lossy().into_owned());
     parse(&text, &name, dir).map_err(|e| format!("{file}: {e}"))
 }
 
