@@ -51,9 +51,9 @@ pub enum Model {
 /// How each body turns between the impulses (`--rotation`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Rotation {
-    /// The torque-free midpoint Lie rotation in two half steps, as in LIEMID[EA].
+    /// The torque-free midpoint Lie rotation in two half steps, as in `liemid-ea`.
     Midpoint,
-    /// The exact torque-free flow, as in LIEMID[EX] (no Newton solve).
+    /// The exact torque-free flow, as in `liemid-ex` (no Newton solve).
     Exact,
 }
 
@@ -98,7 +98,7 @@ pub struct ManyArgs {
     #[arg(long, allow_negative_numbers = true)]
     pub step: Option<f64>,
     /// The free rotation between the impulses [default: midpoint]: the midpoint Lie rule
-    /// (as in LIEMID[EA]) or the exact torque-free flow (as in LIEMID[EX]).
+    /// (as in `liemid-ea`) or the exact torque-free flow (as in `liemid-ex`).
     #[arg(long, value_enum)]
     pub rotation: Option<Rotation>,
     /// Threads [default: all cores]; results are identical for any count.

@@ -7,6 +7,8 @@
 //! `t` and `h`); a Python torque that raises re-raises its own exception. Pure-Rust work
 //! runs with the GIL released.
 
+mod spins;
+
 use std::cell::RefCell;
 use std::time::Instant;
 
@@ -38,7 +40,7 @@ fn mat(m: &[f64]) -> PyResult<Mat3> {
 
 /// A library error as a Python exception: a failed step is a `ConvergenceError` with its
 /// time and step, everything else a `ValueError`.
-fn py_error(py: Python<'_>, e: &Error, context: &str) -> PyErr {
+pub(crate) fn py_error(py: Python<'_>, e: &Error, context: &str) -> PyErr {
     let message = if context.is_empty() {
         e.to_string()
     } else {
@@ -734,8 +736,8 @@ impl ManyBodies {
         result.map_err(|e| py_error(py, &e, ""))
     }
 
-    /// Choose the free rotation between the impulses: "midpoint" (as in LIEMID[EA]) or
-    /// "exact" (the exact torque-free flow, as in LIEMID[EX]).
+    /// Choose the free rotation between the impulses: "midpoint" (as in LIEMID\[EA\]) or
+    /// "exact" (the exact torque-free flow, as in LIEMID\[EX\]).
     fn set_rotation(&mut self, kind: &str) -> PyResult<()> {
         let kind = match kind {
             "midpoint" => liemid::many::FreeRotation::Midpoint,
@@ -797,5 +799,6 @@ fn _liemid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(converge, m)?)?;
     m.add_function(wrap_pyfunction!(work_precision, m)?)?;
     m.add_class::<ManyBodies>()?;
+    spins::register(m)?;
     Ok(())
 }

@@ -16,7 +16,7 @@ True
   Python callable; ``integrate`` returns a ``Solution`` of numpy arrays;
 - ``ensemble`` steps N bodies on all cores (bit-identical for any thread count),
   ``liemid.dask.ensemble`` on a Dask cluster;
-- ``liemid.many``: interacting bodies (the dipolar fluid);
+- ``liemid.many``: interacting bodies (the dipolar fluid); ``liemid.spins``: spin dynamics on lattices;
 - ``methods``, ``problems``, ``converge``, ``work_precision``: what the CLI offers.
 
 Reference: P. Krysl, Explicit momentum-conserving integrator for dynamics of rigid bodies
@@ -25,7 +25,7 @@ approximating the midpoint Lie algorithm, Int. J. Numer. Meth. Engng 63 (2005).
 
 from __future__ import annotations
 
-from . import many, problems
+from . import many, problems, spins
 from ._core import (
     CallableTorque,
     ConstantTorque,
@@ -59,5 +59,6 @@ __all__ = [
     "many",
     "methods",
     "problems",
+    "spins",
     "work_precision",
 ]
