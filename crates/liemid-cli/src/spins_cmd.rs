@@ -52,6 +52,9 @@ pub struct SpinsArgs {
     /// Write the summary as JSON to FILE, or to standard output with `-`.
     #[arg(long)]
     pub json: Option<String>,
+    /// Refuse runs of more than N spin-steps (spins × steps; exit 2) before the first step.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    pub max_spin_steps: Option<u64>,
 }
 
 /// Options shared by the run and the study.
@@ -155,6 +158,15 @@ pub fn spins(args: SpinsArgs) -> CmdResult {
     }
     let steps = liemid::step_count(0.0, sc.t_end, sc.step)
         .map_err(|e| input(format!("step {} and t_end {}: {e}", Num(sc.step), Num(sc.t_end))))?;
+    if let Some(max) = args.max_spin_steps {
+        let work = steps as f64 * sc.system.len() as f64;
+        if work > max as f64 {
+            return Err(input(format!(
+                "the run would take {work:e} spin-steps ({} spins × {steps} steps), more than --max-spin-steps {max}",
+                sc.system.len()
+            )));
+        }
+    }
     let every = args.every.or(sc.every).unwrap_or(10);
     let out = args.out.clone().or(sc.out.clone());
     let inputs: Vec<&Path> = args
