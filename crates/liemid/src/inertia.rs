@@ -22,7 +22,18 @@ impl Inertia {
     /// physical body (equality, a planar body, is allowed).
     pub fn principal(moments: [f64; 3]) -> Result<Self> {
         for (k, &m) in moments.iter().enumerate() {
-            if !m.is_finite() || m <= 0.0 {
+            if m == 0.0 {
+                return Err(Error::InvalidInertia {
+                    reason: format!(
+                        "principal moment I{} = 0: bodies with a zero moment (linear molecules, point masses) are not \
+                         supported, since the rotation about that axis is undefined; give the axis a small positive \
+                         moment (for a symmetric linear body whose torques are normal to its axis, the spin about the \
+                         axis then stays zero and the dynamics are unchanged)",
+                        k + 1
+                    ),
+                });
+            }
+            if !m.is_finite() || m < 0.0 {
                 return Err(Error::InvalidInertia {
                     reason: format!("principal moment I{} = {m} must be finite and positive", k + 1),
                 });

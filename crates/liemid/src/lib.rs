@@ -15,7 +15,7 @@
 //! - [`composition`]: symmetric compositions (Suzuki, Yoshida, Kahan-Li) of EA or Verlet
 //!   up to eighth order.
 //! - [`vector`]: symplectic Euler, its adjoint, Verlet and explicit Newmark on `ℝⁿ`.
-//! - [`many`] and [`interactions`]: N interacting rigid bodies (independent heavy tops,
+//! - [`many`] (with [`many::interactions`], also at [`interactions`]): N interacting rigid bodies (independent heavy tops,
 //!   dipoles), stepped in parallel by the splitting integrator, identical for any thread
 //!   count.
 //! - [`driver`]: [`integrate`] from `t0` to `t_end` with an observer and diagnostics.
@@ -42,11 +42,9 @@ pub mod driver;
 pub mod error;
 pub mod free_flow;
 pub mod inertia;
-pub mod interactions;
-#[cfg(all(feature = "simd", target_arch = "x86_64"))]
-mod lanes;
 pub mod linalg;
 pub mod many;
+pub use many::interactions;
 pub mod midpoint;
 pub mod problems;
 pub mod random;

@@ -406,3 +406,47 @@ fn the_switched_fluid_conserves_energy_to_second_order() {
         "a switch beyond the cutoff is refused"
     );
 }
+
+#[test]
+fn a_body_with_a_zero_moment_is_refused_with_a_clear_error() {
+    // A linear molecule (issue 18; the class of bug LAMMPS issue #1657 fixed): refused, not
+    // integrated with a division by zero.
+    let mut b = Bodies::new();
+    let err = b
+        .push(
+            1.0,
+            Vec3::new(0.0, 1.0, 1.0),
+            true,
+            Vec3::ZERO,
+            Vec3::ZERO,
+            Mat3::IDENTITY,
+            Vec3::ZERO,
+        )
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("I1 = 0") && err.contains("linear molecules"), "{err}");
+    assert!(b.is_empty());
+    // The suggested model, a small moment about the axis, keeps the axial spin at zero for a
+    // symmetric linear dipole in a dipolar field.
+    let dipoles = Dipoles::new(Vec3::new(1.0, 0.0, 0.0), 1.0, 1.0, None, None).unwrap();
+    let mut b = Bodies::new();
+    for (i, x) in [0.0, 1.5].iter().enumerate() {
+        let r = so3::exp(Vec3::new(0.3 * i as f64, 0.2, 0.0));
+        b.push(
+            1.0,
+            Vec3::new(1e-6, 1.0, 1.0),
+            true,
+            Vec3::new(*x, 0.0, 0.0),
+            Vec3::ZERO,
+            r,
+            Vec3::ZERO,
+        )
+        .unwrap();
+    }
+    for _ in 0..1000 {
+        b.step(&dipoles, 1e-3).unwrap();
+    }
+    for pi in &b.pi {
+        assert!(pi.x.abs() < 1e-12 * pi.norm().max(1e-300), "axial spin {pi:?}");
+    }
+}

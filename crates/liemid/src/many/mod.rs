@@ -29,6 +29,10 @@
 //! order and every reduction runs in index order, so results are bit-for-bit identical for
 //! any number of threads.
 
+pub mod interactions;
+#[cfg(all(feature = "simd", target_arch = "x86_64"))]
+mod lanes;
+
 use std::sync::Mutex;
 
 use crate::composition::Scheme;
@@ -253,7 +257,7 @@ const GROUP: usize = 4;
 fn lanes_available() -> bool {
     #[cfg(all(feature = "simd", target_arch = "x86_64"))]
     {
-        crate::lanes::use_avx()
+        lanes::use_avx()
     }
     #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
     {
@@ -277,7 +281,7 @@ fn rotate_group(lanes: bool, inertia: &[PrincipalInertia], r: &mut [Mat3], pi: &
         ) else {
             return false;
         };
-        crate::lanes::free_rotation_x4(
+        lanes::free_rotation_x4(
             lanes,
             &group.map(|g| g.moments),
             &group.map(|g| g.inverse),
