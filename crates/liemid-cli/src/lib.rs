@@ -16,3 +16,4 @@ pub mod scenario;
 pub mod spin_scenario;
 pub mod spin_study;
 pub mod work_precision;
+pub mod xyz;

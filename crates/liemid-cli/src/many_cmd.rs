@@ -130,6 +130,27 @@ pub struct ManyArgs {
     /// Refuse runs of more than N body-steps (bodies × steps; exit 2) before the first step.
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     pub max_body_steps: Option<u64>,
+    /// Write every body (position, orientation quaternion, velocity, angular momenta) to
+    /// this extended XYZ file (OVITO, ASE, MDAnalysis) every `--trajectory-every` steps.
+    #[arg(long)]
+    pub trajectory: Option<PathBuf>,
+    /// Interval of the trajectory, in steps [default: `--every`].
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    pub trajectory_every: Option<u64>,
+    /// Radial distribution function g(r), averaged over the configurations sampled every
+    /// `--every` steps: NAME writes NAME.csv and NAME.png (at most 20,000 bodies).
+    #[arg(long)]
+    pub rdf: Option<PathBuf>,
+}
+
+/// Bodies above which `--rdf` is refused (its pair count grows as N²).
+const MAX_RDF_BODIES: usize = 20_000;
+
+/// What a run observes besides the totals.
+struct Observers {
+    trajectory: Option<(PathBuf, u64)>,
+    rdf: Option<liemid::many::observables::PairHistogram>,
+    box_length: Option<f64>,
 }
 
 /// The settings of a run, from the scenario file and the command line.
@@ -279,6 +300,8 @@ struct Outcome {
     last: Totals,
     stepping_seconds: f64,
     max_energy_error: f64,
+    rdf: Option<liemid::many::observables::PairHistogram>,
+    frames: Option<u64>,
 }
 
 /// Step `bodies` to `t_end` (the last step lands on it), writing the totals every
@@ -289,7 +312,12 @@ fn run_model<I: Interaction>(
     model: &I,
     (h, t_end, steps): (f64, f64, u64),
     interrupt: &Interrupt,
+    mut observers: Observers,
 ) -> Result<Outcome, Failure> {
+    let mut frames = match &observers.trajectory {
+        Some((p, _)) => Some(liemid_cli::xyz::FrameWriter::create(p).map_err(Failure::Run)?),
+        None => None,
+    };
     bodies
         .set_free_rotation(args.rotation)
         .map_err(|e| Failure::Run(e.to_string()))?;
@@ -310,9 +338,27 @@ fn run_model<I: Interaction>(
         }
         Ok(())
     };
-    let keep = |out: Option<TrajectoryWriter>| out.map(|w| format!("; {}", w.keep_partial())).unwrap_or_default();
-    if let Err(e) = write(&bodies, &mut out) {
-        return Err(Failure::Run(format!("{e}{}", keep(out))));
+    let keep = |out: Option<TrajectoryWriter>, frames: Option<liemid_cli::xyz::FrameWriter>| {
+        out.map(|w| format!("; {}", w.keep_partial())).unwrap_or_default()
+            + &frames.map(|w| format!("; {}", w.keep_partial())).unwrap_or_default()
+    };
+    let traj_every = observers.trajectory.as_ref().map_or(u64::MAX, |(_, k)| *k);
+    let box_length = observers.box_length;
+    let mut observe = |b: &Bodies, frames: &mut Option<liemid_cli::xyz::FrameWriter>, k: u64| -> Result<(), String> {
+        if let Some(h) = observers.rdf.as_mut() {
+            if k % args.every == 0 || k == steps {
+                h.add(&b.position, box_length);
+            }
+        }
+        if let Some(w) = frames.as_mut() {
+            if k % traj_every == 0 || k == steps {
+                w.write_frame(b, box_length)?;
+            }
+        }
+        Ok(())
+    };
+    if let Err(e) = write(&bodies, &mut out).and_then(|()| observe(&bodies, &mut frames, 0)) {
+        return Err(Failure::Run(format!("{e}{}", keep(out, frames))));
     }
     let bar = progress(steps, "steps", steps as f64 * bodies.len() as f64 >= 2e7);
     let mut stepping = 0.0;
@@ -326,7 +372,7 @@ fn run_model<I: Interaction>(
                     "{signal}: stopped at t = {} after {} of {steps} steps{}",
                     Num(bodies.t),
                     k - 1,
-                    keep(out)
+                    keep(out, frames)
                 ),
             ));
         }
@@ -336,14 +382,17 @@ fn run_model<I: Interaction>(
         let start = Instant::now();
         if let Err(e) = bodies.step(model, dt) {
             bar.finish_and_clear();
-            return Err(Failure::Run(format!("step {k}: {e}{}", keep(out))));
+            return Err(Failure::Run(format!("step {k}: {e}{}", keep(out, frames))));
         }
         stepping += start.elapsed().as_secs_f64();
         bodies.t = target;
         if k % args.every == 0 || k == steps {
             if let Err(e) = write(&bodies, &mut out) {
-                return Err(Failure::Run(format!("{e}{}", keep(out))));
+                return Err(Failure::Run(format!("{e}{}", keep(out, frames))));
             }
+        }
+        if let Err(e) = observe(&bodies, &mut frames, k) {
+            return Err(Failure::Run(format!("{e}{}", keep(out, frames))));
         }
         if k % 64 == 0 {
             bar.set_position(k);
@@ -353,6 +402,10 @@ fn run_model<I: Interaction>(
     if let Some(w) = out {
         w.finish().map_err(Failure::Run)?;
     }
+    let frames = match frames {
+        Some(w) => Some(w.finish().map_err(Failure::Run)?),
+        None => None,
+    };
     let last = bodies.totals(model);
     Ok(Outcome {
         bodies,
@@ -360,6 +413,8 @@ fn run_model<I: Interaction>(
         last,
         stepping_seconds: stepping,
         max_energy_error: max_de,
+        rdf: observers.rdf,
+        frames,
     })
 }
 
@@ -436,6 +491,43 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
     if let Some(j) = cli.json.as_deref().filter(|j| *j != "-") {
         plan.add("--json", Path::new(j)).map_err(input)?;
     }
+    if let Some(p) = &cli.trajectory {
+        plan.add("--trajectory", p).map_err(input)?;
+    }
+    let rdf_paths = cli.rdf.as_ref().map(|base| {
+        let with = |ext: &str| {
+            let mut s = base.as_os_str().to_owned();
+            s.push(".");
+            s.push(ext);
+            PathBuf::from(s)
+        };
+        (with("csv"), with("png"))
+    });
+    if let Some((csv, png)) = &rdf_paths {
+        if n > MAX_RDF_BODIES {
+            return Err(input(format!(
+                "--rdf counts every pair (N² = {:e} for {n} bodies); it accepts at most {MAX_RDF_BODIES} bodies",
+                (n as f64).powi(2)
+            )));
+        }
+        plan.add("--rdf", csv).map_err(input)?;
+        plan.add("--rdf", png).map_err(input)?;
+    }
+    let observers = |box_length: Option<f64>| {
+        let r_max = box_length.map_or(5.0, |l| (0.5 * l).min(5.0));
+        Observers {
+            trajectory: cli
+                .trajectory
+                .clone()
+                .map(|p| (p, cli.trajectory_every.unwrap_or(args.every))),
+            rdf: rdf_paths
+                .as_ref()
+                .map(|_| liemid::many::observables::PairHistogram::new(r_max, 100)),
+            box_length,
+        }
+    };
+    // The body-frame direction whose order is reported: the dipole, or the top's axis.
+    let mut axis = liemid::Vec3::new(0.0, 0.0, 1.0);
     let pool = builder.build().map_err(|e| Failure::Run(format!("thread pool: {e}")))?;
     let threads = pool.current_num_threads();
     let interrupt = Interrupt::install();
@@ -443,11 +535,11 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
     let outcome = pool.install(|| match args.model {
         Model::Independent => {
             let (b, m) = problems::top_ensemble(n, args.seed);
-            run_model(args, b, &m, run, &interrupt)
+            run_model(args, b, &m, run, &interrupt, observers(None))
         }
         Model::TorqueFree => {
             let (b, m) = problems::torque_free_ensemble(n, args.seed);
-            run_model(args, b, &m, run, &interrupt)
+            run_model(args, b, &m, run, &interrupt, observers(None))
         }
         Model::Dipoles => {
             // A bad density, cutoff or switch is bad input (exit 2), not a failed run.
@@ -464,7 +556,8 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
                 }
                 m = m.with_switch_start(r_s).map_err(|e| input(e.to_string()))?;
             }
-            run_model(args, b, &m, run, &interrupt).map_err(|f| match f {
+            axis = m.moment;
+            run_model(args, b, &m, run, &interrupt, observers(m.box_length)).map_err(|f| match f {
                 Failure::Run(m) => Failure::Run(format!("{m} (density {}, step {})", Num(args.density), Num(h))),
                 other => other,
             })
@@ -476,7 +569,26 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
         last,
         stepping_seconds: seconds,
         max_energy_error: max_de,
+        rdf,
+        frames,
     } = outcome;
+    let (polar, nematic) = liemid::many::observables::orientational_order(&bodies.rotation, axis);
+    if let (Some(h), Some((csv, png))) = (&rdf, &rdf_paths) {
+        let g = h.g();
+        let mut text = String::from("r,g\n");
+        for (r, v) in &g {
+            text += &format!("{r:?},{v:?}\n");
+        }
+        liemid_cli::output::write_atomically(csv, text.as_bytes())
+            .map_err(|e| Failure::Run(format!("{}: cannot write: {e}", csv.display())))?;
+        let title = format!(
+            "{}: g(r) over {} configurations ({} bodies)",
+            args.model.key(),
+            h.samples,
+            bodies.len()
+        );
+        liemid_cli::plot::curve(png, &title, "r", "g(r)", &g).map_err(Failure::Run)?;
+    }
     let body_steps = steps as f64 * bodies.len() as f64;
     let throughput = if seconds > 0.0 { body_steps / seconds } else { f64::NAN };
     let dp = last.linear_momentum - first.linear_momentum;
@@ -507,6 +619,9 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
         "energy_error_sampled_every": args.every,
         "linear_momentum_change": dp.to_array(),
         "angular_momentum_change": dl.to_array(),
+        "polar_order": polar,
+        "nematic_order": nematic,
+        "trajectory_frames": frames,
     });
     match cli.json.as_deref() {
         Some("-") => println!("{summary}"),

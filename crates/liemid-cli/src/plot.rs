@@ -423,6 +423,42 @@ fn draw_spin_work<DB: DrawingBackend>(
     Ok(())
 }
 
+/// A PNG of one curve `y(x)` on linear axes (the radial distribution function).
+///
+/// # Errors
+/// A drawing or file error.
+pub fn curve(path: &Path, title: &str, x_desc: &str, y_desc: &str, points: &[(f64, f64)]) -> Result<(), String> {
+    register_font();
+    let root = BitMapBackend::new(path, (900, 560)).into_drawing_area();
+    root.fill(&WHITE).map_err(e)?;
+    let xmax = points.iter().fold(0.0f64, |a, p| a.max(p.0)).max(1e-300);
+    let ymax = points.iter().fold(0.0f64, |a, p| a.max(p.1)).max(1.0) * 1.1;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 20))
+        .margin(14)
+        .x_label_area_size(44)
+        .y_label_area_size(56)
+        .build_cartesian_2d(0.0..xmax * 1.02, 0.0..ymax)
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .light_line_style(WHITE)
+        .label_style(("sans-serif", 14))
+        .axis_desc_style(("sans-serif", 16))
+        .draw()
+        .map_err(e)?;
+    let style = ShapeStyle::from(palette::BLUE).stroke_width(2);
+    chart.draw_series(LineSeries::new(points.to_vec(), style)).map_err(e)?;
+    let grey = ShapeStyle::from(palette::GREY).stroke_width(1);
+    chart
+        .draw_series(DashedLineSeries::new(vec![(0.0, 1.0), (xmax * 1.02, 1.0)], 6, 4, grey))
+        .map_err(e)?;
+    root.present().map_err(e)?;
+    Ok(())
+}
+
 /// A PNG of a 2-D lattice's spins: the in-plane angle `atan2(S_y, S_x)` as hue, darker
 /// where the spin points out of the plane (`|S_z|` near 1).
 ///

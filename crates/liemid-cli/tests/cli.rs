@@ -722,3 +722,65 @@ fn spins_input_errors_name_the_key_and_exit_2() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("square-64"));
 }
+
+#[test]
+fn many_writes_an_extended_xyz_trajectory_and_the_radial_distribution() {
+    let dir = scratch("many-xyz");
+    let o = run_in(
+        &dir,
+        &[
+            "many",
+            "--model",
+            "dipoles",
+            "--bodies",
+            "216",
+            "--t-end",
+            "0.05",
+            "--trajectory",
+            "fluid.xyz",
+            "--trajectory-every",
+            "10",
+            "--rdf",
+            "rdf",
+            "--json",
+            "-",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = json(&stdout(&o));
+    assert_eq!(s["trajectory_frames"], 6);
+    assert!(s["polar_order"].as_f64().unwrap() <= 1.0 && s["nematic_order"].as_f64().unwrap() <= 1.0);
+    let text = std::fs::read_to_string(dir.join("fluid.xyz")).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 6 * (2 + 216));
+    assert_eq!(lines[0], "216");
+    assert!(lines[1].starts_with("Lattice=\"") && lines[1].contains("Properties=species:S:1:pos:R:3:orientation:R:4"));
+    assert!(lines[1].contains("pbc=\"T T T\""));
+    // Every body line: a species and 16 numbers, the quaternion of unit length.
+    for line in &lines[2..218] {
+        let f: Vec<&str> = line.split_whitespace().collect();
+        assert_eq!(f.len(), 17);
+        let q: Vec<f64> = f[4..8].iter().map(|x| x.parse().unwrap()).collect();
+        assert!((q.iter().map(|x| x * x).sum::<f64>() - 1.0).abs() < 1e-14);
+    }
+    assert!(!dir.join("fluid.xyz.partial").exists());
+    let rdf_text = std::fs::read_to_string(dir.join("rdf.csv")).unwrap();
+    assert_eq!(rdf_text.lines().next(), Some("r,g"));
+    let rdf: Vec<Vec<f64>> = rdf_text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rdf.len(), 100);
+    // No two WCA spheres come closer than about their diameter.
+    assert!(rdf.iter().filter(|r| r[0] < 0.8).all(|r| r[1] == 0.0));
+    assert!(std::fs::metadata(dir.join("rdf.png")).unwrap().len() > 1000);
+    let o = run_in(
+        &dir,
+        &[
+            "many", "--model", "dipoles", "--bodies", "30000", "--rdf", "big", "--t-end", "0.001",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--rdf"), "{}", stderr(&o));
+}

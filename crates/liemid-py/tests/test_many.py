@@ -1,6 +1,10 @@
-"""liemid.many: bodies from arrays, the dipolar fluid, conservation and determinism."""
+"""liemid.many: bodies from arrays, the dipolar fluid, conservation and determinism, and the
+CLI's extended XYZ trajectory read by ASE."""
 
 from __future__ import annotations
+
+import subprocess
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -92,3 +96,25 @@ def test_exact_rotation_is_liemid_ex_and_thread_independent() -> None:
         assert x.tobytes() == y.tobytes()
     with pytest.raises(ValueError, match=r'rotation: unknown rotation "spline"'):
         b.rotation = "spline"
+
+
+def test_the_extended_xyz_trajectory_opens_in_ase(tmp_path: Path, liemid_cli: str) -> None:
+    ase_io = pytest.importorskip("ase.io")
+    out = tmp_path / "fluid.xyz"
+    subprocess.run(
+        [liemid_cli, "many", "--model", "dipoles", "--bodies", "216", "--density", "0.3", "--t-end", "0.02",
+         "--trajectory", str(out), "--trajectory-every", "5"],
+        check=True,
+        capture_output=True,
+    )
+    frames = ase_io.read(str(out), index=":", format="extxyz")
+    assert len(frames) == 5
+    first, last = frames[0], frames[-1]
+    assert len(first) == 216 and first.pbc.all()
+    assert first.cell.lengths()[0] == pytest.approx((216 / 0.3) ** (1 / 3))
+    q = last.arrays["orientation"]
+    assert q.shape == (216, 4) and np.allclose(np.linalg.norm(q, axis=1), 1.0, atol=1e-14)
+    assert last.arrays["velo"].shape == (216, 3) and last.arrays["angmom"].shape == (216, 3)
+    assert float(last.info["Time"]) == pytest.approx(0.02)
+    # The bodies moved.
+    assert not np.allclose(first.positions, last.positions)

@@ -450,3 +450,47 @@ fn a_body_with_a_zero_moment_is_refused_with_a_clear_error() {
         assert!(pi.x.abs() < 1e-12 * pi.norm().max(1e-300), "axial spin {pi:?}");
     }
 }
+
+#[test]
+fn observables_of_known_configurations() {
+    use liemid::many::observables::{orientational_order, PairHistogram};
+    // Uniform random points in a periodic box: g(r) = 1 within the counting error.
+    let mut rng = Rng::new(11);
+    let l = 10.0;
+    let mut h = PairHistogram::new(4.0, 20);
+    for _ in 0..4 {
+        let x: Vec<Vec3> = (0..2000)
+            .map(|_| Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * l)
+            .collect();
+        h.add(&x, Some(l));
+    }
+    for (r, g) in h.g().into_iter().filter(|(r, _)| *r > 1.0) {
+        // Each bin beyond r = 1 holds over 10^4 pairs: 3% is more than 3 sigma.
+        assert!((g - 1.0).abs() < 0.03, "ideal gas: g({r}) = {g}");
+    }
+    // A simple cubic lattice of spacing 1 in a periodic box of 6: no pair closer than 1,
+    // the first shell (6 neighbours) in the bin at r = 1.
+    let x: Vec<Vec3> = (0..216)
+        .map(|i| Vec3::new((i % 6) as f64, ((i / 6) % 6) as f64, (i / 36) as f64))
+        .collect();
+    let mut h = PairHistogram::new(2.0, 40);
+    h.add(&x, Some(6.0));
+    let g = h.g();
+    assert!(g.iter().filter(|(r, _)| *r < 0.95).all(|(_, g)| *g == 0.0));
+    // The bin [1, 1.05) holds the 6 neighbours of each body: g = 6 / (ρ 4π/3 (1.05³ − 1)),
+    // ρ = 1; the next shell is at √2.
+    let first = g.iter().find(|(r, _)| (*r - 1.025).abs() < 1e-9).unwrap().1;
+    let expected = 6.0 / (4.0 / 3.0 * std::f64::consts::PI * (1.05f64.powi(3) - 1.0));
+    assert!(
+        (first / expected - 1.0).abs() < 1e-12,
+        "g at the first shell {first}, expected {expected}"
+    );
+    assert!(g.iter().filter(|(r, _)| *r > 1.05 && *r < 1.4).all(|(_, g)| *g == 0.0));
+    // Orientational order: aligned dipoles 1, 1; random ones near 0.
+    let aligned = vec![Mat3::IDENTITY; 100];
+    let (p1, p2) = orientational_order(&aligned, Vec3::new(0.0, 0.0, 2.0));
+    assert!((p1 - 1.0).abs() < 1e-12 && (p2 - 1.0).abs() < 1e-12);
+    let random: Vec<Mat3> = (0..20_000).map(|_| rng.rotation()).collect();
+    let (p1, p2) = orientational_order(&random, Vec3::new(0.0, 0.0, 1.0));
+    assert!(p1 < 0.03 && p2 < 0.03, "random: {p1} {p2}");
+}

@@ -32,6 +32,7 @@
 pub mod interactions;
 #[cfg(all(feature = "simd", target_arch = "x86_64"))]
 mod lanes;
+pub mod observables;
 
 use std::sync::Mutex;
 
