@@ -65,11 +65,8 @@ impl FrameWriter {
         let n = bodies.len();
         let b = &mut self.buffer;
         let _ = writeln!(b, "{n}");
-        match box_length {
-            Some(l) => {
-                let _ = write!(b, "Lattice=\"{l:?} 0.0 0.0 0.0 {l:?} 0.0 0.0 0.0 {l:?}\" ");
-            }
-            None => {}
+        if let Some(l) = box_length {
+            let _ = write!(b, "Lattice=\"{l:?} 0.0 0.0 0.0 {l:?} 0.0 0.0 0.0 {l:?}\" ");
         }
         let pbc = if box_length.is_some() { "T T T" } else { "F F F" };
         let _ = writeln!(
