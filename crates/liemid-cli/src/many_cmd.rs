@@ -101,6 +101,13 @@ pub struct ManyArgs {
     /// (as in `liemid-ea`) or the exact torque-free flow (as in `liemid-ex`).
     #[arg(long, value_enum)]
     pub rotation: Option<Rotation>,
+    /// Langevin thermostat at this k_B T (model units; BAOAB around the splitting, noise
+    /// keyed on seed, body and step); NVE without it.
+    #[arg(long, allow_negative_numbers = true)]
+    pub temperature: Option<f64>,
+    /// The thermostat's friction, translational and rotational (1/time) [default: 1].
+    #[arg(long, allow_negative_numbers = true)]
+    pub friction: Option<f64>,
     /// Threads [default: all cores]; results are identical for any count.
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     pub threads: Option<u64>,
@@ -157,6 +164,7 @@ struct Observers {
 struct Settings {
     model: Model,
     rotation: FreeRotation,
+    thermostat: Option<(f64, f64)>,
     bodies: usize,
     seed: u64,
     density: f64,
@@ -172,6 +180,7 @@ fn settings(args: &ManyArgs) -> Result<Settings, String> {
     let mut s = Settings {
         model: Model::Independent,
         rotation: FreeRotation::Midpoint,
+        thermostat: None,
         bodies: 1000,
         seed: 1,
         density: 0.3,
@@ -231,7 +240,17 @@ fn settings(args: &ManyArgs) -> Result<Settings, String> {
                 s.cutoff = sys.number("cutoff")?;
                 s.switch_start = sys.number("switch_start")?;
             }
-            if let Some(integ) = Section::new(&root, "integrator", &["step", "t_end", "rotation"], false)? {
+            if let Some(integ) = Section::new(
+                &root,
+                "integrator",
+                &["step", "t_end", "rotation", "temperature", "friction"],
+                false,
+            )? {
+                if let Some(kt) = integ.number("temperature")? {
+                    s.thermostat = Some((kt, integ.number("friction")?.unwrap_or(1.0)));
+                } else if integ.number("friction")?.is_some() {
+                    return Err(integ.err("friction", "needs a temperature"));
+                }
                 s.step = integ.number("step")?;
                 s.t_end = integ.number("t_end")?;
                 if let Some(r) = integ.string("rotation")? {
@@ -256,6 +275,13 @@ fn settings(args: &ManyArgs) -> Result<Settings, String> {
     }
     if let Some(m) = args.model {
         s.model = m;
+    }
+    if let Some(kt) = args.temperature {
+        s.thermostat = Some((kt, args.friction.or(s.thermostat.map(|t| t.1)).unwrap_or(1.0)));
+    } else if let (Some(f), Some((kt, _))) = (args.friction, s.thermostat) {
+        s.thermostat = Some((kt, f));
+    } else if args.friction.is_some() {
+        return Err("--friction needs --temperature (or [integrator] temperature)".into());
     }
     if let Some(r) = args.rotation {
         s.rotation = r.free_rotation();
@@ -314,6 +340,13 @@ fn run_model<I: Interaction>(
     interrupt: &Interrupt,
     mut observers: Observers,
 ) -> Result<Outcome, Failure> {
+    let thermostat = match args.thermostat {
+        Some((kt, friction)) => Some(
+            liemid::many::thermostat::Langevin::new(kt, friction, args.seed)
+                .map_err(|e| Failure::Input(e.to_string()))?,
+        ),
+        None => None,
+    };
     let mut frames = match &observers.trajectory {
         Some((p, _)) => Some(liemid_cli::xyz::FrameWriter::create(p).map_err(Failure::Run)?),
         None => None,
@@ -380,7 +413,11 @@ fn run_model<I: Interaction>(
         let target = if k == steps { t_end } else { t0 + k as f64 * h };
         let dt = target - bodies.t;
         let start = Instant::now();
-        if let Err(e) = bodies.step(model, dt) {
+        let result = match &thermostat {
+            Some(th) => bodies.step_langevin(model, dt, th),
+            None => bodies.step(model, dt),
+        };
+        if let Err(e) = result {
             bar.finish_and_clear();
             return Err(Failure::Run(format!("step {k}: {e}{}", keep(out, frames))));
         }
@@ -416,6 +453,20 @@ fn run_model<I: Interaction>(
         rdf: observers.rdf,
         frames,
     })
+}
+
+/// `[translational, rotational]` kinetic temperatures, `⟨p²/m⟩/3` over the free bodies and
+/// `⟨Π·I⁻¹Π⟩/3` over all.
+fn kinetic_temperatures(b: &Bodies) -> [f64; 2] {
+    let (mut tr, mut free, mut rot) = (0.0, 0usize, 0.0);
+    for i in 0..b.len() {
+        if b.free[i] {
+            tr += b.momentum[i].norm_squared() / b.mass[i];
+            free += 1;
+        }
+        rot += b.pi[i].dot(b.inertia[i].inverse.component_mul(b.pi[i]));
+    }
+    [tr / (3 * free.max(1)) as f64, rot / (3 * b.len().max(1)) as f64]
 }
 
 /// Run `liemid many`.
@@ -595,7 +646,7 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
     let dl = last.angular_momentum - first.angular_momentum;
     // Every model conserves energy (gravity about fixed pivots, the dipole and WCA
     // potentials), so a large error is the step's.
-    if max_de > 1e-2 {
+    if max_de > 1e-2 && args.thermostat.is_none() {
         eprintln!(
             "liemid: warning: the relative energy error reached {max_de:.3e}; the step {} is probably too large \
              for this system",
@@ -619,6 +670,8 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
         "energy_error_sampled_every": args.every,
         "linear_momentum_change": dp.to_array(),
         "angular_momentum_change": dl.to_array(),
+        "thermostat": args.thermostat.map(|(kt, f)| json!({"temperature": kt, "friction": f})),
+        "kinetic_temperature": kinetic_temperatures(&bodies),
         "polar_order": polar,
         "nematic_order": nematic,
         "trajectory_frames": frames,
@@ -647,6 +700,10 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
             seconds,
             throughput
         );
+        if let Some((kt, f)) = args.thermostat {
+            let [tt, tr] = kinetic_temperatures(&bodies);
+            println!("Langevin thermostat k_B T = {kt}, friction {f}: final kinetic temperature {tt:.4} (translation), {tr:.4} (rotation)");
+        }
         println!(
             "max relative energy error (sampled every {} {})  {max_de:.3e}",
             args.every,

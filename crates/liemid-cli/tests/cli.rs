@@ -784,3 +784,42 @@ fn many_writes_an_extended_xyz_trajectory_and_the_radial_distribution() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("--rdf"), "{}", stderr(&o));
 }
+
+#[test]
+fn many_with_a_thermostat_is_the_same_on_any_thread_count() {
+    let dir = scratch("many-langevin");
+    let mut totals = Vec::new();
+    for threads in ["1", "3"] {
+        let file = format!("totals-{threads}.csv");
+        let o = run_in(
+            &dir,
+            &[
+                "many",
+                "--model",
+                "dipoles",
+                "--bodies",
+                "729",
+                "--t-end",
+                "0.04",
+                "--temperature",
+                "1.2",
+                "--friction",
+                "2",
+                "--threads",
+                threads,
+                "--out",
+                &file,
+                "--json",
+                "-",
+            ],
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+        let s = json(&stdout(&o));
+        assert_eq!(s["thermostat"]["temperature"], 1.2);
+        assert!(s["kinetic_temperature"].as_array().unwrap().len() == 2);
+        totals.push(std::fs::read(dir.join(file)).unwrap());
+    }
+    assert_eq!(totals[0], totals[1]);
+    let o = run_in(&dir, &["many", "--friction", "1"]);
+    assert_eq!(o.status.code(), Some(2));
+}

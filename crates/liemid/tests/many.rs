@@ -494,3 +494,91 @@ fn observables_of_known_configurations() {
     let (p1, p2) = orientational_order(&random, Vec3::new(0.0, 0.0, 1.0));
     assert!(p1 < 0.03 && p2 < 0.03, "random: {p1} {p2}");
 }
+
+/// `(translational, rotational)` kinetic temperatures `⟨p²/m⟩/3`, `⟨Π·I⁻¹Π⟩/3` of free bodies.
+fn kinetic_temperatures(b: &Bodies) -> (f64, f64) {
+    let (mut tr, mut rot) = (0.0, 0.0);
+    for i in 0..b.len() {
+        tr += b.momentum[i].norm_squared() / b.mass[i];
+        rot += b.pi[i].dot(b.inertia[i].inverse.component_mul(b.pi[i]));
+    }
+    let n = 3.0 * b.len() as f64;
+    (tr / n, rot / n)
+}
+
+#[test]
+fn the_langevin_thermostat_brings_both_kinetic_temperatures_to_the_target() {
+    use liemid::many::thermostat::Langevin;
+    // The dipolar fluid (216 bodies, rho = 0.3) from rest-like momenta, k_B T = 1.5,
+    // friction 2: after 8 time units of equilibration (the starting lattice melts and
+    // releases heat for several), then 20 blocks of 0.8 time units (longer than the
+    // momenta's correlation time 1/friction, so the blocks are nearly independent).
+    let (mut b, dipoles) = problems::dipolar_fluid(216, 0.3, 3).unwrap();
+    for p in b.momentum.iter_mut().chain(b.pi.iter_mut()) {
+        *p = *p * 0.1;
+    }
+    let thermostat = Langevin::new(1.5, 2.0, 42).unwrap();
+    let h = 2e-3;
+    for _ in 0..4000 {
+        b.step_langevin(&dipoles, h, &thermostat).unwrap();
+    }
+    let (mut blocks_t, mut blocks_r) = (Vec::new(), Vec::new());
+    for _ in 0..20 {
+        let (mut st, mut sr) = (0.0, 0.0);
+        for _ in 0..400 {
+            b.step_langevin(&dipoles, h, &thermostat).unwrap();
+            let (t, r) = kinetic_temperatures(&b);
+            st += t;
+            sr += r;
+        }
+        blocks_t.push(st / 400.0);
+        blocks_r.push(sr / 400.0);
+    }
+    for (name, blocks) in [("translation", &blocks_t), ("rotation", &blocks_r)] {
+        let mean = blocks.iter().sum::<f64>() / blocks.len() as f64;
+        let var = blocks.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (blocks.len() - 1) as f64;
+        let sigma = (var / blocks.len() as f64).sqrt();
+        println!("{name}: kinetic temperature {mean:.4} ± {sigma:.4} (target 1.5)");
+        // Within four standard errors of the target, and the error itself small.
+        assert!(
+            (mean - 1.5).abs() < 4.0 * sigma + 1e-3 && sigma < 0.03,
+            "{name}: {mean} ± {sigma}"
+        );
+    }
+}
+
+#[test]
+fn langevin_results_are_identical_for_one_two_and_three_threads() {
+    use liemid::many::thermostat::Langevin;
+    let thermostat = Langevin::new(1.0, 1.0, 7).unwrap();
+    let runs: Vec<Bodies> = [1, 2, 3]
+        .iter()
+        .map(|&threads| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let (mut b, dipoles) = problems::dipolar_fluid(729, 0.3, 5).unwrap();
+            pool.install(|| {
+                for _ in 0..20 {
+                    b.step_langevin(&dipoles, 2e-3, &thermostat).unwrap();
+                }
+            });
+            b
+        })
+        .collect();
+    assert!(runs[0].len() > 2 * liemid::many::CHUNK);
+    for other in &runs[1..] {
+        assert!(
+            runs[0].position == other.position
+                && runs[0].momentum == other.momentum
+                && runs[0].rotation == other.rotation
+                && runs[0].pi == other.pi,
+            "thread counts differ"
+        );
+    }
+    // The noise is really there: another seed gives another state.
+    let (mut b, dipoles) = problems::dipolar_fluid(729, 0.3, 5).unwrap();
+    let other = Langevin { seed: 8, ..thermostat };
+    for _ in 0..20 {
+        b.step_langevin(&dipoles, 2e-3, &other).unwrap();
+    }
+    assert!(b.momentum != runs[0].momentum);
+}

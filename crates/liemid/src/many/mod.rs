@@ -33,6 +33,7 @@ pub mod interactions;
 #[cfg(all(feature = "simd", target_arch = "x86_64"))]
 mod lanes;
 pub mod observables;
+pub mod thermostat;
 
 use std::sync::Mutex;
 
@@ -76,6 +77,8 @@ pub struct Bodies {
     /// (empty otherwise).
     flows: Vec<FreeFlow>,
     rotation_kind: FreeRotation,
+    /// Langevin steps taken: the step counter of the thermostat's noise.
+    pub langevin_steps: u64,
 }
 
 /// How [`Bodies::step`] moves each body between the impulses.
