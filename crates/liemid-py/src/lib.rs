@@ -584,7 +584,9 @@ fn work_precision(
     serde_json::to_string(&result).map_err(|e| PyValueError::new_err(e.to_string()))
 }
 
-/// The interaction of a many-body system.
+/// The interaction of a many-body system (one per system, so the size of the dipoles'
+/// variant, with its Verlet-list scratch, does not matter).
+#[allow(clippy::large_enum_variant)]
 enum Model {
     Independent(liemid::interactions::Independent),
     Dipoles(liemid::interactions::Dipoles),

@@ -582,3 +582,30 @@ fn langevin_results_are_identical_for_one_two_and_three_threads() {
     }
     assert!(b.momentum != runs[0].momentum);
 }
+
+#[test]
+fn the_verlet_list_is_rebuilt_on_displacement_and_gives_the_forces_of_any_skin() {
+    // The same fluid with the default skin (0.3) and with skin 0 (a new list at every
+    // evaluation): the same pairs within the cutoff, summed in another order, so forces
+    // agree to rounding; the skinned list is rebuilt only every few dozen steps.
+    let (mut a, mut model_a) = problems::dipolar_fluid(1000, 0.3, 4).unwrap();
+    let (mut b, mut model_b) = problems::dipolar_fluid(1000, 0.3, 4).unwrap();
+    model_a.skin = 0.3;
+    model_b.skin = 0.0;
+    for _ in 0..200 {
+        a.step(&model_a, 2e-3).unwrap();
+        b.step(&model_b, 2e-3).unwrap();
+    }
+    let scale = a.force.iter().map(|f| f.norm()).fold(0.0, f64::max);
+    let df = a
+        .force
+        .iter()
+        .zip(&b.force)
+        .map(|(x, y)| (*x - *y).norm())
+        .fold(0.0, f64::max);
+    assert!(df < 1e-10 * scale, "forces differ by {df:e} (scale {scale:e})");
+    let (builds_a, builds_b) = (model_a.list_builds(), model_b.list_builds());
+    println!("Verlet list: {builds_a} builds in 201 evaluations with skin 0.3, {builds_b} with skin 0");
+    assert!(builds_a >= 2 && builds_a < 40, "{builds_a} builds");
+    assert!(builds_b >= 200);
+}

@@ -129,6 +129,10 @@ pub struct Dipoles {
     /// Where the switch begins, `r_s ≤ r_c` (used only with a cutoff; `r_s = r_c` is a
     /// plain truncation).
     pub switch_start: f64,
+    /// The Verlet list's skin: with a cutoff, each body keeps the neighbours within
+    /// `r_c + skin`, rebuilt once some body has moved more than `skin/2` since the last build
+    /// (checked every evaluation); 0 rebuilds at every evaluation.
+    pub skin: f64,
     scratch: Mutex<Scratch>,
 }
 
@@ -139,7 +143,18 @@ struct Scratch {
     sorted: Vec<usize>,
     cell_of: Vec<usize>,
     fill: Vec<usize>,
+    /// The Verlet list: the neighbours of `i` within `r_c + skin` at the last build are
+    /// `list[list_start[i]..list_start[i + 1]]`, in the cell traversal's fixed order.
+    list_start: Vec<usize>,
+    list: Vec<u32>,
+    /// Positions at the last build (empty: no list yet).
+    reference: Vec<Vec3>,
+    /// Builds of the list, for diagnostics.
+    builds: u64,
 }
+
+/// The default Verlet skin, as LAMMPS's default for Lennard-Jones units.
+pub const DEFAULT_SKIN: f64 = 0.3;
 
 /// What one evaluation of the [`Dipoles`] pair sum needs of the model: the switch in squared
 /// radii (`S = 1` up to `s2`, `0` beyond `c2`, `inv_width = 1/(c2 − s2)`) and the periodic box
@@ -213,6 +228,7 @@ impl Dipoles {
             cutoff,
             box_length,
             switch_start: cutoff.map_or(0.0, |c| DEFAULT_SWITCH_FRACTION * c),
+            skin: DEFAULT_SKIN,
             scratch: Mutex::new(Scratch::default()),
         })
     }
@@ -320,8 +336,64 @@ impl Dipoles {
         Some((total, field, energy))
     }
 
+    /// Verlet-list builds so far (the list is rebuilt when a body has moved more than half
+    /// the skin).
+    #[must_use]
+    pub fn list_builds(&self) -> u64 {
+        self.scratch.lock().expect("not poisoned").builds
+    }
+
+    /// Rebuild the Verlet list if it is missing, stale (a body moved more than `skin/2`
+    /// since the last build) or for another number of bodies; `true` when there is one.
+    fn update_list(&self, c: &Configuration<'_>, s: &mut Scratch) -> bool {
+        let Some(cutoff) = self.cutoff else {
+            return false;
+        };
+        let n = c.position.len();
+        let limit = (0.5 * self.skin) * (0.5 * self.skin);
+        let fresh = s.reference.len() == n
+            && s.list_start.len() == n + 1
+            && c.position
+                .iter()
+                .zip(&s.reference)
+                .all(|(x, x0)| (*x - *x0).norm_squared() <= limit);
+        if fresh {
+            return true;
+        }
+        let reach = cutoff + self.skin;
+        let reach2 = reach * reach;
+        let constants = self.constants();
+        let mut list_start = std::mem::take(&mut s.list_start);
+        let mut list = std::mem::take(&mut s.list);
+        list_start.clear();
+        list.clear();
+        list_start.push(0);
+        {
+            let cells = self.build_cells_of(c, s, reach);
+            for i in 0..n {
+                self.for_neighbours(i, c, cells.as_ref(), |j| {
+                    if Self::separation(&constants, c.position[i], c.position[j]).norm_squared() <= reach2 {
+                        list.push(j as u32);
+                    }
+                });
+                list_start.push(list.len());
+            }
+        }
+        s.list_start = list_start;
+        s.list = list;
+        s.reference.clear();
+        s.reference.extend_from_slice(c.position);
+        s.builds += 1;
+        true
+    }
+
     fn build_cells<'a>(&self, c: &Configuration<'_>, s: &'a mut Scratch) -> Option<Cells<'a>> {
         let cutoff = self.cutoff?;
+        self.build_cells_of(c, s, cutoff)
+    }
+
+    /// A cell list with cells at least `cutoff` wide.
+    fn build_cells_of<'a>(&self, c: &Configuration<'_>, s: &'a mut Scratch, cutoff: f64) -> Option<Cells<'a>> {
         let n_bodies = c.position.len();
         let (origin, extent, periodic) = match self.box_length {
             Some(l) => (Vec3::ZERO, Vec3::new(l, l, l), true),
@@ -449,8 +521,27 @@ impl Interaction for Dipoles {
         s.dipoles.clear();
         s.dipoles.extend(c.rotation.iter().map(|r: &Mat3| *r * self.moment));
         let dipoles = std::mem::take(&mut s.dipoles);
-        let cells = self.build_cells(&c, s);
         let constants = self.constants();
+        if self.update_list(&c, s) {
+            let (start, list) = (&s.list_start, &s.list);
+            for_chunks(force, torque, |i, f, t| {
+                let mi = dipoles[i];
+                let (mut fi, mut bi) = (Vec3::ZERO, Vec3::ZERO);
+                for &j in &list[start[i]..start[i + 1]] {
+                    let j = j as usize;
+                    let r = Self::separation(&constants, c.position[i], c.position[j]);
+                    if let Some((fij, field, _)) = self.pair(&constants, r, mi, dipoles[j]) {
+                        fi += fij;
+                        bi += field;
+                    }
+                }
+                *f = fi;
+                *t = c.rotation[i].tr_mul_vec(mi.cross(bi));
+            });
+            s.dipoles = dipoles;
+            return;
+        }
+        let cells = self.build_cells(&c, s);
         for_chunks(force, torque, |i, f, t| {
             let mi = dipoles[i];
             let (mut fi, mut bi) = (Vec3::ZERO, Vec3::ZERO);
