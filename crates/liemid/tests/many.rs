@@ -608,4 +608,21 @@ fn the_verlet_list_is_rebuilt_on_displacement_and_gives_the_forces_of_any_skin()
     println!("Verlet list: {builds_a} builds in 201 evaluations with skin 0.3, {builds_b} with skin 0");
     assert!((2..40).contains(&builds_a), "{builds_a} builds");
     assert!(builds_b >= 200);
+    // The full list (each pair twice, as above the half list's size limit) gives the same
+    // forces as the half list (each pair once, Newton's third law) to rounding.
+    let (mut c, mut model_c) = problems::dipolar_fluid(1000, 0.3, 4).unwrap();
+    model_c.half_list_max_bodies = 0;
+    for _ in 0..200 {
+        c.step(&model_c, 2e-3).unwrap();
+    }
+    let df = a
+        .force
+        .iter()
+        .zip(&c.force)
+        .map(|(x, y)| (*x - *y).norm())
+        .fold(0.0, f64::max);
+    assert!(
+        df < 1e-10 * scale,
+        "half and full lists differ by {df:e} (scale {scale:e})"
+    );
 }

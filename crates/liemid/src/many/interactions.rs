@@ -133,6 +133,8 @@ pub struct Dipoles {
     /// `r_c + skin`, rebuilt once some body has moved more than `skin/2` since the last build
     /// (checked every evaluation); 0 rebuilds at every evaluation.
     pub skin: f64,
+    /// Bodies up to which the half list is used ([`HALF_LIST_MAX_BODIES`] by default).
+    pub half_list_max_bodies: usize,
     scratch: Mutex<Scratch>,
 }
 
@@ -147,6 +149,16 @@ struct Scratch {
     /// `list[list_start[i]..list_start[i + 1]]`, in the cell traversal's fixed order.
     list_start: Vec<usize>,
     list: Vec<u32>,
+    /// The half list (each pair once, `i < j`): pair `p` joins `half_i[p]` and `half_j[p]`;
+    /// the pairs where `i` comes first are `half_start[i]..half_start[i + 1]`, those where it
+    /// comes second `as_second[as_second_start[i]..as_second_start[i + 1]]` (increasing).
+    half_start: Vec<usize>,
+    half_i: Vec<u32>,
+    half_j: Vec<u32>,
+    as_second_start: Vec<usize>,
+    as_second: Vec<u32>,
+    /// Per pair: the force on the first body and the fields at the first and the second.
+    pair_out: Vec<[Vec3; 3]>,
     /// Positions at the last build (empty: no list yet).
     reference: Vec<Vec3>,
     /// Builds of the list, for diagnostics.
@@ -155,6 +167,14 @@ struct Scratch {
 
 /// The default Verlet skin, as LAMMPS's default for Lennard-Jones units.
 pub const DEFAULT_SKIN: f64 = 0.3;
+
+/// Bodies up to which the forces use the half list (each pair once, Newton's third law,
+/// through per-pair slots); above, each body gathers its full list (each pair twice). The
+/// crossover, measured with `farm-bench --vs` on this 2-core machine (2026-12-01): the half
+/// list took 0.82x the time at 10³ bodies (2 threads) and 0.83x at 10⁴ (1 thread), but
+/// 1.11x at 10⁵ (1 thread) and 1.04x (2 threads), where its 1.6 kB of pair slots per body
+/// no longer stay in cache.
+pub const HALF_LIST_MAX_BODIES: usize = 30_000;
 
 /// What one evaluation of the [`Dipoles`] pair sum needs of the model: the switch in squared
 /// radii (`S = 1` up to `s2`, `0` beyond `c2`, `inv_width = 1/(c2 − s2)`) and the periodic box
@@ -229,6 +249,7 @@ impl Dipoles {
             box_length,
             switch_start: cutoff.map_or(0.0, |c| DEFAULT_SWITCH_FRACTION * c),
             skin: DEFAULT_SKIN,
+            half_list_max_bodies: HALF_LIST_MAX_BODIES,
             scratch: Mutex::new(Scratch::default()),
         })
     }
@@ -379,12 +400,57 @@ impl Dipoles {
                 list_start.push(list.len());
             }
         }
+        // The half list and its transpose, in pair order.
+        s.half_start.clear();
+        s.half_i.clear();
+        s.half_j.clear();
+        s.half_start.push(0);
+        for i in 0..n {
+            for &j in &list[list_start[i]..list_start[i + 1]] {
+                if (j as usize) > i {
+                    s.half_i.push(i as u32);
+                    s.half_j.push(j);
+                }
+            }
+            s.half_start.push(s.half_i.len());
+        }
+        s.as_second_start.clear();
+        s.as_second_start.resize(n + 1, 0);
+        for &j in &s.half_j {
+            s.as_second_start[j as usize + 1] += 1;
+        }
+        for k in 0..n {
+            s.as_second_start[k + 1] += s.as_second_start[k];
+        }
+        s.fill.clear();
+        s.fill.extend_from_slice(&s.as_second_start);
+        s.as_second.clear();
+        s.as_second.resize(s.half_j.len(), 0);
+        for (p, &j) in s.half_j.iter().enumerate() {
+            s.as_second[s.fill[j as usize]] = p as u32;
+            s.fill[j as usize] += 1;
+        }
         s.list_start = list_start;
         s.list = list;
         s.reference.clear();
         s.reference.extend_from_slice(c.position);
         s.builds += 1;
         true
+    }
+
+    /// [`Dipoles::pair`] for both bodies at once: the force on `i` (that on `j` is its
+    /// negative), the field of `j` at `i` and the field of `i` at `j`.
+    #[inline(always)]
+    fn pair_both(&self, sw: &PairConstants, r: Vec3, mi: Vec3, mj: Vec3) -> Option<(Vec3, Vec3, Vec3)> {
+        let (force, field_i, _) = self.pair(sw, r, mi, mj)?;
+        // The field of i at j: r → −r and i ↔ j in the field formula, times the same switch.
+        let r2 = r.norm_squared();
+        let inv2 = 1.0 / r2;
+        let inv3 = inv2 * inv2.sqrt();
+        let t = (r2 - sw.s2).max(0.0) * sw.inv_width;
+        let s = 1.0 - t * t * (3.0 - 2.0 * t);
+        let field_j = (r * (3.0 * mi.dot(r) * inv2) - mi) * (inv3 * s);
+        Some((force, field_i, field_j))
     }
 
     fn build_cells<'a>(&self, c: &Configuration<'_>, s: &'a mut Scratch) -> Option<Cells<'a>> {
@@ -522,7 +588,9 @@ impl Interaction for Dipoles {
         s.dipoles.extend(c.rotation.iter().map(|r: &Mat3| *r * self.moment));
         let dipoles = std::mem::take(&mut s.dipoles);
         let constants = self.constants();
-        if self.update_list(&c, s) {
+        if self.update_list(&c, s) && c.position.len() > self.half_list_max_bodies {
+            // Large systems: every body gathers its own neighbours (each pair twice), which
+            // streams less memory than the half list's pair slots.
             let (start, list) = (&s.list_start, &s.list);
             for_chunks(force, torque, |i, f, t| {
                 let mi = dipoles[i];
@@ -537,6 +605,53 @@ impl Interaction for Dipoles {
                 }
                 *f = fi;
                 *t = c.rotation[i].tr_mul_vec(mi.cross(bi));
+            });
+            s.dipoles = dipoles;
+            return;
+        }
+        if !s.reference.is_empty() && s.reference.len() == c.position.len() && self.cutoff.is_some() {
+            // Each pair once (Newton's third law): its force and both fields into its slot,
+            // then every body sums its slots, as first and then as second, in pair order,
+            // so the result does not depend on the thread count.
+            s.pair_out.resize(s.half_i.len(), [Vec3::ZERO; 3]);
+            let (hi, hj) = (&s.half_i, &s.half_j);
+            let position = c.position;
+            let one = |p: usize, out: &mut [Vec3; 3]| {
+                let (i, j) = (hi[p] as usize, hj[p] as usize);
+                let r = Self::separation(&constants, position[i], position[j]);
+                *out = match self.pair_both(&constants, r, dipoles[i], dipoles[j]) {
+                    Some((f, bi, bj)) => [f, bi, bj],
+                    None => [Vec3::ZERO; 3],
+                };
+            };
+            #[cfg(feature = "parallel")]
+            {
+                use rayon::prelude::*;
+                const PAIRS: usize = 4096;
+                s.pair_out.par_chunks_mut(PAIRS).enumerate().for_each(|(k, chunk)| {
+                    for (q, out) in chunk.iter_mut().enumerate() {
+                        one(k * PAIRS + q, out);
+                    }
+                });
+            }
+            #[cfg(not(feature = "parallel"))]
+            for (p, out) in s.pair_out.iter_mut().enumerate() {
+                one(p, out);
+            }
+            let (start, second_start, second, out) = (&s.half_start, &s.as_second_start, &s.as_second, &s.pair_out);
+            for_chunks(force, torque, |i, f, t| {
+                let (mut fi, mut bi) = (Vec3::ZERO, Vec3::ZERO);
+                for o in &out[start[i]..start[i + 1]] {
+                    fi += o[0];
+                    bi += o[1];
+                }
+                for &p in &second[second_start[i]..second_start[i + 1]] {
+                    let o = &out[p as usize];
+                    fi -= o[0];
+                    bi += o[2];
+                }
+                *f = fi;
+                *t = c.rotation[i].tr_mul_vec(dipoles[i].cross(bi));
             });
             s.dipoles = dipoles;
             return;
