@@ -159,6 +159,9 @@ struct Scratch {
     as_second: Vec<u32>,
     /// Per pair: the force on the first body and the fields at the first and the second.
     pair_out: Vec<[Vec3; 3]>,
+    /// Per chunk of bodies, while the list is built in parallel: the neighbours found and
+    /// each body's count (kept to reuse their memory).
+    chunk_lists: Vec<(Vec<u32>, Vec<u32>)>,
     /// Positions at the last build (empty: no list yet).
     reference: Vec<Vec3>,
     /// Builds of the list, for diagnostics.
@@ -406,17 +409,44 @@ impl Dipoles {
         list_start.clear();
         list.clear();
         list_start.push(0);
+        // In parallel over fixed chunks of bodies, then joined in chunk order: the same list
+        // as a sequential build, for any number of threads.
+        let chunk = crate::many::CHUNK;
+        let mut chunks = std::mem::take(&mut s.chunk_lists);
+        chunks.resize_with(n.div_ceil(chunk), Default::default);
         {
             let cells = self.build_cells_of(c, s, reach);
-            for i in 0..n {
-                self.for_neighbours(i, c, cells.as_ref(), |j| {
-                    if Self::separation(&constants, c.position[i], c.position[j]).norm_squared() <= reach2 {
-                        list.push(j as u32);
-                    }
-                });
-                list_start.push(list.len());
+            let cells = cells.as_ref();
+            let fill = |k: usize, (entries, counts): &mut (Vec<u32>, Vec<u32>)| {
+                entries.clear();
+                counts.clear();
+                for i in k * chunk..((k + 1) * chunk).min(n) {
+                    let before = entries.len();
+                    self.for_neighbours(i, c, cells, |j| {
+                        if Self::separation(&constants, c.position[i], c.position[j]).norm_squared() <= reach2 {
+                            entries.push(j as u32);
+                        }
+                    });
+                    counts.push((entries.len() - before) as u32);
+                }
+            };
+            #[cfg(feature = "parallel")]
+            {
+                use rayon::prelude::*;
+                chunks.par_iter_mut().enumerate().for_each(|(k, ch)| fill(k, ch));
+            }
+            #[cfg(not(feature = "parallel"))]
+            for (k, ch) in chunks.iter_mut().enumerate() {
+                fill(k, ch);
             }
         }
+        for (entries, counts) in &chunks {
+            for &count in counts {
+                list_start.push(list_start[list_start.len() - 1] + count as usize);
+            }
+            list.extend_from_slice(entries);
+        }
+        s.chunk_lists = chunks;
         // The half list and its transpose, in pair order.
         s.half_start.clear();
         s.half_i.clear();
