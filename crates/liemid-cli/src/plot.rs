@@ -276,14 +276,46 @@ fn panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, axes: &Axes, series:
     Ok(())
 }
 
-fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, study: &Study) -> Result<(), String> {
+/// A figure of two side-by-side log-log panels under `title`, with the legend of
+/// `labels` (and the reference slopes, when the panels draw them) in its own strip.
+fn two_panels<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    title: &str,
+    labels: &[String],
+    panels: [(Axes<'_>, Vec<Series>); 2],
+) -> Result<(), String> {
     root.fill(&WHITE).map_err(e)?;
-    let title = format!("{}: error at t = {} s against the step", study.problem, study.t_end);
-    let root = root.titled(&title, ("sans-serif", 24)).map_err(e)?;
+    let root = root.titled(title, ("sans-serif", 24)).map_err(e)?;
     let (plots, strip) = root.split_horizontally(root.dim_in_pixel().0 - LEGEND_WIDTH);
+    legend(&strip, labels, panels[0].0.slopes)?;
+    let areas = plots.split_evenly((1, 2));
+    for (area, (axes, series)) in areas.iter().zip(&panels) {
+        panel(area, axes, series)?;
+    }
+    root.present().map_err(e)?;
+    Ok(())
+}
+
+/// The series `(label, [(seconds, error)])` of a work-precision study, positive points only.
+fn work_series<'a, P: 'a>(
+    curves: impl Iterator<Item = (&'a str, &'a [P])>,
+    seconds: impl Fn(&P) -> f64,
+    error: impl Fn(&P) -> f64,
+) -> Vec<Series> {
+    curves
+        .map(|(label, points)| {
+            let pts = points
+                .iter()
+                .map(|p| (seconds(p), error(p)))
+                .filter(|p| p.0 > 0.0 && p.1 > 0.0);
+            (label.to_string(), pts.collect())
+        })
+        .collect()
+}
+
+fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, study: &Study) -> Result<(), String> {
+    let title = format!("{}: error at t = {} s against the step", study.problem, study.t_end);
     let labels: Vec<String> = study.methods.iter().map(|m| m.label.clone()).collect();
-    legend(&strip, &labels, true)?;
-    let panels = plots.split_evenly((1, 2));
     let collect = |f: &dyn Fn(&crate::converge::MethodErrors, usize) -> Option<f64>| -> Vec<Series> {
         study
             .methods
@@ -298,64 +330,87 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, study: &Study) -> Resu
             })
             .collect()
     };
-    let momentum = collect(&|m, k| m.momentum_error[k]);
-    let attitude = collect(&|m, k| m.attitude_error[k]);
     let axes = |title, y_desc| Axes {
         title,
         x_desc: "step h (s)",
         y_desc,
         slopes: true,
     };
-    panel(
-        &panels[0],
-        &axes("body angular momentum", "|Pi - Pi_ref| / |Pi_ref|"),
-        &momentum,
-    )?;
-    panel(&panels[1], &axes("attitude", "||R - R_ref||_F"), &attitude)?;
-    root.present().map_err(e)?;
-    Ok(())
+    two_panels(
+        root,
+        &title,
+        &labels,
+        [
+            (
+                axes("body angular momentum", "|Pi - Pi_ref| / |Pi_ref|"),
+                collect(&|m, k| m.momentum_error[k]),
+            ),
+            (
+                axes("attitude", "||R - R_ref||_F"),
+                collect(&|m, k| m.attitude_error[k]),
+            ),
+        ],
+    )
 }
 
 fn draw_work<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, study: &WorkStudy) -> Result<(), String> {
-    root.fill(&WHITE).map_err(e)?;
     let title = format!("{}: work-precision to t = {} s", study.problem, study.t_end);
-    let root = root.titled(&title, ("sans-serif", 24)).map_err(e)?;
-    let (plots, strip) = root.split_horizontally(root.dim_in_pixel().0 - LEGEND_WIDTH);
     let labels: Vec<String> = study.methods.iter().map(|m| m.label.clone()).collect();
-    legend(&strip, &labels, false)?;
-    let panels = plots.split_evenly((1, 2));
-    let series = |f: &dyn Fn(&crate::work_precision::Point) -> f64| -> Vec<Series> {
-        study
-            .methods
-            .iter()
-            .map(|c| {
-                let pts = c
-                    .points
-                    .iter()
-                    .map(|p| (p.seconds, f(p)))
-                    .filter(|p| p.0 > 0.0 && p.1 > 0.0);
-                (c.label.clone(), pts.collect())
-            })
-            .collect()
-    };
+    let curves = || study.methods.iter().map(|c| (c.label.as_str(), c.points.as_slice()));
     let axes = |title, y_desc| Axes {
         title,
         x_desc: "CPU time (s), median of repeated runs",
         y_desc,
         slopes: false,
     };
-    panel(
-        &panels[0],
-        &axes("attitude error at t_end", "||R - R_ref||_F"),
-        &series(&|p| p.attitude_error),
-    )?;
-    panel(
-        &panels[1],
-        &axes("largest energy error along the run", "max |E - E0| / |E0|"),
-        &series(&|p| p.max_energy_error),
-    )?;
-    root.present().map_err(e)?;
-    Ok(())
+    two_panels(
+        root,
+        &title,
+        &labels,
+        [
+            (
+                axes("attitude error at t_end", "||R - R_ref||_F"),
+                work_series(curves(), |p| p.seconds, |p| p.attitude_error),
+            ),
+            (
+                axes("largest energy error along the run", "max |E - E0| / |E0|"),
+                work_series(curves(), |p| p.seconds, |p| p.max_energy_error),
+            ),
+        ],
+    )
+}
+
+fn draw_spin_work<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    study: &crate::spin_study::SpinStudy,
+) -> Result<(), String> {
+    let title = format!(
+        "{}: {} spins, work-precision to t = {} ps",
+        study.problem, study.spins, study.t_end
+    );
+    let labels: Vec<String> = study.methods.iter().map(|m| m.name.clone()).collect();
+    let curves = || study.methods.iter().map(|c| (c.name.as_str(), c.points.as_slice()));
+    let axes = |title, y_desc| Axes {
+        title,
+        x_desc: "CPU time (s)",
+        y_desc,
+        slopes: false,
+    };
+    two_panels(
+        root,
+        &title,
+        &labels,
+        [
+            (
+                axes("largest energy error along the run", "max |E - E0| / |E0|"),
+                work_series(curves(), |p| p.seconds, |p| p.max_relative_energy_error),
+            ),
+            (
+                axes("spins at t_end", "max |S_i - S_i,ref|"),
+                work_series(curves(), |p| p.seconds, |p| p.spin_error),
+            ),
+        ],
+    )
 }
 
 /// The files a plot option names: `NAME` writes `NAME.svg` and `NAME.png`; a name ending
@@ -373,54 +428,6 @@ pub fn plot_paths(base: &Path) -> Vec<std::path::PathBuf> {
             vec![with("svg"), with("png")]
         }
     }
-}
-
-fn draw_spin_work<DB: DrawingBackend>(
-    root: DrawingArea<DB, Shift>,
-    study: &crate::spin_study::SpinStudy,
-) -> Result<(), String> {
-    root.fill(&WHITE).map_err(e)?;
-    let title = format!(
-        "{}: {} spins, work-precision to t = {} ps",
-        study.problem, study.spins, study.t_end
-    );
-    let root = root.titled(&title, ("sans-serif", 24)).map_err(e)?;
-    let (plots, strip) = root.split_horizontally(root.dim_in_pixel().0 - LEGEND_WIDTH);
-    let labels: Vec<String> = study.methods.iter().map(|m| m.name.clone()).collect();
-    legend(&strip, &labels, false)?;
-    let panels = plots.split_evenly((1, 2));
-    let series = |f: &dyn Fn(&crate::spin_study::SpinPoint) -> f64| -> Vec<Series> {
-        study
-            .methods
-            .iter()
-            .map(|c| {
-                let pts = c
-                    .points
-                    .iter()
-                    .map(|p| (p.seconds, f(p)))
-                    .filter(|p| p.0 > 0.0 && p.1 > 0.0);
-                (c.name.clone(), pts.collect())
-            })
-            .collect()
-    };
-    let axes = |title, y_desc| Axes {
-        title,
-        x_desc: "CPU time (s)",
-        y_desc,
-        slopes: false,
-    };
-    panel(
-        &panels[0],
-        &axes("largest energy error along the run", "max |E - E0| / |E0|"),
-        &series(&|p| p.max_relative_energy_error),
-    )?;
-    panel(
-        &panels[1],
-        &axes("spins at t_end", "max |S_i - S_i,ref|"),
-        &series(&|p| p.spin_error),
-    )?;
-    root.present().map_err(e)?;
-    Ok(())
 }
 
 /// A PNG of one curve `y(x)` on linear axes (the radial distribution function).
