@@ -2,31 +2,13 @@
 //! threads) watches steps of a dipolar fluid with its cell list and of torque-free rotors
 //! (midpoint and exact free rotation).
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicU64, Ordering};
-
 use liemid::problems;
 
-struct Counting;
-
-static ALLOCATIONS: AtomicU64 = AtomicU64::new(0);
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
+#[path = "common/counting.rs"]
+mod counting;
 
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: counting::Counting = counting::Counting;
 
 #[test]
 fn many_body_steps_allocate_nothing_once_warm() {
@@ -44,7 +26,7 @@ fn many_body_steps_allocate_nothing_once_warm() {
             exact_rotors.step(&free, 1e-3).unwrap();
         }
     });
-    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    let before = counting::allocations();
     assert!(before > 0, "the counter saw the set-up allocate");
     pool.install(|| {
         for _ in 0..10 {
@@ -53,6 +35,6 @@ fn many_body_steps_allocate_nothing_once_warm() {
             exact_rotors.step(&free, 1e-3).unwrap();
         }
     });
-    let during = ALLOCATIONS.load(Ordering::Relaxed) - before;
+    let during = counting::allocations() - before;
     assert_eq!(during, 0, "{during} allocations in 30 many-body steps");
 }

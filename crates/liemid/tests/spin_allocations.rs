@@ -2,31 +2,13 @@
 //! threads): none at all on one thread, and on a team of threads one hand-off per
 //! `advance` call (rayon's broadcast), whatever the number of steps it takes.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicU64, Ordering};
-
 use liemid::spin::{problems, SpinIntegrator, SpinMethod};
 
-struct Counting;
-
-static ALLOCATIONS: AtomicU64 = AtomicU64::new(0);
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
+#[path = "common/counting.rs"]
+mod counting;
 
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: counting::Counting = counting::Counting;
 
 #[test]
 fn spin_steps_allocate_nothing_once_warm() {
@@ -43,9 +25,9 @@ fn spin_steps_allocate_nothing_once_warm() {
             })
         };
         calls(2);
-        let before = ALLOCATIONS.load(Ordering::Relaxed);
+        let before = counting::allocations();
         calls(5);
-        let during = ALLOCATIONS.load(Ordering::Relaxed) - before;
+        let during = counting::allocations() - before;
         // The four splitting methods hand their steps to the team once per call.
         let allowed = if threads == 1 { 0 } else { 4 };
         assert!(
