@@ -242,6 +242,15 @@ fn for_each_chunk(b: Chunk<'_>, f: impl Fn(usize, Chunk<'_>) + Sync + Send) {
     });
 }
 
+/// Record the failure of body `i` unless a body of lower index already failed, so that the
+/// error reported does not depend on which thread found its failure first.
+fn keep_first_failure(failure: &Mutex<Option<(usize, Error)>>, i: usize, e: Error) {
+    let mut f = failure.lock().expect("not poisoned");
+    if f.as_ref().is_none_or(|(j, _)| i < *j) {
+        *f = Some((i, e));
+    }
+}
+
 /// Half kick of a run of bodies: `p ← p + (h/2) F` (free bodies), `Π ← Π + (h/2) T`.
 #[inline]
 fn kick_chunk(free: &[bool], p: &mut [Vec3], pi: &mut [Vec3], force: &[Vec3], torque: &[Vec3], hh: f64) {
@@ -516,11 +525,8 @@ impl Bodies {
                 for k in k..end {
                     let i = start + k;
                     if let Err(e) = free_rotation(&inertia[i], &mut r[k], &mut pi[k], hh) {
-                        let mut f = failure_ref.lock().expect("not poisoned");
                         let err = newton_error("many-body splitting", "midpoint equation (M)", t, h, e);
-                        if f.as_ref().is_none_or(|(j, _)| i < *j) {
-                            *f = Some((i, err));
-                        }
+                        keep_first_failure(failure_ref, i, err);
                         return;
                     }
                 }

@@ -20,7 +20,7 @@
 //! T. E. Ouldridge, M. V. Tretyakov, *New Langevin and gradient thermostats for rigid body
 //! dynamics*, J. Chem. Phys. 142, 144114 (2015).
 
-use super::{for_each_chunk, free_rotation, kick_chunk, Bodies, Chunk, FreeRotation, Interaction};
+use super::{for_each_chunk, free_rotation, keep_first_failure, kick_chunk, Bodies, Chunk, FreeRotation, Interaction};
 use crate::error::{Error, Result};
 use crate::linalg::Vec3;
 use crate::rotation::newton_error;
@@ -168,10 +168,7 @@ impl Bodies {
                     half(&mut x[k], p[k], &mut r[k], &mut pi[k])
                 };
                 if let Err(e) = run() {
-                    let mut f = failure.lock().expect("not poisoned");
-                    if f.as_ref().is_none_or(|(j, _)| i < *j) {
-                        *f = Some((i, e));
-                    }
+                    keep_first_failure(&failure, i, e);
                     return;
                 }
             }
