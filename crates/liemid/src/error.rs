@@ -135,6 +135,26 @@ pub enum Error {
         /// The step size.
         h: f64,
     },
+    /// A structural model that cannot be built: a node without elements, an element of
+    /// zero length, an orientation vector along the element, a load on a missing node.
+    #[error("invalid structural model: {reason}")]
+    InvalidModel {
+        /// What is wrong, naming the node, element or field.
+        reason: String,
+    },
+    /// An explicit step above the estimated critical step of the linearised structure.
+    #[error(
+        "step h = {h:e} exceeds the critical step {critical:e} of the explicit method (largest \
+         eigenfrequency {omega:.6e} rad/s of the linearised structure); use h <= {critical:e}"
+    )]
+    UnstableStep {
+        /// The step asked for.
+        h: f64,
+        /// The estimated critical step.
+        critical: f64,
+        /// The largest eigenfrequency found.
+        omega: f64,
+    },
     /// The observer asked the driver to stop with an error of its own.
     #[error("observer stopped the run at t = {t}: {reason}")]
     ObserverFailed {

@@ -412,7 +412,7 @@ fn jacobi_agm(u: f64, m: f64) -> (f64, f64, f64, f64) {
 
 /// Eigenvalues and eigenvectors (columns, a rotation) of a symmetric 3x3 matrix by cyclic
 /// Jacobi rotations.
-fn symmetric_eigen(m: &Mat3) -> Result<([f64; 3], Mat3)> {
+pub(crate) fn symmetric_eigen(m: &Mat3) -> Result<([f64; 3], Mat3)> {
     let mut a = m.m;
     let mut v = Mat3::IDENTITY.m;
     for _sweep in 0..50 {

@@ -40,6 +40,7 @@
 pub mod composition;
 pub mod driver;
 pub mod error;
+pub mod beam;
 pub mod free_flow;
 pub mod inertia;
 pub mod linalg;
