@@ -6,6 +6,8 @@
 //! binary.
 
 pub mod baseline;
+pub mod beam_scenario;
+pub mod beam_study;
 pub mod checkpoint;
 pub mod converge;
 pub mod interrupt;

@@ -1,6 +1,7 @@
 //! `liemid`: run rigid-body scenarios, write trajectories, and reproduce the convergence
 //! study of the explicit midpoint Lie paper.
 
+mod beam_cmd;
 mod many_cmd;
 mod run_cmd;
 mod spins_cmd;
@@ -74,6 +75,12 @@ enum Command {
         liemid spins examples/spins_square.toml --final final.npy --snapshot spins.png\n  \
         liemid spins work-precision --threads 1 --json spin-wp.json")]
     Spins(spins_cmd::SpinsArgs),
+    /// Flexible 3-D beams (corotational elements, nodes as rigid bodies): a benchmark or a
+    /// structure file, or `beam work-precision` against implicit Newmark.
+    #[command(after_help = "Examples:\n  liemid beam --problem right-angle-cantilever --plot elbow.svg\n  \
+        liemid beam examples/right_angle_cantilever.toml --elements-per-member 16 --json run.json\n  \
+        liemid beam --method newmark --step 0.05 --out newmark.csv\n  liemid beam work-precision")]
+    Beam(beam_cmd::BeamArgs),
     /// List the integrators: name, order, torque evaluations, what they conserve.
     Methods(MethodsArgs),
     /// List the built-in problems.
@@ -189,6 +196,7 @@ fn main() -> ExitCode {
         Command::WorkPrecision(args) => work_precision_cmd(args),
         Command::Many(args) => many_cmd::many(&args),
         Command::Spins(args) => spins_cmd::spins(args),
+        Command::Beam(args) => beam_cmd::beam(args),
         Command::Methods(args) => {
             if args.spins {
                 spins_cmd::methods(args.json);

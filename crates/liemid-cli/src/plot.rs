@@ -573,3 +573,101 @@ mod tests {
         }
     }
 }
+
+/// Lines `y(t)` with a legend, and optional reference points (published data), on linear
+/// axes: the displacement histories of `liemid beam`.
+pub struct Histories<'a> {
+    /// Title.
+    pub title: &'a str,
+    /// Axis descriptions.
+    pub x_desc: &'a str,
+    /// Axis descriptions.
+    pub y_desc: &'a str,
+    /// Labelled lines.
+    pub lines: &'a [(String, Vec<(f64, f64)>)],
+    /// Labelled reference points.
+    pub points: &'a [(String, Vec<(f64, f64)>)],
+}
+
+fn draw_histories<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, h: &Histories<'_>) -> Result<(), String> {
+    root.fill(&WHITE).map_err(e)?;
+    let all = h.lines.iter().chain(h.points).flat_map(|(_, v)| v.iter());
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+    for &(x, y) in all {
+        (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
+    }
+    if x0 >= x1 {
+        (x0, x1) = (0.0, 1.0);
+    }
+    if y0 >= y1 {
+        (y0, y1) = (y0 - 1.0, y0 + 1.0);
+    }
+    let pad = 0.06 * (y1 - y0);
+    let mut chart = ChartBuilder::on(&root)
+        .caption(h.title, ("sans-serif", 20))
+        .margin(14)
+        .x_label_area_size(44)
+        .y_label_area_size(60)
+        .build_cartesian_2d(x0..x1, (y0 - pad)..(y1 + pad))
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .x_desc(h.x_desc)
+        .y_desc(h.y_desc)
+        .light_line_style(WHITE)
+        .label_style(("sans-serif", 14))
+        .axis_desc_style(("sans-serif", 16))
+        .draw()
+        .map_err(e)?;
+    let colours = [
+        palette::BLUE,
+        palette::ORANGE,
+        palette::GREEN,
+        palette::RED,
+        palette::PURPLE,
+        palette::BROWN,
+        palette::PINK,
+        palette::OLIVE,
+        palette::CYAN,
+    ];
+    for (k, (label, v)) in h.lines.iter().enumerate() {
+        let c = colours[k % colours.len()];
+        chart
+            .draw_series(LineSeries::new(v.clone(), ShapeStyle::from(c).stroke_width(2)))
+            .map_err(e)?
+            .label(label.as_str())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], ShapeStyle::from(c).stroke_width(2)));
+    }
+    for (k, (label, v)) in h.points.iter().enumerate() {
+        let c = colours[k % colours.len()];
+        chart
+            .draw_series(v.iter().map(move |&p| Circle::new(p, 3, ShapeStyle::from(c).stroke_width(1))))
+            .map_err(e)?
+            .label(label.as_str())
+            .legend(move |(x, y)| Circle::new((x + 10, y), 3, ShapeStyle::from(c).filled()));
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.9))
+        .border_style(palette::GREY)
+        .label_font(("sans-serif", 14))
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(e)?;
+    root.present().map_err(e)?;
+    Ok(())
+}
+
+/// Write [`Histories`] as SVG or PNG, by the extension of `path`.
+///
+/// # Errors
+/// Another extension, or a drawing or file error.
+pub fn histories(path: &Path, h: &Histories<'_>) -> Result<(), String> {
+    register_font();
+    let size = (1100, 600);
+    match path.extension().and_then(|x| x.to_str()) {
+        Some("svg") => draw_histories(SVGBackend::new(path, size).into_drawing_area(), h),
+        Some("png") => draw_histories(BitMapBackend::new(path, size).into_drawing_area(), h),
+        _ => Err(format!("plot: {}: use a .svg or .png file name", path.display())),
+    }
+}

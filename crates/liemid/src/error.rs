@@ -144,8 +144,8 @@ pub enum Error {
     },
     /// An explicit step above the estimated critical step of the linearised structure.
     #[error(
-        "step h = {h:e} exceeds the critical step {critical:e} of the explicit method (largest \
-         eigenfrequency {omega:.6e} rad/s of the linearised structure); use h <= {critical:e}"
+        "step h = {h:.4e} exceeds the critical step {critical:.4e} of the explicit method (largest \
+         eigenfrequency at most {omega:.4e} rad per time unit in the linearised structure); use a smaller step"
     )]
     UnstableStep {
         /// The step asked for.

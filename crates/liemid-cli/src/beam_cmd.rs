@@ -1,0 +1,330 @@
+//! `liemid beam`: run a flexible-beam structure (built-in benchmark or TOML file) with the
+//! explicit midpoint Lie splitting or the implicit Newmark baseline; displacement
+//! histories of the named nodes as CSV/.npy, JSON and a plot. `liemid beam
+//! work-precision`: CPU time against the error of the elbow history, both methods.
+
+use std::sync::Mutex;
+use std::path::{Path, PathBuf};
+
+use serde_json::json;
+
+use crate::{CmdResult, Failure};
+use liemid_cli::beam_scenario::{self, BeamIntegrator, BeamScenario};
+use liemid_cli::beam_study::{self, RunFailure};
+use liemid_cli::interrupt::Interrupt;
+use liemid_cli::output::{write_atomically, OutputPlan, TrajectoryWriter};
+use liemid_cli::plot::{self, Histories};
+use liemid_cli::scenario::Format;
+
+/// Arguments of `liemid beam`.
+#[derive(clap::Args, Debug)]
+#[command(args_conflicts_with_subcommands = true)]
+pub struct BeamArgs {
+    #[command(subcommand)]
+    pub command: Option<BeamCommand>,
+    /// Structure file (TOML); without it, `--problem`.
+    pub file: Option<PathBuf>,
+    /// Built-in problem: right-angle-cantilever (default), cantilever-vibration, flying-beam.
+    #[arg(long)]
+    pub problem: Option<String>,
+    /// Elements per member [default: the problem's or the file's].
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..100_000))]
+    pub elements_per_member: Option<u64>,
+    /// liemid (order 2), liemid4 (order 4) or newmark [default: the file's, else liemid].
+    #[arg(long)]
+    pub method: Option<String>,
+    /// Step [default: 0.9 of the critical step; 0.05 for newmark].
+    #[arg(long, allow_negative_numbers = true)]
+    pub step: Option<f64>,
+    /// End time [default: the problem's].
+    #[arg(long, allow_negative_numbers = true)]
+    pub t_end: Option<f64>,
+    /// Output interval in time [default: the file's, else t_end/600].
+    #[arg(long, allow_negative_numbers = true)]
+    pub sample: Option<f64>,
+    /// Run an explicit step above the critical one anyway.
+    #[arg(long)]
+    pub force_step: bool,
+    /// Threads [default: all cores]; results are identical for any count.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    pub threads: Option<u64>,
+    /// Displacement histories: t, energy, then NAME_ux, NAME_uy, NAME_uz per tracked node
+    /// (CSV or .npy by extension).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Plot the tracked displacements (.svg or .png).
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// Write the summary as JSON to FILE, or to standard output with `-`.
+    #[arg(long)]
+    pub json: Option<String>,
+}
+
+/// Subcommands of `liemid beam`.
+#[derive(clap::Subcommand, Debug)]
+pub enum BeamCommand {
+    /// CPU time to the error of the elbow history on the right-angle cantilever: the
+    /// explicit splittings against implicit Newmark.
+    WorkPrecision(WorkPrecisionArgs),
+}
+
+/// Arguments of `liemid beam work-precision`.
+#[derive(clap::Args, Debug)]
+pub struct WorkPrecisionArgs {
+    /// Elements per leg.
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u64).range(1..1000))]
+    pub elements_per_member: u64,
+    /// Timed repetitions per point (the fastest is kept).
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u64).range(1..100))]
+    pub repetitions: u64,
+    /// Threads [default: 1, the fair setting against serial Newmark].
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
+    pub threads: u64,
+    /// Write the study as JSON to FILE, or to standard output with `-`.
+    #[arg(long)]
+    pub json: Option<String>,
+}
+
+fn pool(threads: Option<u64>) -> Result<rayon::ThreadPool, Failure> {
+    let mut b = rayon::ThreadPoolBuilder::new();
+    if let Some(k) = threads {
+        let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+        b = b.num_threads(usize::try_from(k).unwrap_or(usize::MAX).min(4 * cores));
+    }
+    b.build().map_err(|e| Failure::Run(format!("thread pool: {e}")))
+}
+
+fn load(args: &BeamArgs) -> Result<BeamScenario, Failure> {
+    let elements = args.elements_per_member.map(|n| n as usize);
+    let mut sc = match (&args.file, &args.problem) {
+        (Some(_), Some(_)) => return Err(Failure::Input("give a structure file or --problem, not both".into())),
+        (Some(f), None) => beam_scenario::load(f, elements),
+        (None, p) => beam_scenario::builtin(p.as_deref().unwrap_or("right-angle-cantilever"), elements),
+    }
+    .map_err(Failure::Input)?;
+    if let Some(m) = &args.method {
+        sc.method = BeamIntegrator::parse(m).map_err(Failure::Input)?;
+    }
+    if let Some(h) = args.step {
+        sc.step = Some(h);
+    }
+    if let Some(t) = args.t_end {
+        sc.problem.t_end = t;
+    }
+    if let Some(s) = args.sample {
+        sc.sample = Some(s);
+    }
+    Ok(sc)
+}
+
+fn emit_json(target: Option<&str>, value: &serde_json::Value) -> CmdResult {
+    match target {
+        Some("-") => println!("{value}"),
+        Some(path) => write_atomically(Path::new(path), (value.to_string() + "\n").as_bytes())
+            .map_err(|e| Failure::Run(format!("{path}: cannot write: {e}")))?,
+        None => {}
+    }
+    Ok(())
+}
+
+/// Run `liemid beam`.
+pub fn beam(args: BeamArgs) -> CmdResult {
+    if let Some(BeamCommand::WorkPrecision(wp)) = &args.command {
+        return work_precision(wp);
+    }
+    let input = Failure::Input;
+    let sc = load(&args)?;
+    let inputs: Vec<&Path> = args.file.iter().map(PathBuf::as_path).collect();
+    let mut plan = OutputPlan::new(&inputs);
+    if let Some(p) = &args.out {
+        plan.add("--out", p).map_err(input)?;
+    }
+    if let Some(p) = &args.plot {
+        if !matches!(p.extension().and_then(|x| x.to_str()), Some("svg" | "png")) {
+            return Err(input(format!("--plot {}: use a .svg or .png file name", p.display())));
+        }
+        plan.add("--plot", p).map_err(input)?;
+    }
+    if let Some(j) = args.json.as_deref().filter(|j| *j != "-") {
+        plan.add("--json", Path::new(j)).map_err(input)?;
+    }
+    let t_end = sc.problem.t_end;
+    let sample = sc.sample.unwrap_or(t_end / 600.0);
+    let pool = pool(args.threads)?;
+    let threads = pool.current_num_threads();
+    let interrupt = Interrupt::install();
+    let signal: Mutex<Option<u8>> = Mutex::new(None);
+    let result = pool.install(|| {
+        beam_study::run(&sc, t_end, sc.step, sample, args.force_step, &mut |t| {
+            interrupt.requested().map(|(name, code)| {
+                *signal.lock().expect("not poisoned") = Some(code);
+                format!("{name}: stopped at t = {t}; nothing was written")
+            })
+        })
+    });
+    let run = match result {
+        Ok(r) => r,
+        Err(RunFailure::Input(m)) => return Err(Failure::Input(m)),
+        Err(RunFailure::Numerical(m)) => {
+            return Err(match *signal.lock().expect("not poisoned") {
+                Some(code) => Failure::Signal(code, m),
+                None => Failure::Run(m),
+            })
+        }
+    };
+    if let Some(p) = &args.out {
+        let mut columns: Vec<String> = vec!["t".into(), "energy".into()];
+        for (n, _) in &run.tracked {
+            for c in ["ux", "uy", "uz"] {
+                columns.push(format!("{n}_{c}"));
+            }
+        }
+        let names: Vec<&str> = columns.iter().map(String::as_str).collect();
+        let format = if p.extension().and_then(|x| x.to_str()) == Some("npy") { Format::Npy } else { Format::Csv };
+        let mut w = TrajectoryWriter::create(p, format, &names).map_err(Failure::Run)?;
+        for (k, t) in run.t.iter().enumerate() {
+            let mut row = vec![*t, run.energy.get(k).copied().unwrap_or(f64::NAN)];
+            for (_, u) in &run.tracked {
+                row.extend(u[k]);
+            }
+            w.write_row(&row).map_err(Failure::Run)?;
+        }
+        w.finish().map_err(Failure::Run)?;
+    }
+    if let Some(p) = &args.plot {
+        let mut lines = Vec::new();
+        for (n, u) in &run.tracked {
+            for (c, axis) in ["x", "y", "z"].iter().enumerate() {
+                let v: Vec<(f64, f64)> = run.t.iter().zip(u).map(|(t, u)| (*t, u[c])).collect();
+                if v.iter().any(|p| p.1.abs() > 1e-9 * (1.0 + t_end)) {
+                    lines.push((format!("{n} u_{axis}"), v));
+                }
+            }
+        }
+        let title = format!(
+            "{}: {} elements, {} h = {:.3e}",
+            sc.name,
+            run.elements,
+            run.method.key(),
+            run.step
+        );
+        plot::histories(
+            p,
+            &Histories {
+                title: &title,
+                x_desc: "t",
+                y_desc: "displacement",
+                lines: &lines,
+                points: &[],
+            },
+        )
+        .map_err(Failure::Run)?;
+    }
+    let mut summary = run.json(&sc.name);
+    summary["threads"] = json!(threads);
+    emit_json(args.json.as_deref(), &summary)?;
+    if args.json.as_deref() != Some("-") {
+        println!(
+            "{} ({}): {} elements, {} steps of {:.4e} to t = {} on {threads} thread(s): {:.3} s, {:.3e} element-steps/s",
+            sc.name,
+            run.method.key(),
+            run.elements,
+            run.steps,
+            run.step,
+            run.t.last().copied().unwrap_or(0.0),
+            run.wall_seconds,
+            run.element_steps_per_second()
+        );
+        println!(
+            "critical step of the explicit splitting {:.4e} (omega_max <= {:.4e})",
+            run.critical_step, run.omega_bound
+        );
+        if let Some(it) = run.newton_iterations {
+            println!("Newton iterations {it} ({:.2} per step)", it as f64 / run.steps.max(1) as f64);
+        }
+        let loads_end = sc.problem.frame.loads.iter().map(|l| l.history.end()).fold(0.0, f64::max);
+        let after: Vec<f64> = run
+            .t
+            .iter()
+            .zip(&run.energy)
+            .filter(|(t, _)| **t >= loads_end)
+            .map(|(_, e)| *e)
+            .collect();
+        if let Some(&e0) = after.first() {
+            let scale = e0.abs().max(1e-300);
+            let de = after.iter().map(|e| (e - e0).abs() / scale).fold(0.0, f64::max);
+            println!("max relative energy change after the loads (t >= {loads_end}) {de:.3e}");
+        }
+        for (n, u) in &run.tracked {
+            let (mut hi, mut lo) = ((f64::MIN, 0.0), (f64::MAX, 0.0));
+            for (t, u) in run.t.iter().zip(u) {
+                if u[2] > hi.0 {
+                    hi = (u[2], *t);
+                }
+                if u[2] < lo.0 {
+                    lo = (u[2], *t);
+                }
+            }
+            println!(
+                "{n:>8}: u_z max {:.4} at t = {:.2}, min {:.4} at t = {:.2}",
+                hi.0, hi.1, lo.0, lo.1
+            );
+        }
+    }
+    Ok(())
+}
+
+fn work_precision(args: &WorkPrecisionArgs) -> CmdResult {
+    if let Some(j) = args.json.as_deref().filter(|j| *j != "-") {
+        OutputPlan::new(&[]).add("--json", Path::new(j)).map_err(Failure::Input)?;
+    }
+    let pool = pool(Some(args.threads))?;
+    let (points, reference_error) = pool
+        .install(|| beam_study::work_precision(args.elements_per_member as usize, args.repetitions as usize))
+        .map_err(|e| match e {
+            RunFailure::Input(m) => Failure::Input(m),
+            RunFailure::Numerical(m) => Failure::Run(m),
+        })?;
+    let to_stdout = args.json.as_deref() != Some("-");
+    let say = |s: String| {
+        if to_stdout {
+            println!("{s}");
+        } else {
+            eprintln!("{s}");
+        }
+    };
+    say(format!(
+        "right-angle cantilever, {} elements per leg, t = 30; error = max_t |u_elbow - u_ref| / max_t |u_ref| \
+         (reference liemid4 at 0.2 of its critical step, its own error {reference_error:.1e})",
+        args.elements_per_member
+    ));
+    say(format!("{:<9} {:>11} {:>11} {:>11}", "method", "step", "CPU s", "error"));
+    for p in &points {
+        say(format!("{:<9} {:>11.4e} {:>11.4} {:>11.3e}", p.method, p.step, p.seconds, p.error));
+    }
+    let mut targets = serde_json::Map::new();
+    for target in [1e-2, 1e-3] {
+        let mut row = serde_json::Map::new();
+        for m in ["liemid", "liemid4", "newmark"] {
+            let v = beam_study::time_to_error(&points, m, target);
+            say(format!(
+                "CPU time to {target:e}: {m:<8} {}",
+                match v {
+                    Some((s, true)) => format!("{s:.4} s"),
+                    Some((s, false)) => format!("{s:.4} s (already below the target at the largest step run)"),
+                    None => "not reached".into(),
+                }
+            ));
+            row.insert(m.into(), json!(v.map(|x| x.0)));
+        }
+        targets.insert(format!("{target:e}"), serde_json::Value::Object(row));
+    }
+    let value = json!({
+        "problem": "right-angle-cantilever",
+        "elements_per_leg": args.elements_per_member,
+        "reference_error": reference_error,
+        "points": points.iter().map(|p| json!({"method": p.method, "step": p.step, "seconds": p.seconds, "error": p.error})).collect::<Vec<_>>(),
+        "time_to_error": targets,
+    });
+    emit_json(args.json.as_deref(), &value)
+}

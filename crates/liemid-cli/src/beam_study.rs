@@ -1,0 +1,316 @@
+//! Runs of a beam scenario (explicit splitting or implicit Newmark) sampled at a fixed
+//! interval, and the work-precision study of the two on the right-angle cantilever.
+
+use std::time::Instant;
+
+use liemid::beam::{BeamMethod, BeamSystem, Newmark};
+use serde_json::{json, Value};
+
+use crate::beam_scenario::{BeamIntegrator, BeamScenario};
+
+/// Why a run failed: bad input (a step above the critical one, a bad step) or a failure
+/// of the integration itself.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RunFailure {
+    /// Exit 2.
+    Input(String),
+    /// Exit 1.
+    Numerical(String),
+}
+
+/// A sampled run.
+#[derive(Clone, Debug)]
+pub struct BeamRun {
+    /// Method.
+    pub method: BeamIntegrator,
+    /// Sample times.
+    pub t: Vec<f64>,
+    /// Tracked nodes: name, displacement at every sample.
+    pub tracked: Vec<(String, Vec<[f64; 3]>)>,
+    /// Energy at every sample (explicit methods; Newmark's is not computed).
+    pub energy: Vec<f64>,
+    /// Steps taken.
+    pub steps: u64,
+    /// Step.
+    pub step: f64,
+    /// Wall time of the stepping (s).
+    pub wall_seconds: f64,
+    /// Elements.
+    pub elements: usize,
+    /// The bound of the largest eigenfrequency.
+    pub omega_bound: f64,
+    /// The explicit method's critical step (for Newmark: the splitting's, for comparison).
+    pub critical_step: f64,
+    /// Newton iterations (Newmark).
+    pub newton_iterations: Option<u64>,
+    /// Total linear and angular momentum at the start and the end (explicit).
+    pub momenta: Option<[[f64; 3]; 4]>,
+}
+
+impl BeamRun {
+    /// Element-steps per second (internal-force evaluations count once per stage).
+    #[must_use]
+    pub fn element_steps_per_second(&self) -> f64 {
+        self.elements as f64 * self.steps as f64 / self.wall_seconds.max(1e-12)
+    }
+
+    /// The summary JSON of `liemid beam`.
+    #[must_use]
+    pub fn json(&self, scenario: &str) -> Value {
+        let tracked: serde_json::Map<String, Value> = self
+            .tracked
+            .iter()
+            .map(|(n, u)| (n.clone(), json!({"t": self.t, "u": u})))
+            .collect();
+        json!({
+            "problem": scenario,
+            "method": self.method.key(),
+            "tracked": tracked,
+            "energy": if self.energy.is_empty() { Value::Null } else { json!(self.energy) },
+            "steps": self.steps,
+            "step": self.step,
+            "critical_step": self.critical_step,
+            "omega_max_bound": self.omega_bound,
+            "elements": self.elements,
+            "wall_seconds": self.wall_seconds,
+            "element_steps_per_second": self.element_steps_per_second(),
+            "newton_iterations": self.newton_iterations,
+            "momenta": self.momenta.map(|m| json!({"linear_start": m[0], "linear_end": m[1], "angular_start": m[2], "angular_end": m[3]})),
+        })
+    }
+}
+
+/// Run `scenario` to `t_end` with `step` (default: 0.9 of the critical step for the
+/// explicit methods, 0.05 for Newmark), sampling every `sample` (rounded to whole steps).
+/// A step above the critical one is refused unless `force_step`. `stop` is asked between
+/// samples; `Some(reason)` ends the run with that message.
+pub fn run(
+    scenario: &BeamScenario,
+    t_end: f64,
+    step: Option<f64>,
+    sample: f64,
+    force_step: bool,
+    stop: &mut dyn FnMut(f64) -> Option<String>,
+) -> Result<BeamRun, RunFailure> {
+    let input = RunFailure::Input;
+    if !(t_end.is_finite() && t_end > 0.0) {
+        return Err(input(format!("t_end must be positive and finite, found {t_end}")));
+    }
+    if !(sample.is_finite() && sample > 0.0) {
+        return Err(input(format!("the sample interval must be positive, found {sample}")));
+    }
+    let mut system: BeamSystem = scenario.problem.system().map_err(|e| input(e.to_string()))?;
+    let stability = system.stability(0);
+    let explicit = match scenario.method {
+        BeamIntegrator::Explicit(m) => Some(m),
+        BeamIntegrator::Newmark => None,
+    };
+    let critical = stability.critical_step(explicit.unwrap_or(BeamMethod::Splitting));
+    let (h, every) = match step {
+        Some(h) => {
+            if !(h.is_finite() && h > 0.0) {
+                return Err(input(format!("the step must be positive and finite, found {h}")));
+            }
+            if let (Some(m), false) = (explicit, force_step) {
+                stability.check(m, h).map_err(|e| input(format!("{e} (or --force-step)")))?;
+            }
+            (h, ((sample / h).round() as u64).max(1))
+        }
+        None => {
+            let default = if explicit.is_some() { 0.9 * critical } else { 0.05 };
+            let k = (sample / default).ceil().max(1.0);
+            (sample / k, k as u64)
+        }
+    };
+    let steps = (t_end / h - 1e-9).ceil() as u64;
+    let names: Vec<(String, usize)> = scenario.problem.frame.names.clone();
+    let mut out = BeamRun {
+        method: scenario.method,
+        t: Vec::new(),
+        tracked: names.iter().map(|(n, _)| (n.clone(), Vec::new())).collect(),
+        energy: Vec::new(),
+        steps,
+        step: h,
+        wall_seconds: 0.0,
+        elements: system.elements(),
+        omega_bound: stability.omega_bound,
+        critical_step: critical,
+        newton_iterations: None,
+        momenta: None,
+    };
+    let record = |out: &mut BeamRun, s: &BeamSystem, t: f64, energy: Option<f64>| {
+        out.t.push(t);
+        for (k, (_, node)) in names.iter().enumerate() {
+            out.tracked[k].1.push(s.displacement(*node).to_array());
+        }
+        if let Some(e) = energy {
+            out.energy.push(e);
+        }
+    };
+    let mut newmark = explicit.is_none().then(|| Newmark::new(&system));
+    let start_totals = system.totals();
+    record(&mut out, &system, 0.0, explicit.map(|_| start_totals.energy));
+    let mut done = 0u64;
+    let mut seconds = 0.0;
+    while done < steps {
+        if let Some(reason) = stop(done as f64 * h) {
+            return Err(RunFailure::Numerical(reason));
+        }
+        let k = every.min(steps - done);
+        let clock = Instant::now();
+        for _ in 0..k {
+            let result = match (&mut newmark, explicit) {
+                (Some(nm), _) => nm.step(h).map(|_| ()),
+                (None, Some(m)) => system.step_with(m, h),
+                (None, None) => unreachable!("Newmark or explicit"),
+            };
+            result.map_err(|e| RunFailure::Numerical(e.to_string()))?;
+        }
+        seconds += clock.elapsed().as_secs_f64();
+        done += k;
+        let t = done as f64 * h;
+        match &newmark {
+            Some(nm) => record(&mut out, nm.system(), t, None),
+            None => {
+                let energy = system.totals().energy;
+                if !energy.is_finite() {
+                    return Err(RunFailure::Numerical(format!(
+                        "the energy became non-finite by t = {t}: the step {h:e} is unstable for this structure"
+                    )));
+                }
+                record(&mut out, &system, t, Some(energy));
+            }
+        }
+    }
+    out.wall_seconds = seconds;
+    if let Some(nm) = &newmark {
+        out.newton_iterations = Some(nm.iterations);
+    } else {
+        let end = system.totals();
+        out.momenta = Some([
+            start_totals.linear_momentum.to_array(),
+            end.linear_momentum.to_array(),
+            start_totals.angular_momentum.to_array(),
+            end.angular_momentum.to_array(),
+        ]);
+    }
+    Ok(out)
+}
+
+/// One point of the work-precision study.
+#[derive(Clone, Debug)]
+pub struct WorkPoint {
+    /// Method.
+    pub method: &'static str,
+    /// Step.
+    pub step: f64,
+    /// Best wall time of the repetitions (s).
+    pub seconds: f64,
+    /// `max_t |u(t) − u_ref(t)| / max_t |u_ref(t)|` of the tracked node.
+    pub error: f64,
+}
+
+/// The error of `run`'s history of node `node` against `reference`'s (sampled every
+/// `sample`; `run`'s samples are multiples of it).
+fn history_error(run: &BeamRun, reference: &BeamRun, node: usize, sample: f64) -> f64 {
+    let r = &reference.tracked[node].1;
+    let scale = r.iter().map(|u| (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt()).fold(0.0, f64::max);
+    let mut worst: f64 = 0.0;
+    for (t, u) in run.t.iter().zip(&run.tracked[node].1) {
+        let k = (t / sample).round() as usize;
+        if let Some(v) = r.get(k) {
+            let d = ((u[0] - v[0]).powi(2) + (u[1] - v[1]).powi(2) + (u[2] - v[2]).powi(2)).sqrt();
+            worst = worst.max(d);
+        }
+    }
+    worst / scale
+}
+
+/// CPU time against the error of the elbow's history on the right-angle cantilever with
+/// `per_leg` elements per leg, for the explicit splittings (0.9 and 0.45 of their
+/// critical steps) and Newmark (`dt` 0.2 down to 0.0125; a step whose Newton iteration
+/// fails gives no point); the reference is `liemid4` at 0.2 of its critical step. Returns
+/// the points and the reference's own error estimate (against `liemid4` at 0.1).
+pub fn work_precision(per_leg: usize, repetitions: usize) -> Result<(Vec<WorkPoint>, f64), RunFailure> {
+    let scenario = |method: BeamIntegrator| -> Result<BeamScenario, RunFailure> {
+        let mut s = crate::beam_scenario::builtin("right-angle-cantilever", Some(per_leg)).map_err(RunFailure::Input)?;
+        s.method = method;
+        Ok(s)
+    };
+    let sample = 0.05;
+    let t_end = scenario(BeamIntegrator::Newmark)?.problem.t_end;
+    let elbow = 0;
+    let explicit4 = BeamIntegrator::Explicit(BeamMethod::Splitting4);
+    let critical4 = scenario(explicit4)?.problem.system().map_err(|e| RunFailure::Input(e.to_string()))?.stability(0).critical_step(BeamMethod::Splitting4);
+    let fine = |fraction: f64| -> Result<BeamRun, RunFailure> {
+        let h = sample / (sample / (fraction * critical4)).ceil();
+        run(&scenario(explicit4)?, t_end, Some(h), sample, false, &mut |_| None)
+    };
+    let reference = fine(0.2)?;
+    let check = fine(0.1)?;
+    let reference_error = history_error(&reference, &check, elbow, sample);
+    let mut points = Vec::new();
+    let time = |method: BeamIntegrator, h: f64| -> Result<Option<WorkPoint>, RunFailure> {
+        let sc = scenario(method)?;
+        let mut best = f64::INFINITY;
+        let mut last = None;
+        for _ in 0..repetitions.max(1) {
+            let r = match run(&sc, t_end, Some(h), sample, false, &mut |_| None) {
+                Ok(r) => r,
+                // Newmark's Newton iteration can fail at a large step: a point it does not reach.
+                Err(RunFailure::Numerical(_)) if method == BeamIntegrator::Newmark => return Ok(None),
+                Err(e) => return Err(e),
+            };
+            best = best.min(r.wall_seconds);
+            let long = r.wall_seconds > 1.0;
+            last = Some(r);
+            if long {
+                break;
+            }
+        }
+        let r = last.expect("at least one repetition");
+        Ok(Some(WorkPoint {
+            method: method.key(),
+            step: h,
+            seconds: best,
+            error: history_error(&r, &reference, elbow, sample),
+        }))
+    };
+    for m in [BeamMethod::Splitting, BeamMethod::Splitting4] {
+        let critical = scenario(BeamIntegrator::Explicit(m))?
+            .problem
+            .system()
+            .map_err(|e| RunFailure::Input(e.to_string()))?
+            .stability(0)
+            .critical_step(m);
+        for fraction in [0.9, 0.45] {
+            let h = sample / (sample / (fraction * critical)).ceil();
+            points.extend(time(BeamIntegrator::Explicit(m), h)?);
+        }
+    }
+    for dt in [0.2, 0.1, 0.05, 0.025, 0.0125] {
+        points.extend(time(BeamIntegrator::Newmark, dt)?);
+    }
+    Ok((points, reference_error))
+}
+
+/// The CPU time at which `method`'s points reach `target` (log-log interpolation between
+/// the neighbouring points; the cheapest point's time when even it is below the target;
+/// `None` when no point reaches it).
+#[must_use]
+pub fn time_to_error(points: &[WorkPoint], method: &str, target: f64) -> Option<(f64, bool)> {
+    let mut p: Vec<&WorkPoint> = points.iter().filter(|p| p.method == method).collect();
+    p.sort_by(|a, b| a.seconds.total_cmp(&b.seconds));
+    let first = p.first()?;
+    if first.error <= target {
+        return Some((first.seconds, false));
+    }
+    for w in p.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        if a.error > target && b.error <= target {
+            let f = (target.ln() - a.error.ln()) / (b.error.ln() - a.error.ln());
+            return Some(((a.seconds.ln() + f * (b.seconds.ln() - a.seconds.ln())).exp(), true));
+        }
+    }
+    None
+}

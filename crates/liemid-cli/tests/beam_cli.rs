@@ -1,0 +1,102 @@
+//! `liemid beam` end to end: the JSON contract, files, the example against the built-in
+//! problem, errors.
+
+mod common;
+use common::{examples, json, run_in, scratch, stderr, stdout};
+
+fn write(dir: &std::path::Path, name: &str, text: &str) -> std::path::PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn beam_writes_the_json_contract_with_tracked_histories() {
+    let dir = scratch("beam-json");
+    let o = run_in(&dir, &["beam", "--t-end", "3", "--sample", "0.1", "--json", "-"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v = json(&stdout(&o));
+    for key in ["elbow", "tip"] {
+        let t = v["tracked"][key]["t"].as_array().unwrap();
+        let u = v["tracked"][key]["u"].as_array().unwrap();
+        assert_eq!(t.len(), 31, "{key}");
+        assert_eq!(u.len(), 31);
+        assert_eq!(u[0].as_array().unwrap().len(), 3);
+    }
+    assert_eq!(v["energy"].as_array().unwrap().len(), 31);
+    assert!(v["steps"].as_u64().unwrap() > 1000);
+    let h = v["step"].as_f64().unwrap();
+    assert!(h <= v["critical_step"].as_f64().unwrap());
+    assert!(v["wall_seconds"].as_f64().unwrap() > 0.0);
+    assert!(v["element_steps_per_second"].as_f64().unwrap() > 1e5);
+    // The elbow is pushed up: positive u_z by t = 1.
+    let uz = v["tracked"]["elbow"]["u"][10][2].as_f64().unwrap();
+    assert!(uz > 0.5, "{uz}");
+}
+
+#[test]
+fn the_example_file_gives_the_built_in_problem_bit_for_bit_on_any_thread_count() {
+    let dir = scratch("beam-example");
+    let file = examples().join("right_angle_cantilever.toml");
+    let a = run_in(&dir, &["beam", file.to_str().unwrap(), "--t-end", "2", "--json", "-", "--threads", "1"]);
+    let b = run_in(
+        &dir,
+        &["beam", "--problem", "right-angle-cantilever", "--t-end", "2", "--sample", "0.05", "--json", "-", "--threads", "3"],
+    );
+    assert!(a.status.success() && b.status.success(), "{}{}", stderr(&a), stderr(&b));
+    let (a, b) = (json(&stdout(&a)), json(&stdout(&b)));
+    assert_eq!(a["tracked"], b["tracked"]);
+    assert_eq!(a["energy"], b["energy"]);
+}
+
+#[test]
+fn beam_writes_csv_npy_and_a_plot_and_newmark_runs() {
+    let dir = scratch("beam-files");
+    let o = run_in(
+        &dir,
+        &["beam", "--t-end", "2", "--sample", "0.5", "--out", "h.csv", "--plot", "h.svg", "--elements-per-member", "4"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(dir.join("h.csv")).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next().unwrap(), "t,energy,elbow_ux,elbow_uy,elbow_uz,tip_ux,tip_uy,tip_uz");
+    assert_eq!(lines.count(), 5);
+    assert!(std::fs::read_to_string(dir.join("h.svg")).unwrap().contains("<svg"));
+    let o = run_in(&dir, &["beam", "--method", "newmark", "--t-end", "2", "--out", "n.npy", "--sample", "0.5"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("Newton iterations"), "{}", stdout(&o));
+    let rows = common::read_npy_columns(&dir.join("n.npy"), 8);
+    assert_eq!(rows.len(), 5);
+    // Newmark has no energy column value: NaN.
+    assert!(rows[1][1].is_nan());
+}
+
+#[test]
+fn beam_input_errors_name_the_cause_and_exit_2() {
+    let dir = scratch("beam-errors");
+    let base = "[[section]]\nname = \"s\"\nEA = 1.0\nGJ = 1.0\nEI2 = 1.0\nEI3 = 1.0\nrhoA = 1.0\nrotary_inertia = [1.0, 0.5, 0.5]\n\
+                [[member]]\nfrom = [0.0, 0.0, 0.0]\nto = [1.0, 0.0, 0.0]\nsection = \"s\"\norientation = [0.0, 0.0, 1.0]\n";
+    for (extra, expected) in [
+        ("[run]\nt_end = 1.0\nmethod = \"rk4\"\n", "unknown beam method"),
+        ("[run]\nt_end = 1.0\nspeed = 3\n", "speed"),
+        ("[[load]]\nat = [0.5, 0.3, 0.0]\nforce = [1.0, 0.0, 0.0]\n[run]\nt_end = 1.0\n", "no node at"),
+        ("[[node]]\nat = [0.0, 0.0, 0.0]\nsupport = \"glued\"\n[run]\nt_end = 1.0\n", "support `glued`"),
+        ("[run]\nt_end = 1.0\nstep = 10.0\n", "critical step"),
+        ("", "t_end is missing"),
+    ] {
+        let file = write(&dir, "bad.toml", &format!("{base}{extra}"));
+        let o = run_in(&dir, &["beam", file.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(2), "{extra}: {}", stderr(&o));
+        let err = stderr(&o);
+        assert!(err.contains(expected), "{extra}: expected `{expected}` in {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+    }
+    let o = run_in(&dir, &["beam", "--problem", "bridge"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("right-angle-cantilever"), "{}", stderr(&o));
+    // No output may replace the input.
+    let file = write(&dir, "ok.toml", &format!("{base}[run]\nt_end = 0.1\n"));
+    let o = run_in(&dir, &["beam", file.to_str().unwrap(), "--out", file.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(std::fs::read_to_string(&file).unwrap().contains("[[member]]"));
+}
