@@ -3,8 +3,8 @@
 //! histories of the named nodes as CSV/.npy, JSON and a plot. `liemid beam
 //! work-precision`: CPU time against the error of the elbow history, both methods.
 
-use std::sync::Mutex;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 use serde_json::json;
 
@@ -55,6 +55,13 @@ pub struct BeamArgs {
     /// Plot the tracked displacements (.svg or .png).
     #[arg(long)]
     pub plot: Option<PathBuf>,
+    /// The displacement components to plot, any of x, y, z.
+    #[arg(long, default_value = "xyz")]
+    pub components: String,
+    /// Reference points drawn on the plot: a CSV `node,t,value` (lines starting with `#`
+    /// are comments), e.g. a published curve of the tracked nodes.
+    #[arg(long, requires = "plot")]
+    pub compare: Option<PathBuf>,
     /// Write the summary as JSON to FILE, or to standard output with `-`.
     #[arg(long)]
     pub json: Option<String>,
@@ -148,6 +155,13 @@ pub fn beam(args: BeamArgs) -> CmdResult {
     if let Some(j) = args.json.as_deref().filter(|j| *j != "-") {
         plan.add("--json", Path::new(j)).map_err(input)?;
     }
+    if args.components.is_empty() || !args.components.chars().all(|c| "xyz".contains(c)) {
+        return Err(input(format!("--components {}: use some of x, y, z", args.components)));
+    }
+    let reference = match &args.compare {
+        Some(p) => reference_points(p).map_err(input)?,
+        None => Vec::new(),
+    };
     let t_end = sc.problem.t_end;
     let sample = sc.sample.unwrap_or(t_end / 600.0);
     let pool = pool(args.threads)?;
@@ -180,7 +194,11 @@ pub fn beam(args: BeamArgs) -> CmdResult {
             }
         }
         let names: Vec<&str> = columns.iter().map(String::as_str).collect();
-        let format = if p.extension().and_then(|x| x.to_str()) == Some("npy") { Format::Npy } else { Format::Csv };
+        let format = if p.extension().and_then(|x| x.to_str()) == Some("npy") {
+            Format::Npy
+        } else {
+            Format::Csv
+        };
         let mut w = TrajectoryWriter::create(p, format, &names).map_err(Failure::Run)?;
         for (k, t) in run.t.iter().enumerate() {
             let mut row = vec![*t, run.energy.get(k).copied().unwrap_or(f64::NAN)];
@@ -195,6 +213,9 @@ pub fn beam(args: BeamArgs) -> CmdResult {
         let mut lines = Vec::new();
         for (n, u) in &run.tracked {
             for (c, axis) in ["x", "y", "z"].iter().enumerate() {
+                if !args.components.contains(axis) {
+                    continue;
+                }
                 let v: Vec<(f64, f64)> = run.t.iter().zip(u).map(|(t, u)| (*t, u[c])).collect();
                 if v.iter().any(|p| p.1.abs() > 1e-9 * (1.0 + t_end)) {
                     lines.push((format!("{n} u_{axis}"), v));
@@ -215,7 +236,7 @@ pub fn beam(args: BeamArgs) -> CmdResult {
                 x_desc: "t",
                 y_desc: "displacement",
                 lines: &lines,
-                points: &[],
+                points: &reference,
             },
         )
         .map_err(Failure::Run)?;
@@ -231,7 +252,7 @@ pub fn beam(args: BeamArgs) -> CmdResult {
             run.elements,
             run.steps,
             run.step,
-            run.t.last().copied().unwrap_or(0.0),
+            liemid::error::Num(run.t.last().copied().unwrap_or(0.0)),
             run.wall_seconds,
             run.element_steps_per_second()
         );
@@ -240,9 +261,18 @@ pub fn beam(args: BeamArgs) -> CmdResult {
             run.critical_step, run.omega_bound
         );
         if let Some(it) = run.newton_iterations {
-            println!("Newton iterations {it} ({:.2} per step)", it as f64 / run.steps.max(1) as f64);
+            println!(
+                "Newton iterations {it} ({:.2} per step)",
+                it as f64 / run.steps.max(1) as f64
+            );
         }
-        let loads_end = sc.problem.frame.loads.iter().map(|l| l.history.end()).fold(0.0, f64::max);
+        let loads_end = sc
+            .problem
+            .frame
+            .loads
+            .iter()
+            .map(|l| l.history.end())
+            .fold(0.0, f64::max);
         let after: Vec<f64> = run
             .t
             .iter()
@@ -274,9 +304,41 @@ pub fn beam(args: BeamArgs) -> CmdResult {
     Ok(())
 }
 
+/// A labelled set of points `(t, value)`.
+type PointSet = (String, Vec<(f64, f64)>);
+
+/// Labelled point sets from a `node,t,value` CSV.
+fn reference_points(path: &Path) -> Result<Vec<PointSet>, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("--compare {}: {e}", path.display()))?;
+    let mut sets: Vec<PointSet> = Vec::new();
+    for (k, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') || line.starts_with("node,") {
+            continue;
+        }
+        let f: Vec<&str> = line.split(',').collect();
+        let parsed = (f.len() == 3).then(|| (f[1].trim().parse::<f64>(), f[2].trim().parse::<f64>()));
+        let Some((Ok(t), Ok(v))) = parsed else {
+            return Err(format!(
+                "--compare {}: line {}: expected `node,t,value`",
+                path.display(),
+                k + 1
+            ));
+        };
+        let label = format!("{} (reference)", f[0].trim());
+        match sets.iter_mut().find(|(l, _)| *l == label) {
+            Some((_, pts)) => pts.push((t, v)),
+            None => sets.push((label, vec![(t, v)])),
+        }
+    }
+    Ok(sets)
+}
+
 fn work_precision(args: &WorkPrecisionArgs) -> CmdResult {
     if let Some(j) = args.json.as_deref().filter(|j| *j != "-") {
-        OutputPlan::new(&[]).add("--json", Path::new(j)).map_err(Failure::Input)?;
+        OutputPlan::new(&[])
+            .add("--json", Path::new(j))
+            .map_err(Failure::Input)?;
     }
     let pool = pool(Some(args.threads))?;
     let (points, reference_error) = pool
@@ -298,9 +360,15 @@ fn work_precision(args: &WorkPrecisionArgs) -> CmdResult {
          (reference liemid4 at 0.2 of its critical step, its own error {reference_error:.1e})",
         args.elements_per_member
     ));
-    say(format!("{:<9} {:>11} {:>11} {:>11}", "method", "step", "CPU s", "error"));
+    say(format!(
+        "{:<9} {:>11} {:>11} {:>11}",
+        "method", "step", "CPU s", "error"
+    ));
     for p in &points {
-        say(format!("{:<9} {:>11.4e} {:>11.4} {:>11.3e}", p.method, p.step, p.seconds, p.error));
+        say(format!(
+            "{:<9} {:>11.4e} {:>11.4} {:>11.3e}",
+            p.method, p.step, p.seconds, p.error
+        ));
     }
     let mut targets = serde_json::Map::new();
     for target in [1e-2, 1e-3] {

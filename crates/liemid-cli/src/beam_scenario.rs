@@ -183,16 +183,22 @@ fn section(s: &FileSection) -> Result<Section, String> {
     let what = |e: liemid::Error| format!("section `{}`: {e}", s.name);
     let material = [s.e, s.g, s.a, s.i2, s.i3, s.j, s.rho];
     let coefficients = [s.ea, s.gj, s.ei2, s.ei3, s.rho_a];
-    match (material.iter().all(Option::is_some), coefficients.iter().all(Option::is_some)) {
+    match (
+        material.iter().all(Option::is_some),
+        coefficients.iter().all(Option::is_some),
+    ) {
         (true, false) if coefficients.iter().all(Option::is_none) && s.rotary_inertia.is_none() => {
             let [e, g, a, i2, i3, j, rho] = material.map(|v| v.unwrap_or(0.0));
             Section::from_material(e, g, a, i2, i3, j, rho).map_err(what)
         }
         (false, true) if material.iter().all(Option::is_none) => {
             let [ea, gj, ei2, ei3, rho_a] = coefficients.map(|v| v.unwrap_or(0.0));
-            let rotary = s
-                .rotary_inertia
-                .ok_or_else(|| format!("section `{}`: with EA, GJ, EI2, EI3, rhoA give rotary_inertia = [rho J, rho I2, rho I3]", s.name))?;
+            let rotary = s.rotary_inertia.ok_or_else(|| {
+                format!(
+                    "section `{}`: with EA, GJ, EI2, EI3, rhoA give rotary_inertia = [rho J, rho I2, rho I3]",
+                    s.name
+                )
+            })?;
             let sec = Section {
                 axial_stiffness: ea,
                 torsional_stiffness: gj,
@@ -257,7 +263,9 @@ pub fn parse(text: &str, name: &str, elements: Option<usize>) -> Result<BeamScen
     for (k, nd) in file.node.iter().enumerate() {
         let id = find(&frame, nd.at, &format!("node {k}"))?;
         if let Some(s) = &nd.support {
-            frame.support(id, support(s).map_err(|e| format!("node {k}: {e}"))?).map_err(|e| e.to_string())?;
+            frame
+                .support(id, support(s).map_err(|e| format!("node {k}: {e}"))?)
+                .map_err(|e| e.to_string())?;
         }
         if let Some(n) = &nd.name {
             frame.name(n, id).map_err(|e| format!("node {k}: {e}"))?;
@@ -270,7 +278,9 @@ pub fn parse(text: &str, name: &str, elements: Option<usize>) -> Result<BeamScen
             _ => return Err(format!("load {k}: give `at = [x, y, z]` or `node = \"NAME\"`")),
         };
         let history = match &l.history {
-            Some(points) => History::new(points.iter().map(|p| (p[0], p[1])).collect()).map_err(|e| format!("load {k}: {e}"))?,
+            Some(points) => {
+                History::new(points.iter().map(|p| (p[0], p[1])).collect()).map_err(|e| format!("load {k}: {e}"))?
+            }
             None => History::constant(),
         };
         frame
@@ -289,7 +299,8 @@ pub fn parse(text: &str, name: &str, elements: Option<usize>) -> Result<BeamScen
             return Err("[run] gravity is not finite".into());
         }
     }
-    let method = BeamIntegrator::parse(file.run.method.as_deref().unwrap_or("liemid")).map_err(|e| format!("[run] method: {e}"))?;
+    let method = BeamIntegrator::parse(file.run.method.as_deref().unwrap_or("liemid"))
+        .map_err(|e| format!("[run] method: {e}"))?;
     let t_end = file.run.t_end.ok_or("[run] t_end is missing")?;
     Ok(BeamScenario {
         name: name.to_string(),

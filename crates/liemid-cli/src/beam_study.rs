@@ -112,7 +112,9 @@ pub fn run(
                 return Err(input(format!("the step must be positive and finite, found {h}")));
             }
             if let (Some(m), false) = (explicit, force_step) {
-                stability.check(m, h).map_err(|e| input(format!("{e} (or --force-step)")))?;
+                stability
+                    .check(m, h)
+                    .map_err(|e| input(format!("{e} (or --force-step)")))?;
             }
             (h, ((sample / h).round() as u64).max(1))
         }
@@ -214,7 +216,10 @@ pub struct WorkPoint {
 /// `sample`; `run`'s samples are multiples of it).
 fn history_error(run: &BeamRun, reference: &BeamRun, node: usize, sample: f64) -> f64 {
     let r = &reference.tracked[node].1;
-    let scale = r.iter().map(|u| (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt()).fold(0.0, f64::max);
+    let scale = r
+        .iter()
+        .map(|u| (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt())
+        .fold(0.0, f64::max);
     let mut worst: f64 = 0.0;
     for (t, u) in run.t.iter().zip(&run.tracked[node].1) {
         let k = (t / sample).round() as usize;
@@ -233,7 +238,8 @@ fn history_error(run: &BeamRun, reference: &BeamRun, node: usize, sample: f64) -
 /// the points and the reference's own error estimate (against `liemid4` at 0.1).
 pub fn work_precision(per_leg: usize, repetitions: usize) -> Result<(Vec<WorkPoint>, f64), RunFailure> {
     let scenario = |method: BeamIntegrator| -> Result<BeamScenario, RunFailure> {
-        let mut s = crate::beam_scenario::builtin("right-angle-cantilever", Some(per_leg)).map_err(RunFailure::Input)?;
+        let mut s =
+            crate::beam_scenario::builtin("right-angle-cantilever", Some(per_leg)).map_err(RunFailure::Input)?;
         s.method = method;
         Ok(s)
     };
@@ -241,7 +247,12 @@ pub fn work_precision(per_leg: usize, repetitions: usize) -> Result<(Vec<WorkPoi
     let t_end = scenario(BeamIntegrator::Newmark)?.problem.t_end;
     let elbow = 0;
     let explicit4 = BeamIntegrator::Explicit(BeamMethod::Splitting4);
-    let critical4 = scenario(explicit4)?.problem.system().map_err(|e| RunFailure::Input(e.to_string()))?.stability(0).critical_step(BeamMethod::Splitting4);
+    let critical4 = scenario(explicit4)?
+        .problem
+        .system()
+        .map_err(|e| RunFailure::Input(e.to_string()))?
+        .stability(0)
+        .critical_step(BeamMethod::Splitting4);
     let fine = |fraction: f64| -> Result<BeamRun, RunFailure> {
         let h = sample / (sample / (fraction * critical4)).ceil();
         run(&scenario(explicit4)?, t_end, Some(h), sample, false, &mut |_| None)

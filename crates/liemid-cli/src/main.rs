@@ -77,9 +77,11 @@ enum Command {
     Spins(spins_cmd::SpinsArgs),
     /// Flexible 3-D beams (corotational elements, nodes as rigid bodies): a benchmark or a
     /// structure file, or `beam work-precision` against implicit Newmark.
-    #[command(after_help = "Examples:\n  liemid beam --problem right-angle-cantilever --plot elbow.svg\n  \
+    #[command(
+        after_help = "Examples:\n  liemid beam --problem right-angle-cantilever --plot elbow.svg\n  \
         liemid beam examples/right_angle_cantilever.toml --elements-per-member 16 --json run.json\n  \
-        liemid beam --method newmark --step 0.05 --out newmark.csv\n  liemid beam work-precision")]
+        liemid beam --method newmark --step 0.05 --out newmark.csv\n  liemid beam work-precision"
+    )]
     Beam(beam_cmd::BeamArgs),
     /// List the integrators: name, order, torque evaluations, what they conserve.
     Methods(MethodsArgs),

@@ -534,46 +534,6 @@ pub fn write(path: &Path, figure: &Figure) -> Result<(), String> {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use liemid::RotationMethod;
-
-    #[test]
-    fn every_method_has_its_own_look_colour_by_family_marker_by_order() {
-        let mut labels: Vec<&str> = RotationMethod::ALL.iter().map(|m| m.name()).collect();
-        labels.push("DOP853");
-        let looks: Vec<Look> = labels.iter().map(|l| look(l)).collect();
-        for (i, a) in looks.iter().enumerate() {
-            for (j, b) in looks.iter().enumerate().skip(i + 1) {
-                assert!(
-                    (a.color, a.marker, a.dashed) != (b.color, b.marker, b.dashed),
-                    "{} and {} look the same",
-                    labels[i],
-                    labels[j]
-                );
-            }
-        }
-        let of = |l: &str| look(l);
-        // One colour per family, one marker per order.
-        assert_eq!(of("LIEMID[EA]").color, of("LIEMID[EA]8").color);
-        assert_ne!(of("LIEMID[EA]").color, of("LIEMID[EX]").color);
-        assert_eq!(of("LIEMID[EA]6").marker, of("LIEMID[EX]6").marker);
-        assert_ne!(of("LIEMID[EA]4").marker, of("LIEMID[EA]6").marker);
-        assert_eq!(of("LIEMID[E1]").marker, Marker::Cross);
-        // Baselines black and grey.
-        assert_eq!(of("DOP853").color, palette::BLACK);
-        for b in ["RK4", "RKMK4"] {
-            let c = of(b).color;
-            assert!(c.0 == c.1 && c.1 == c.2 && c.0 > 0, "{b} is not grey");
-        }
-        // No method falls back to the unknown look.
-        for l in &labels {
-            assert_ne!(of(l), look("?"), "{l} has no look of its own");
-        }
-    }
-}
-
 /// Lines `y(t)` with a legend, and optional reference points (published data), on linear
 /// axes: the displacement histories of `liemid beam`.
 pub struct Histories<'a> {
@@ -641,7 +601,10 @@ fn draw_histories<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, h: &Historie
     for (k, (label, v)) in h.points.iter().enumerate() {
         let c = colours[k % colours.len()];
         chart
-            .draw_series(v.iter().map(move |&p| Circle::new(p, 3, ShapeStyle::from(c).stroke_width(1))))
+            .draw_series(
+                v.iter()
+                    .map(move |&p| Circle::new(p, 3, ShapeStyle::from(c).stroke_width(1))),
+            )
             .map_err(e)?
             .label(label.as_str())
             .legend(move |(x, y)| Circle::new((x + 10, y), 3, ShapeStyle::from(c).filled()));
@@ -669,5 +632,45 @@ pub fn histories(path: &Path, h: &Histories<'_>) -> Result<(), String> {
         Some("svg") => draw_histories(SVGBackend::new(path, size).into_drawing_area(), h),
         Some("png") => draw_histories(BitMapBackend::new(path, size).into_drawing_area(), h),
         _ => Err(format!("plot: {}: use a .svg or .png file name", path.display())),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use liemid::RotationMethod;
+
+    #[test]
+    fn every_method_has_its_own_look_colour_by_family_marker_by_order() {
+        let mut labels: Vec<&str> = RotationMethod::ALL.iter().map(|m| m.name()).collect();
+        labels.push("DOP853");
+        let looks: Vec<Look> = labels.iter().map(|l| look(l)).collect();
+        for (i, a) in looks.iter().enumerate() {
+            for (j, b) in looks.iter().enumerate().skip(i + 1) {
+                assert!(
+                    (a.color, a.marker, a.dashed) != (b.color, b.marker, b.dashed),
+                    "{} and {} look the same",
+                    labels[i],
+                    labels[j]
+                );
+            }
+        }
+        let of = |l: &str| look(l);
+        // One colour per family, one marker per order.
+        assert_eq!(of("LIEMID[EA]").color, of("LIEMID[EA]8").color);
+        assert_ne!(of("LIEMID[EA]").color, of("LIEMID[EX]").color);
+        assert_eq!(of("LIEMID[EA]6").marker, of("LIEMID[EX]6").marker);
+        assert_ne!(of("LIEMID[EA]4").marker, of("LIEMID[EA]6").marker);
+        assert_eq!(of("LIEMID[E1]").marker, Marker::Cross);
+        // Baselines black and grey.
+        assert_eq!(of("DOP853").color, palette::BLACK);
+        for b in ["RK4", "RKMK4"] {
+            let c = of(b).color;
+            assert!(c.0 == c.1 && c.1 == c.2 && c.0 > 0, "{b} is not grey");
+        }
+        // No method falls back to the unknown look.
+        for l in &labels {
+            assert_ne!(of(l), look("?"), "{l} has no look of its own");
+        }
     }
 }

@@ -38,10 +38,34 @@ fn beam_writes_the_json_contract_with_tracked_histories() {
 fn the_example_file_gives_the_built_in_problem_bit_for_bit_on_any_thread_count() {
     let dir = scratch("beam-example");
     let file = examples().join("right_angle_cantilever.toml");
-    let a = run_in(&dir, &["beam", file.to_str().unwrap(), "--t-end", "2", "--json", "-", "--threads", "1"]);
+    let a = run_in(
+        &dir,
+        &[
+            "beam",
+            file.to_str().unwrap(),
+            "--t-end",
+            "2",
+            "--json",
+            "-",
+            "--threads",
+            "1",
+        ],
+    );
     let b = run_in(
         &dir,
-        &["beam", "--problem", "right-angle-cantilever", "--t-end", "2", "--sample", "0.05", "--json", "-", "--threads", "3"],
+        &[
+            "beam",
+            "--problem",
+            "right-angle-cantilever",
+            "--t-end",
+            "2",
+            "--sample",
+            "0.05",
+            "--json",
+            "-",
+            "--threads",
+            "3",
+        ],
     );
     assert!(a.status.success() && b.status.success(), "{}{}", stderr(&a), stderr(&b));
     let (a, b) = (json(&stdout(&a)), json(&stdout(&b)));
@@ -54,15 +78,35 @@ fn beam_writes_csv_npy_and_a_plot_and_newmark_runs() {
     let dir = scratch("beam-files");
     let o = run_in(
         &dir,
-        &["beam", "--t-end", "2", "--sample", "0.5", "--out", "h.csv", "--plot", "h.svg", "--elements-per-member", "4"],
+        &[
+            "beam",
+            "--t-end",
+            "2",
+            "--sample",
+            "0.5",
+            "--out",
+            "h.csv",
+            "--plot",
+            "h.svg",
+            "--elements-per-member",
+            "4",
+        ],
     );
     assert!(o.status.success(), "{}", stderr(&o));
     let text = std::fs::read_to_string(dir.join("h.csv")).unwrap();
     let mut lines = text.lines();
-    assert_eq!(lines.next().unwrap(), "t,energy,elbow_ux,elbow_uy,elbow_uz,tip_ux,tip_uy,tip_uz");
+    assert_eq!(
+        lines.next().unwrap(),
+        "t,energy,elbow_ux,elbow_uy,elbow_uz,tip_ux,tip_uy,tip_uz"
+    );
     assert_eq!(lines.count(), 5);
     assert!(std::fs::read_to_string(dir.join("h.svg")).unwrap().contains("<svg"));
-    let o = run_in(&dir, &["beam", "--method", "newmark", "--t-end", "2", "--out", "n.npy", "--sample", "0.5"]);
+    let o = run_in(
+        &dir,
+        &[
+            "beam", "--method", "newmark", "--t-end", "2", "--out", "n.npy", "--sample", "0.5",
+        ],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stdout(&o).contains("Newton iterations"), "{}", stdout(&o));
     let rows = common::read_npy_columns(&dir.join("n.npy"), 8);
@@ -79,8 +123,14 @@ fn beam_input_errors_name_the_cause_and_exit_2() {
     for (extra, expected) in [
         ("[run]\nt_end = 1.0\nmethod = \"rk4\"\n", "unknown beam method"),
         ("[run]\nt_end = 1.0\nspeed = 3\n", "speed"),
-        ("[[load]]\nat = [0.5, 0.3, 0.0]\nforce = [1.0, 0.0, 0.0]\n[run]\nt_end = 1.0\n", "no node at"),
-        ("[[node]]\nat = [0.0, 0.0, 0.0]\nsupport = \"glued\"\n[run]\nt_end = 1.0\n", "support `glued`"),
+        (
+            "[[load]]\nat = [0.5, 0.3, 0.0]\nforce = [1.0, 0.0, 0.0]\n[run]\nt_end = 1.0\n",
+            "no node at",
+        ),
+        (
+            "[[node]]\nat = [0.0, 0.0, 0.0]\nsupport = \"glued\"\n[run]\nt_end = 1.0\n",
+            "support `glued`",
+        ),
         ("[run]\nt_end = 1.0\nstep = 10.0\n", "critical step"),
         ("", "t_end is missing"),
     ] {

@@ -37,10 +37,10 @@
 #![warn(missing_docs)]
 #![allow(non_snake_case)]
 
+pub mod beam;
 pub mod composition;
 pub mod driver;
 pub mod error;
-pub mod beam;
 pub mod free_flow;
 pub mod inertia;
 pub mod linalg;

@@ -20,7 +20,13 @@ fn configuration(rng: &mut Rng) -> (Vec3, Vec3, Mat3, Mat3) {
     let k = stiffness();
     let base = rng.rotation();
     let xa = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform());
-    let xb = xa + base * Vec3::new(k.length * (1.0 + 0.1 * rng.uniform()), 0.2 * rng.uniform(), 0.2 * rng.uniform());
+    let xb = xa
+        + base
+            * Vec3::new(
+                k.length * (1.0 + 0.1 * rng.uniform()),
+                0.2 * rng.uniform(),
+                0.2 * rng.uniform(),
+            );
     let turn = |rng: &mut Rng| so3::exp(Vec3::new(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5) * 0.6);
     (xa, xb, base * turn(rng), base * turn(rng))
 }
@@ -41,8 +47,14 @@ fn element_forces_are_minus_the_gradient_of_the_strain_energy() {
             d[axis] = eps;
             let d = Vec3::from_array(d);
             let checks = [
-                ((v(xa + d, xb, &ta, &tb) - v(xa - d, xb, &ta, &tb)) / (2.0 * eps), -f.force_a[axis]),
-                ((v(xa, xb + d, &ta, &tb) - v(xa, xb - d, &ta, &tb)) / (2.0 * eps), -f.force_b[axis]),
+                (
+                    (v(xa + d, xb, &ta, &tb) - v(xa - d, xb, &ta, &tb)) / (2.0 * eps),
+                    -f.force_a[axis],
+                ),
+                (
+                    (v(xa, xb + d, &ta, &tb) - v(xa, xb - d, &ta, &tb)) / (2.0 * eps),
+                    -f.force_b[axis],
+                ),
                 (
                     (v(xa, xb, &(so3::exp(d) * ta), &tb) - v(xa, xb, &(so3::exp(-d) * ta), &tb)) / (2.0 * eps),
                     -f.moment_a[axis],
@@ -82,7 +94,6 @@ fn element_forces_have_zero_resultant_force_and_moment() {
     }
 }
 
-
 /// Zero crossings of `u(t)` sampled every `h`, linearly interpolated; `ω` from the first
 /// and last.
 fn omega_from_crossings(samples: &[f64], h: f64) -> f64 {
@@ -114,7 +125,10 @@ fn cantilever_bending_frequencies_match_euler_bernoulli_within_one_percent() {
         let omega = omega_from_crossings(&u, h);
         let exact = problems::cantilever_omega(mode);
         let relative = (omega - exact).abs() / exact;
-        println!("mode {mode}: omega {omega:.5}, Euler-Bernoulli {exact:.5}, {:.3} %", 100.0 * relative);
+        println!(
+            "mode {mode}: omega {omega:.5}, Euler-Bernoulli {exact:.5}, {:.3} %",
+            100.0 * relative
+        );
         assert!(relative < 0.01, "mode {mode}: {omega} vs {exact}");
     }
 }
@@ -125,18 +139,21 @@ fn torsional_frequency_of_the_cantilever_matches_the_shaft_formula() {
     let mut s = p.frame.build().unwrap();
     for node in 0..s.frame.nodes.len() {
         let x = s.frame.nodes[node];
-        s.set_pose(node, x, so3::exp(Vec3::new(1e-3 * (std::f64::consts::FRAC_PI_2 * x.x).sin(), 0.0, 0.0)));
+        s.set_pose(
+            node,
+            x,
+            so3::exp(Vec3::new(1e-3 * (std::f64::consts::FRAC_PI_2 * x.x).sin(), 0.0, 0.0)),
+        );
     }
     let sec = p.frame.elements[0].section;
     let exact = std::f64::consts::FRAC_PI_2 * (sec.torsional_stiffness / sec.rotary_inertia.x).sqrt();
     let h = s.stability(0).default_step(BeamMethod::Splitting);
     let tip = p.frame.named("tip").unwrap();
     let steps = (20.0 * std::f64::consts::TAU / exact / h).ceil() as usize;
-    let mut twist = vec![0.0; steps + 1];
-    twist[0] = so3::log(&s.rotation(tip)).x;
-    for k in 1..=steps {
+    let mut twist = vec![so3::log(&s.rotation(tip)).x];
+    for _ in 0..steps {
         s.step(h).unwrap();
-        twist[k] = so3::log(&s.rotation(tip)).x;
+        twist.push(so3::log(&s.rotation(tip)).x);
     }
     let omega = omega_from_crossings(&twist, h);
     // 20 elements: the lumped shaft's first frequency is low by (π/2)²/(24·20²) = 0.026 %.
@@ -199,9 +216,15 @@ fn right_angle_cantilever_reproduces_simo_and_vu_quoc() {
     }
     // Convergence in space: the 4 → 8 change is larger than the 8 → 16 change.
     let change = |a: &[(f64, f64)], b: &[(f64, f64)]| {
-        a.iter().zip(b).map(|(x, y)| (x.0 - y.0).abs().max((x.1 - y.1).abs())).fold(0.0, f64::max)
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| (x.0 - y.0).abs().max((x.1 - y.1).abs()))
+            .fold(0.0, f64::max)
     };
-    let (c1, c2) = (change(&histories[0], &histories[1]), change(&histories[1], &histories[2]));
+    let (c1, c2) = (
+        change(&histories[0], &histories[1]),
+        change(&histories[1], &histories[2]),
+    );
     println!("largest change 4 -> 8: {c1:.4}, 8 -> 16: {c2:.4}");
     assert!(c2 < 0.5 * c1, "no convergence: {c1} then {c2}");
     // Against the published extremes (read from their points): tip +8.29 near t = 7.7 and
@@ -222,7 +245,10 @@ fn right_angle_cantilever_reproduces_simo_and_vu_quoc() {
         ((-tmin.0, tmin.1), peak("tip", -1.0), 0.03),
         ((-emin.0, emin.1), peak("elbow", -1.0), 0.06),
     ] {
-        assert!((ours - theirs).abs() < tolerance * theirs, "extreme {ours} vs published {theirs}");
+        assert!(
+            (ours - theirs).abs() < tolerance * theirs,
+            "extreme {ours} vs published {theirs}"
+        );
         assert!((t_ours - t_theirs).abs() < 0.4, "time {t_ours} vs published {t_theirs}");
     }
     // The whole curves: within 1.0 (10 % of the swing) at every published point.
@@ -320,8 +346,12 @@ fn the_bound_brackets_the_largest_frequency_and_steps_above_it_blow_up() {
     let estimate = st.omega_estimate.unwrap();
     println!("omega bound {:.1}, power iteration {estimate:.1}", st.omega_bound);
     assert!(estimate <= st.omega_bound * (1.0 + 1e-9) && estimate > 0.95 * st.omega_bound);
-    assert!(st.check(BeamMethod::Splitting, 0.99 * st.critical_step(BeamMethod::Splitting)).is_ok());
-    let err = st.check(BeamMethod::Splitting, 1.01 * st.critical_step(BeamMethod::Splitting)).unwrap_err();
+    assert!(st
+        .check(BeamMethod::Splitting, 0.99 * st.critical_step(BeamMethod::Splitting))
+        .is_ok());
+    let err = st
+        .check(BeamMethod::Splitting, 1.01 * st.critical_step(BeamMethod::Splitting))
+        .unwrap_err();
     assert!(err.to_string().contains("critical step"), "{err}");
     // Composition limits on the harmonic oscillator: Verlet 2, Suzuki's five stages larger.
     let verlet = liemid::beam::stability::composition_limit(None);
@@ -353,13 +383,16 @@ fn newmark_agrees_with_the_explicit_splitting_on_the_right_angle_cantilever() {
     let explicit = right_angle_history(4);
     let mut nm = Newmark::new(&p.system().unwrap());
     let mut worst: f64 = 0.0;
-    for k in 1..=600 {
+    for (k, &(e_ref, t_ref)) in explicit.iter().enumerate().skip(1) {
         let iterations = nm.step(0.05).unwrap();
         assert!(iterations <= 10, "{iterations} Newton iterations at step {k}");
         let (e, t) = (nm.displacement(elbow).z, nm.displacement(tip).z);
-        worst = worst.max((e - explicit[k].0).abs()).max((t - explicit[k].1).abs());
+        worst = worst.max((e - e_ref).abs()).max((t - t_ref).abs());
     }
-    println!("Newmark dt = 0.05 vs explicit: {worst:.4}, {} iterations", nm.iterations);
+    println!(
+        "Newmark dt = 0.05 vs explicit: {worst:.4}, {} iterations",
+        nm.iterations
+    );
     // Newmark's own second-order error at dt = 0.05 (measured 0.030); the explicit step's is
     // far smaller.
     assert!(worst < 0.06, "{worst}");
@@ -371,7 +404,13 @@ fn big_frame(threads: usize) -> Vec<u64> {
     for k in 0..6 {
         let y = k as f64;
         let nodes = frame
-            .add_member(Vec3::new(0.0, y, 0.0), Vec3::new(50.0, y, 1.0), 400, section, Vec3::new(0.0, 0.0, 1.0))
+            .add_member(
+                Vec3::new(0.0, y, 0.0),
+                Vec3::new(50.0, y, 1.0),
+                400,
+                section,
+                Vec3::new(0.0, 0.0, 1.0),
+            )
             .unwrap();
         frame.support(nodes[0], Support::Clamped).unwrap();
         frame.gravity = Vec3::new(0.0, 0.0, -9.81);
@@ -404,10 +443,24 @@ fn bad_models_are_refused_with_the_cause() {
     let section = Section::rectangle(1.0, 0.3, 1.0, 0.1, 0.1).unwrap();
     let mut frame = Frame::new();
     let err = frame
-        .add_member(Vec3::ZERO, Vec3::new(1.0, 0.0, 0.0), 2, section, Vec3::new(2.0, 0.0, 0.0))
+        .add_member(
+            Vec3::ZERO,
+            Vec3::new(1.0, 0.0, 0.0),
+            2,
+            section,
+            Vec3::new(2.0, 0.0, 0.0),
+        )
         .unwrap_err();
     assert!(err.to_string().contains("orientation vector"), "{err}");
-    frame.add_member(Vec3::ZERO, Vec3::new(1.0, 0.0, 0.0), 2, section, Vec3::new(0.0, 1.0, 0.0)).unwrap();
+    frame
+        .add_member(
+            Vec3::ZERO,
+            Vec3::new(1.0, 0.0, 0.0),
+            2,
+            section,
+            Vec3::new(0.0, 1.0, 0.0),
+        )
+        .unwrap();
     frame.add_node(Vec3::new(5.0, 5.0, 5.0)).unwrap();
     let err = frame.build().unwrap_err();
     assert!(err.to_string().contains("belongs to no element"), "{err}");

@@ -8,7 +8,7 @@
 //! `Σ E₀ diag(ρ(I₂+I₃), ρI₂, ρI₃) E₀ᵀ L₀/2` of its half elements (body axes: the
 //! principal axes of that sum); pinned nodes are rotors (held in place, free to turn).
 //! The elements, loads and gravity are the [`Structure`], an
-//! [`Interaction`](crate::many::Interaction), so a step is [`Bodies::step`]:
+//! [`Interaction`], so a step is [`Bodies::step`]:
 //!
 //! ```text
 //! p ← p + (h/2) F,  Π ← Π + (h/2) T        half impulse of the element forces and moments
@@ -42,7 +42,7 @@ pub mod newmark;
 pub mod problems;
 pub mod stability;
 
-pub use element::{EndForces, ElementStiffness};
+pub use element::{ElementStiffness, EndForces};
 pub use model::{ElementSpec, Frame, History, NodalLoad, Section, Support};
 pub use newmark::Newmark;
 pub use stability::Stability;
@@ -368,14 +368,14 @@ impl Frame {
             e.section.validate()?;
             let d = self.nodes[b] - self.nodes[a];
             let length = d.norm();
-            if !(length > 0.0) {
+            if length <= 0.0 || length.is_nan() {
                 return Err(Error::InvalidModel {
                     reason: format!("element {k}: nodes {a} and {b} coincide"),
                 });
             }
             let e1 = d * (1.0 / length);
             let across = e.orientation - e1 * e.orientation.dot(e1);
-            if !(across.norm() > 1e-6 * e.orientation.norm()) {
+            if across.norm() <= 1e-6 * e.orientation.norm() || across.norm().is_nan() {
                 return Err(Error::InvalidModel {
                     reason: format!("element {k}: the orientation vector lies along the element"),
                 });
@@ -590,7 +590,8 @@ impl BeamSystem {
     /// The strain energy.
     #[must_use]
     pub fn strain_energy(&self) -> f64 {
-        self.structure.strain_energy(&self.bodies.position, &self.bodies.rotation)
+        self.structure
+            .strain_energy(&self.bodies.position, &self.bodies.rotation)
     }
 
     /// The last time at which a load changes.

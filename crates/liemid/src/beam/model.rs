@@ -40,7 +40,15 @@ impl Section {
             mass_per_length: rho * area,
             rotary_inertia: Vec3::new(rho * (i2 + i3), rho * i2, rho * i3),
         };
-        for (name, v) in [("E", e), ("G", g), ("A", area), ("I2", i2), ("I3", i3), ("J", j), ("rho", rho)] {
+        for (name, v) in [
+            ("E", e),
+            ("G", g),
+            ("A", area),
+            ("I2", i2),
+            ("I3", i3),
+            ("J", j),
+            ("rho", rho),
+        ] {
             if !(v.is_finite() && v > 0.0) {
                 return Err(Error::InvalidParameter {
                     name,
@@ -346,7 +354,11 @@ impl Frame {
     pub fn load(&mut self, load: NodalLoad) -> Result<()> {
         if load.node >= self.nodes.len() {
             return Err(Error::InvalidModel {
-                reason: format!("load on node {}, but the model has {} nodes", load.node, self.nodes.len()),
+                reason: format!(
+                    "load on node {}, but the model has {} nodes",
+                    load.node,
+                    self.nodes.len()
+                ),
             });
         }
         if !(load.force.is_finite() && load.moment.is_finite()) {
@@ -365,7 +377,10 @@ impl Frame {
     pub fn name(&mut self, name: &str, node: usize) -> Result<()> {
         if node >= self.nodes.len() {
             return Err(Error::InvalidModel {
-                reason: format!("name `{name}` for node {node}, but the model has {} nodes", self.nodes.len()),
+                reason: format!(
+                    "name `{name}` for node {node}, but the model has {} nodes",
+                    self.nodes.len()
+                ),
             });
         }
         if self.named(name).is_some() {

@@ -54,11 +54,12 @@ impl Banded {
         self.a.iter_mut().for_each(|x| *x = 0.0);
     }
     /// Solve in place (destroys the matrix); `false` for a zero pivot.
+    #[allow(clippy::needless_range_loop)]
     fn solve(&mut self, b: &mut [f64]) -> bool {
         let (n, w) = (self.n, self.w);
         for k in 0..n {
             let pivot = *self.at(k, k);
-            if !(pivot.abs() > 0.0) || !pivot.is_finite() {
+            if pivot == 0.0 || !pivot.is_finite() {
                 return false;
             }
             for i in k + 1..(k + w + 1).min(n) {
@@ -132,7 +133,13 @@ impl Newmark {
         let velocity = (0..n).map(|i| b.momentum[i] * (1.0 / b.mass[i])).collect();
         let omega = (0..n).map(|i| inv(i).component_mul(b.pi[i])).collect::<Vec<_>>();
         let acceleration = (0..n)
-            .map(|i| if b.free[i] { b.force[i] * (1.0 / b.mass[i]) } else { Vec3::ZERO })
+            .map(|i| {
+                if b.free[i] {
+                    b.force[i] * (1.0 / b.mass[i])
+                } else {
+                    Vec3::ZERO
+                }
+            })
             .collect();
         let alpha = (0..n)
             .map(|i| {
@@ -187,6 +194,7 @@ impl Newmark {
     /// # Errors
     /// [`Error::NewtonDidNotConverge`] after 30 iterations (the state is then left as it
     /// was), or a bad step.
+    #[allow(clippy::needless_range_loop)]
     pub fn step(&mut self, h: f64) -> Result<u32> {
         if !(h.is_finite() && h > 0.0) {
             return Err(Error::InvalidStep { h });
@@ -231,7 +239,7 @@ impl Newmark {
                 let r = self.torque[i] - m.component_mul(alp[i]) - omg[i].cross(m.component_mul(omg[i]));
                 rhs[k..k + 3].copy_from_slice(&r.to_array());
             }
-            self.assemble(c);
+            self.assemble(c, h, &r0, &omg);
             if !self.matrix.solve(&mut rhs) {
                 break;
             }
@@ -299,7 +307,7 @@ impl Newmark {
     }
 
     /// `4M/h² + K` at the current iterate, `K` by central differences element by element.
-    fn assemble(&mut self, c: f64) {
+    fn assemble(&mut self, c: f64, h: f64, r0: &[Mat3], omega: &[Vec3]) {
         self.matrix.clear();
         let b = &self.system.bodies;
         for i in 0..b.len() {
@@ -310,9 +318,17 @@ impl Newmark {
                 }
                 k += 3;
             }
-            let m = b.inertia[i].moments.to_array();
-            for d in 0..3 {
-                *self.matrix.at(k + d, k + d) += c * m[d];
+            // d(J A + W × J W)/dδ for R ← R exp(δ): Θ = log(R₀ᵀ R) moves by Jr⁻¹(Θ) δ,
+            // A by c of that and W by 2/h of it.
+            let m = b.inertia[i].moments;
+            let theta = so3::log(&(r0[i].transpose() * b.rotation[i]));
+            let w = omega[i];
+            let gyro = so3::hat(w) * Mat3::from_diagonal(m) - so3::hat(m.component_mul(w));
+            let block = (Mat3::from_diagonal(m * c) + gyro * (2.0 / h)) * so3::right_jacobian_inverse(theta);
+            for r in 0..3 {
+                for q in 0..3 {
+                    *self.matrix.at(k + r, k + q) += block.m[r][q];
+                }
             }
         }
         let structure = &self.system.structure;

@@ -16,6 +16,7 @@
 //!   Vu-Quoc's free-flying beam), pushed at its lower end by `F = p(t)/10 (0, 1, 0)` and
 //!   `M = p(t) (0, −1/2, 1)` with `p` rising linearly to 50 at `t = 2.5` and back to 0 at
 //!   `t = 5`; after that it flies free, keeping its momenta.
+//! - `tower`: a 25-storey steel frame for throughput ([`tower`]).
 //!
 //! ## Reference
 //! J. C. Simo, L. Vu-Quoc, *On the dynamics in space of rods undergoing large motions — a
@@ -47,7 +48,7 @@ pub struct BeamProblem {
 }
 
 /// The problems' names.
-pub const NAMES: [&str; 3] = ["cantilever-vibration", "right-angle-cantilever", "flying-beam"];
+pub const NAMES: [&str; 4] = ["cantilever-vibration", "right-angle-cantilever", "flying-beam", "tower"];
 
 /// Default elements per member of each problem.
 #[must_use]
@@ -55,6 +56,7 @@ pub fn default_elements(name: &str) -> usize {
     match name {
         "cantilever-vibration" => 20,
         "right-angle-cantilever" => 8,
+        "tower" => 50,
         _ => 10,
     }
 }
@@ -69,6 +71,7 @@ pub fn by_name(name: &str, elements: Option<usize>) -> Result<BeamProblem> {
         "cantilever-vibration" => cantilever_vibration(n, 1),
         "right-angle-cantilever" => right_angle_cantilever(n),
         "flying-beam" => flying_beam(n),
+        "tower" => tower(25, n),
         _ => Err(Error::InvalidModel {
             reason: format!("unknown beam problem `{name}` (known: {})", NAMES.join(", ")),
         }),
@@ -102,14 +105,21 @@ pub fn cantilever_vibration(elements: usize, mode: usize) -> Result<BeamProblem>
     let e = ei * 12.0 / a.powi(4);
     let section = Section::rectangle(e, 0.0, rho_a / (a * a), a, a)?;
     let mut frame = Frame::new();
-    let nodes = frame.add_member(Vec3::ZERO, Vec3::new(1.0, 0.0, 0.0), elements, section, Vec3::new(0.0, 0.0, 1.0))?;
+    let nodes = frame.add_member(
+        Vec3::ZERO,
+        Vec3::new(1.0, 0.0, 0.0),
+        elements,
+        section,
+        Vec3::new(0.0, 0.0, 1.0),
+    )?;
     frame.support(nodes[0], Support::Clamped)?;
     frame.name("tip", nodes[elements])?;
     frame.name("middle", nodes[elements / 2])?;
     let t_end = 12.0 * std::f64::consts::TAU / cantilever_omega(mode);
     Ok(BeamProblem {
         name: "cantilever-vibration",
-        description: "small free vibration of a clamped-free beam started in a bending mode shape (L = 1, EI = 1, rho A = 1)",
+        description:
+            "small free vibration of a clamped-free beam started in a bending mode shape (L = 1, EI = 1, rho A = 1)",
         frame,
         t_end,
         initial_mode: Some((mode, 1e-4)),
@@ -140,7 +150,11 @@ pub fn right_angle_cantilever(per_leg: usize) -> Result<BeamProblem> {
     };
     let mut frame = Frame::new();
     let up = Vec3::new(0.0, 0.0, 1.0);
-    let (root, elbow, tip) = (Vec3::new(0.0, 10.0, 0.0), Vec3::new(10.0, 10.0, 0.0), Vec3::new(10.0, 0.0, 0.0));
+    let (root, elbow, tip) = (
+        Vec3::new(0.0, 10.0, 0.0),
+        Vec3::new(10.0, 10.0, 0.0),
+        Vec3::new(10.0, 0.0, 0.0),
+    );
     let leg1 = frame.add_member(root, elbow, per_leg, section, up)?;
     let leg2 = frame.add_member(elbow, tip, per_leg, section, up)?;
     frame.support(leg1[0], Support::Clamped)?;
@@ -198,6 +212,68 @@ pub fn flying_beam(elements: usize) -> Result<BeamProblem> {
         description: "a free beam pushed at one end by a force and a moment that ramp up and down, then flying free",
         frame,
         t_end: 30.0,
+        initial_mode: None,
+    })
+}
+
+/// A steel tower frame for throughput: `stories` storeys of 4 m, a 6 m square plan, four
+/// columns and four beams per storey, each member cut into `elements` elements
+/// (`8 · stories · elements` elements: 10⁴ for 25 storeys of 50), clamped at the base,
+/// under gravity and a lateral gust at the top (100 kN for 0.1 s).
+///
+/// # Errors
+/// Zero elements or storeys.
+pub fn tower(stories: usize, elements: usize) -> Result<BeamProblem> {
+    if stories == 0 {
+        return Err(Error::InvalidModel {
+            reason: "a tower needs at least one storey".into(),
+        });
+    }
+    let steel = Section::rectangle(210e9, 0.3, 7850.0, 0.3, 0.3)?;
+    let mut frame = Frame::new();
+    let corners = [(0.0, 0.0), (6.0, 0.0), (6.0, 6.0), (0.0, 6.0)];
+    for s in 0..stories {
+        let (z0, z1) = (4.0 * s as f64, 4.0 * (s + 1) as f64);
+        for &(x, y) in &corners {
+            let nodes = frame.add_member(
+                Vec3::new(x, y, z0),
+                Vec3::new(x, y, z1),
+                elements,
+                steel,
+                Vec3::new(1.0, 0.0, 0.0),
+            )?;
+            if s == 0 {
+                frame.support(nodes[0], Support::Clamped)?;
+            }
+        }
+        for k in 0..4 {
+            let ((xa, ya), (xb, yb)) = (corners[k], corners[(k + 1) % 4]);
+            frame.add_member(
+                Vec3::new(xa, ya, z1),
+                Vec3::new(xb, yb, z1),
+                elements,
+                steel,
+                Vec3::new(0.0, 0.0, 1.0),
+            )?;
+        }
+    }
+    let top = frame
+        .node_at(Vec3::new(0.0, 0.0, 4.0 * stories as f64), 1e-9)
+        .expect("the top corner exists");
+    frame.name("top", top)?;
+    frame.gravity = Vec3::new(0.0, 0.0, -9.81);
+    frame.load(NodalLoad {
+        node: top,
+        force: Vec3::new(1e5, 0.0, 0.0),
+        moment: Vec3::ZERO,
+        follower: false,
+        history: History::new(vec![(0.0, 1.0), (0.1, 1.0), (0.1 + 1e-9, 0.0)])?,
+    })?;
+    Ok(BeamProblem {
+        name: "tower",
+        description: "a 25-storey steel tower frame (10^4 elements at 50 per member) under gravity and a gust",
+        frame,
+        t_end: 0.05,
         initial_mode: None,
     })
 }

@@ -183,9 +183,12 @@ impl BeamSystem {
                     .map(|i| b.position[i] + Vec3::new(z[6 * i], z[6 * i + 1], z[6 * i + 2]) * (sign * eps))
                     .collect();
                 let rotation: Vec<Mat3> = (0..n)
-                    .map(|i| b.rotation[i] * so3::exp(Vec3::new(z[6 * i + 3], z[6 * i + 4], z[6 * i + 5]) * (sign * eps)))
+                    .map(|i| {
+                        b.rotation[i] * so3::exp(Vec3::new(z[6 * i + 3], z[6 * i + 4], z[6 * i + 5]) * (sign * eps))
+                    })
                     .collect();
-                self.structure.internal_forces(&position, &rotation, &mut force, &mut torque);
+                self.structure
+                    .internal_forces(&position, &rotation, &mut force, &mut torque);
                 for i in 0..n {
                     for k in 0..3 {
                         // K z = −dF/dε.
