@@ -7,6 +7,7 @@
 //! `t` and `h`); a Python torque that raises re-raises its own exception. Pure-Rust work
 //! runs with the GIL released.
 
+mod beam;
 mod spins;
 
 use std::cell::RefCell;
@@ -802,5 +803,6 @@ fn _liemid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(work_precision, m)?)?;
     m.add_class::<ManyBodies>()?;
     spins::register(m)?;
+    beam::register(m)?;
     Ok(())
 }

@@ -414,6 +414,15 @@ pub fn right_jacobian_inverse(v: Vec3) -> Mat3 {
     i_plus_hat_plus_hat2(v, 0.5, jacobian_inv_c(theta))
 }
 
+/// `Jr⁻¹(v) x = x + ½ v × x + c(θ) v × (v × x)` without forming the matrix.
+#[must_use]
+#[inline]
+pub fn right_jacobian_inverse_apply(v: Vec3, x: Vec3) -> Vec3 {
+    let c = jacobian_inv_c(v.norm());
+    let vx = v.cross(x);
+    x + vx * 0.5 + v.cross(vx) * c
+}
+
 /// Inverse of the left Jacobian, `Jl⁻¹(v) = Jr⁻¹(−v)`, for `|v| < 2π`.
 #[must_use]
 pub fn left_jacobian_inverse(v: Vec3) -> Mat3 {
@@ -793,6 +802,17 @@ mod tests {
             j.m[2][k] = d.z;
         }
         j
+    }
+
+    #[test]
+    fn inverse_jacobian_applied_equals_the_matrix_times_the_vector() {
+        let mut rng = crate::random::Rng::new(3);
+        for scale in [1e-9, 1e-3, 0.3, 2.5] {
+            let v = rng.unit_vector() * scale;
+            let x = rng.unit_vector();
+            let d = right_jacobian_inverse_apply(v, x) - right_jacobian_inverse(v) * x;
+            assert!(d.norm() < 4.0 * f64::EPSILON, "{scale}: {d:?}");
+        }
     }
 
     #[test]

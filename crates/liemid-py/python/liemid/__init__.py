@@ -17,6 +17,7 @@ True
 - ``ensemble`` steps N bodies on all cores (bit-identical for any thread count),
   ``liemid.dask.ensemble`` on a Dask cluster;
 - ``liemid.many``: interacting bodies (the dipolar fluid); ``liemid.spins``: spin dynamics on lattices;
+  ``liemid.beam``: flexible 3-D beams;
 - ``methods``, ``problems``, ``converge``, ``work_precision``: what the CLI offers.
 
 Reference: P. Krysl, Explicit momentum-conserving integrator for dynamics of rigid bodies
@@ -25,7 +26,7 @@ approximating the midpoint Lie algorithm, Int. J. Numer. Meth. Engng 63 (2005).
 
 from __future__ import annotations
 
-from . import many, problems, spins
+from . import beam, many, problems, spins
 from ._core import (
     CallableTorque,
     ConstantTorque,
@@ -53,6 +54,7 @@ __all__ = [
     "RigidBody",
     "Solution",
     "TorqueSum",
+    "beam",
     "converge",
     "ensemble",
     "integrate",

@@ -1,6 +1,6 @@
 """Type stubs of the compiled core (flat float64 arrays in and out)."""
 
-from typing import Any, Callable, List, Optional, Sequence, Tuple
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -105,3 +105,15 @@ class Spins:
 
 def spin_methods() -> List[Tuple[str, int, bool, str]]: ...
 def spins_near_z(n: int, max_tilt: float, seed: int) -> NDArray[np.float64]: ...
+def beam_run(
+    problem: Optional[str],
+    text: Optional[str],
+    elements_per_member: Optional[int],
+    method: Optional[str],
+    step: Optional[float],
+    t_end: Optional[float],
+    sample: Optional[float],
+    force_step: bool,
+) -> Dict[str, Any]: ...
+def beam_problems() -> List[Tuple[str, str]]: ...
+def beam_methods() -> List[Tuple[str, int]]: ...

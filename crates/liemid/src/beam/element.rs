@@ -89,6 +89,21 @@ struct Local {
     theta_b: Vec3,
 }
 
+/// `log(Q)` for the small local rotations of an element: below `|sin θ| = 0.01` by the
+/// series `θ/sin θ = 1 + s²/6 + 3s⁴/40 + 5s⁶/112 + 35s⁸/1152 + O(s¹⁰)` (truncation below
+/// 1e-21), else [`so3::log`].
+#[inline]
+fn local_log(q: &Mat3) -> Vec3 {
+    let w = so3::vee(q);
+    let s2 = w.norm_squared();
+    if s2 < 1e-4 && q.trace() > 1.0 {
+        let f = 1.0 + s2 * (1.0 / 6.0 + s2 * (3.0 / 40.0 + s2 * (5.0 / 112.0 + s2 * (35.0 / 1152.0))));
+        w * f
+    } else {
+        so3::log(q)
+    }
+}
+
 #[inline]
 fn local(k: &ElementStiffness, xa: Vec3, xb: Vec3, ta: &Mat3, tb: &Mat3) -> Local {
     let d = xb - xa;
@@ -106,8 +121,8 @@ fn local(k: &ElementStiffness, xa: Vec3, xb: Vec3, ta: &Mat3, tb: &Mat3) -> Loca
         l,
         q,
         stretch: l - k.length,
-        theta_a: so3::log(&(ft * *ta)),
-        theta_b: so3::log(&(ft * *tb)),
+        theta_a: local_log(&(ft * *ta)),
+        theta_b: local_log(&(ft * *tb)),
     }
 }
 
@@ -145,8 +160,8 @@ pub fn end_forces(k: &ElementStiffness, xa: Vec3, xb: Vec3, ta: &Mat3, tb: &Mat3
     let s = local(k, xa, xb, ta, tb);
     let [e1, e2, e3] = s.e;
     let (ma, mb) = local_moments(k, s.theta_a, s.theta_b);
-    let sa = s.frame * (so3::right_jacobian_inverse(s.theta_a) * ma);
-    let sb = s.frame * (so3::right_jacobian_inverse(s.theta_b) * mb);
+    let sa = s.frame * so3::right_jacobian_inverse_apply(s.theta_a, ma);
+    let sb = s.frame * so3::right_jacobian_inverse_apply(s.theta_b, mb);
     let sum = sa + sb;
     let (s1, s2, s3) = (sum.dot(e1), sum.dot(e2), sum.dot(e3));
     let (q1, q2) = (s.q.dot(e1), s.q.dot(e2));

@@ -1,0 +1,118 @@
+//! `liemid._liemid` beams: run a built-in benchmark or a structure file's text with the
+//! explicit splitting or Newmark, as `liemid beam` does (the same `liemid_cli` runner), and
+//! return the sampled histories as flat arrays. `python/liemid/beam.py` shapes them.
+
+use std::collections::HashMap;
+
+use liemid::beam::problems;
+use liemid_cli::beam_scenario::{self, BeamIntegrator};
+use liemid_cli::beam_study::{self, RunFailure};
+use numpy::{IntoPyArray, PyArray1};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+/// Run a beam scenario; returns a dict of the run (arrays flat, `tracked` per node (n·3)).
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (problem, text, elements_per_member, method, step, t_end, sample, force_step))]
+fn beam_run<'py>(
+    py: Python<'py>,
+    problem: Option<&str>,
+    text: Option<&str>,
+    elements_per_member: Option<usize>,
+    method: Option<&str>,
+    step: Option<f64>,
+    t_end: Option<f64>,
+    sample: Option<f64>,
+    force_step: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    let mut sc = match (problem, text) {
+        (Some(p), None) => beam_scenario::builtin(p, elements_per_member),
+        (None, Some(t)) => beam_scenario::parse(t, "text", elements_per_member),
+        _ => Err("give a problem name or a structure file's text, not both".into()),
+    }
+    .map_err(PyValueError::new_err)?;
+    if let Some(m) = method {
+        sc.method = BeamIntegrator::parse(m).map_err(|e| PyValueError::new_err(format!("method: {e}")))?;
+    }
+    if step.is_some() {
+        sc.step = step;
+    }
+    let t_end = t_end.unwrap_or(sc.problem.t_end);
+    let sample = sample.or(sc.sample).unwrap_or(t_end / 600.0);
+    let run = py
+        .detach(|| beam_study::run(&sc, t_end, sc.step, sample, force_step, &mut |_| None))
+        .map_err(|e| match e {
+            RunFailure::Input(m) => PyValueError::new_err(m),
+            RunFailure::Numerical(m) => {
+                match py
+                    .import("liemid._errors")
+                    .and_then(|m| m.getattr("ConvergenceError"))
+                    .and_then(|c| c.call1((m.clone(), f64::NAN, sc.step.unwrap_or(f64::NAN))))
+                {
+                    Ok(exc) => PyErr::from_value(exc),
+                    Err(e) => e,
+                }
+            }
+        })?;
+    let d = PyDict::new(py);
+    d.set_item("method", run.method.key())?;
+    d.set_item("t", run.t.clone().into_pyarray(py))?;
+    let tracked: HashMap<String, Bound<'py, PyArray1<f64>>> = run
+        .tracked
+        .iter()
+        .map(|(n, u)| {
+            (
+                n.clone(),
+                u.iter().flatten().copied().collect::<Vec<f64>>().into_pyarray(py),
+            )
+        })
+        .collect();
+    d.set_item("tracked", tracked)?;
+    d.set_item("names", run.tracked.iter().map(|(n, _)| n.clone()).collect::<Vec<_>>())?;
+    d.set_item("energy", run.energy.clone().into_pyarray(py))?;
+    d.set_item("steps", run.steps)?;
+    d.set_item("step", run.step)?;
+    d.set_item("critical_step", run.critical_step)?;
+    d.set_item("wall_seconds", run.wall_seconds)?;
+    d.set_item("element_steps_per_second", run.element_steps_per_second())?;
+    d.set_item("elements", run.elements)?;
+    d.set_item("newton_iterations", run.newton_iterations)?;
+    Ok(d)
+}
+
+/// The built-in beam problems: (name, description).
+#[pyfunction]
+fn beam_problems() -> PyResult<Vec<(String, String)>> {
+    problems::NAMES
+        .iter()
+        .map(|n| {
+            problems::by_name(n, None)
+                .map(|p| (p.name.to_string(), p.description.to_string()))
+                .map_err(|e| PyValueError::new_err(e.to_string()))
+        })
+        .collect()
+}
+
+/// The beam methods: (name, order).
+#[pyfunction]
+fn beam_methods() -> Vec<(String, u32)> {
+    BeamIntegrator::ALL
+        .iter()
+        .map(|m| {
+            let order = match m {
+                BeamIntegrator::Explicit(b) => b.order(),
+                BeamIntegrator::Newmark => 2,
+            };
+            (m.key().to_string(), order)
+        })
+        .collect()
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(beam_run, m)?)?;
+    m.add_function(wrap_pyfunction!(beam_problems, m)?)?;
+    m.add_function(wrap_pyfunction!(beam_methods, m)?)?;
+    Ok(())
+}
