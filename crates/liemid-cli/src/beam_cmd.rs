@@ -252,7 +252,7 @@ pub fn beam(args: BeamArgs) -> CmdResult {
             run.elements,
             run.steps,
             run.step,
-            liemid::error::Num(run.t.last().copied().unwrap_or(0.0)),
+            format!("{:.6}", run.t.last().copied().unwrap_or(0.0)).trim_end_matches('0').trim_end_matches('.'),
             run.wall_seconds,
             run.element_steps_per_second()
         );

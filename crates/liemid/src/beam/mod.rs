@@ -155,13 +155,16 @@ impl Structure {
                 *o = self.element_forces(e, position, rotation);
             }
         };
+        // One chunk runs on the calling thread: a small structure pays no hand-off.
         #[cfg(feature = "parallel")]
-        {
+        if scratch.len() > ELEMENT_CHUNK {
             use rayon::prelude::*;
             scratch
                 .par_chunks_mut(ELEMENT_CHUNK)
                 .enumerate()
                 .for_each(|(k, out)| per_element(k, out));
+        } else {
+            per_element(0, &mut scratch);
         }
         #[cfg(not(feature = "parallel"))]
         for (k, out) in scratch.chunks_mut(ELEMENT_CHUNK).enumerate() {
@@ -188,7 +191,9 @@ impl Structure {
             }
         };
         #[cfg(feature = "parallel")]
-        {
+        if force.len() <= CHUNK {
+            gather(0, force, torque);
+        } else {
             use rayon::prelude::*;
             force
                 .par_chunks_mut(CHUNK)
