@@ -477,3 +477,116 @@ fn bad_models_are_refused_with_the_cause() {
     let err = problems::by_name("bridge", None).unwrap_err();
     assert!(err.to_string().contains("right-angle-cantilever"), "{err}");
 }
+
+#[test]
+fn a_pinned_pinned_beam_vibrates_at_the_simply_supported_frequency() {
+    // Pinned at both ends (translations held, rotations free): ω₁ = π² √(EI/(ρA L⁴)).
+    let p = problems::cantilever_vibration(20, 1).unwrap();
+    let mut frame = p.frame.clone();
+    frame.support(0, Support::Pinned).unwrap();
+    let last = frame.named("tip").unwrap();
+    frame.support(last, Support::Pinned).unwrap();
+    let mut s = frame.build().unwrap();
+    let middle = frame.named("middle").unwrap();
+    for node in 0..frame.nodes.len() {
+        let x = frame.nodes[node];
+        let (w, slope) = (
+            1e-4 * (std::f64::consts::PI * x.x).sin(),
+            1e-4 * std::f64::consts::PI * (std::f64::consts::PI * x.x).cos(),
+        );
+        s.set_pose(node, x + Vec3::new(0.0, 0.0, w), so3::exp(Vec3::new(0.0, -slope, 0.0)));
+    }
+    // The pinned ends stayed where they were.
+    assert_eq!(s.displacement(0), Vec3::ZERO);
+    let exact = std::f64::consts::PI.powi(2);
+    let h = s.stability(0).default_step(BeamMethod::Splitting);
+    let steps = (12.0 * std::f64::consts::TAU / exact / h).ceil() as usize;
+    let mut u = vec![s.displacement(middle).z];
+    for _ in 0..steps {
+        s.step(h).unwrap();
+        u.push(s.displacement(middle).z);
+    }
+    assert_eq!(s.displacement(0), Vec3::ZERO);
+    let omega = omega_from_crossings(&u, h);
+    assert!((omega - exact).abs() < 0.01 * exact, "{omega} vs {exact}");
+}
+
+#[test]
+fn follower_loads_turn_with_the_node_and_spatial_loads_do_not() {
+    use liemid::beam::{History, NodalLoad};
+    use liemid::many::Interaction;
+    let section = Section::rectangle(1e3, 0.3, 1.0, 0.1, 0.1).unwrap();
+    let mut frame = Frame::new();
+    let nodes = frame
+        .add_member(
+            Vec3::ZERO,
+            Vec3::new(1.0, 0.0, 0.0),
+            2,
+            section,
+            Vec3::new(0.0, 0.0, 1.0),
+        )
+        .unwrap();
+    let f0 = Vec3::new(0.0, 1.0, 0.0);
+    let m0 = Vec3::new(0.0, 0.0, 2.0);
+    for follower in [true, false] {
+        frame.loads.clear();
+        frame
+            .load(NodalLoad {
+                node: nodes[2],
+                force: f0,
+                moment: m0,
+                follower,
+                history: History::constant(),
+            })
+            .unwrap();
+        let mut s = frame.build().unwrap();
+        // Turn the whole structure rigidly: no strain, so the end node's force is the load.
+        let q = so3::exp(Vec3::new(0.3, -0.2, 0.9));
+        for &n in &nodes {
+            s.set_pose(n, q * frame.nodes[n], q);
+        }
+        let i = match s.nodes[nodes[2]] {
+            liemid::beam::NodeRef::Body(i) => i,
+            liemid::beam::NodeRef::Fixed(_) => unreachable!(),
+        };
+        let mut force = vec![Vec3::ZERO; s.bodies.len()];
+        let mut torque = force.clone();
+        s.structure.compute(s.bodies.configuration(), &mut force, &mut torque);
+        let spatial_moment = s.bodies.rotation[i] * torque[i];
+        let (f, m) = if follower { (q * f0, q * m0) } else { (f0, m0) };
+        assert!((force[i] - f).norm() < 1e-12, "{follower}: {:?} vs {f:?}", force[i]);
+        assert!(
+            (spatial_moment - m).norm() < 1e-12,
+            "{follower}: {spatial_moment:?} vs {m:?}"
+        );
+    }
+}
+
+#[test]
+fn under_gravity_a_free_beam_falls_with_g_and_keeps_its_shape() {
+    let p = problems::flying_beam(6).unwrap();
+    let mut frame = p.frame.clone();
+    frame.loads.clear();
+    frame.gravity = Vec3::new(0.0, 0.0, -9.81);
+    let mut s = frame.build().unwrap();
+    let h = s.stability(0).default_step(BeamMethod::Splitting);
+    let mass: f64 = s.bodies.mass.iter().sum();
+    let steps = 1000;
+    for _ in 0..steps {
+        s.step(h).unwrap();
+    }
+    let t = steps as f64 * h;
+    let p_total = s.totals().linear_momentum;
+    // Each step adds exactly m g h of momentum (the internal forces sum to zero).
+    assert!(
+        (p_total.z + mass * 9.81 * t).abs() < 1e-10 * mass * 9.81 * t,
+        "{p_total:?}"
+    );
+    for node in 0..frame.nodes.len() {
+        let u = s.displacement(node);
+        assert!(
+            (u.z + 0.5 * 9.81 * t * t).abs() < 1e-8 && u.x.abs() < 1e-8,
+            "node {node}: {u:?}"
+        );
+    }
+}
