@@ -93,7 +93,12 @@ fn run_with_threads(threads: usize) -> Bodies {
 }
 
 fn run_with_threads_and_rotation(threads: usize, rotation: FreeRotation, moments: Vec3) -> Bodies {
-    let dipoles = Dipoles::new(Vec3::new(0.0, 0.0, 1.0), 1.0, 1.0, Some(3.0), Some(9.1)).unwrap();
+    run_with(threads, rotation, moments, 0)
+}
+
+fn run_with(threads: usize, rotation: FreeRotation, moments: Vec3, half_list_max_bodies: usize) -> Bodies {
+    let mut dipoles = Dipoles::new(Vec3::new(0.0, 0.0, 1.0), 1.0, 1.0, Some(3.0), Some(9.1)).unwrap();
+    dipoles.half_list_max_bodies = half_list_max_bodies;
     let mut b = Bodies::new();
     b.set_free_rotation(rotation).unwrap();
     let mut rng = Rng::new(7);
@@ -124,8 +129,24 @@ fn results_are_identical_for_one_and_two_threads() {
     );
     assert!(a.rotation == b.rotation && a.pi == b.pi, "rotation differs");
     assert!(a.force == b.force && a.torque == b.torque, "forces differ");
+    let c = run_with_threads(3);
+    assert!(
+        a.position == c.position && a.pi == c.pi && a.force == c.force,
+        "3 threads differ"
+    );
     // And the bodies did move.
     assert!(a.position[0] != Vec3::ZERO);
+    // The half list (each pair once, per-pair slots) too, on 1, 2 and 3 threads.
+    let moments = Vec3::new(0.1, 0.1, 0.1);
+    let h1 = run_with(1, FreeRotation::Midpoint, moments, usize::MAX);
+    for threads in [2, 3] {
+        let h = run_with(threads, FreeRotation::Midpoint, moments, usize::MAX);
+        assert!(
+            h1.position == h.position && h1.pi == h.pi && h1.force == h.force,
+            "half list: {threads} threads differ"
+        );
+    }
+    assert!(h1.force != a.force, "the half list sums in another order");
 }
 
 #[test]
@@ -608,10 +629,10 @@ fn the_verlet_list_is_rebuilt_on_displacement_and_gives_the_forces_of_any_skin()
     println!("Verlet list: {builds_a} builds in 201 evaluations with skin 0.3, {builds_b} with skin 0");
     assert!((2..40).contains(&builds_a), "{builds_a} builds");
     assert!(builds_b >= 200);
-    // The full list (each pair twice, as above the half list's size limit) gives the same
-    // forces as the half list (each pair once, Newton's third law) to rounding.
+    // The half list (each pair once, Newton's third law) gives the same forces as the full
+    // list (each pair twice, the default, in SIMD lanes) to rounding.
     let (mut c, mut model_c) = problems::dipolar_fluid(1000, 0.3, 4).unwrap();
-    model_c.half_list_max_bodies = 0;
+    model_c.half_list_max_bodies = usize::MAX;
     for _ in 0..200 {
         c.step(&model_c, 2e-3).unwrap();
     }

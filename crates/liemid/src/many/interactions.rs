@@ -172,12 +172,14 @@ struct Scratch {
 pub const DEFAULT_SKIN: f64 = 0.3;
 
 /// Bodies up to which the forces use the half list (each pair once, Newton's third law,
-/// through per-pair slots); above, each body gathers its full list (each pair twice). The
-/// crossover, measured with `farm-bench --vs` on this 2-core machine (2026-12-01): the half
-/// list took 0.82x the time at 10³ bodies (2 threads) and 0.83x at 10⁴ (1 thread), but
-/// 1.11x at 10⁵ (1 thread) and 1.04x (2 threads), where its 1.6 kB of pair slots per body
-/// no longer stay in cache.
-pub const HALF_LIST_MAX_BODIES: usize = 30_000;
+/// through per-pair slots); above, each body gathers its full list (each pair twice, four
+/// pairs at a time in AVX lanes where the processor has AVX, the same bits as the scalar
+/// sum). Since the gather runs in lanes the full list is faster at every size measured
+/// (2026-12-02, 2-core machine, `liemid many --model dipoles`, M body-steps/s, half list
+/// → full list in lanes): 10³ bodies 1.37 → 1.68 (1 thread), 1.20 → 1.85 (2 threads); 10⁴
+/// 1.06 → 1.57, 1.83 → 2.74; so the default is 0 (the half list only on request). It does
+/// not depend on the processor, so a machine without AVX gives the same bits, slower.
+pub const HALF_LIST_MAX_BODIES: usize = 0;
 
 /// What one evaluation of the [`Dipoles`] pair sum needs of the model: the switch in squared
 /// radii (`S = 1` up to `s2`, `0` beyond `c2`, `inv_width = 1/(c2 − s2)`) and the periodic box
@@ -375,6 +377,45 @@ impl Dipoles {
             energy += 4.0 * self.epsilon * (s6 * s6 - s6) + self.epsilon;
         }
         Some((total, field, field_j, energy))
+    }
+
+    /// The force and field on a body at `xi` with dipole `mi` from its neighbours `list`,
+    /// summed as the SIMD lanes sum them: pair `k` into accumulator `k mod 4`, combined as
+    /// `(a₀ + a₁) + (a₂ + a₃)`; the lanes give the same bits.
+    fn gather_pairs(
+        &self,
+        k: &PairConstants,
+        xi: Vec3,
+        mi: Vec3,
+        position: &[Vec3],
+        dipoles: &[Vec3],
+        list: &[u32],
+    ) -> (Vec3, Vec3) {
+        let mut f = [Vec3::ZERO; 4];
+        let mut b = [Vec3::ZERO; 4];
+        for (n, &j) in list.iter().enumerate() {
+            let j = j as usize;
+            let r = Self::separation(k, xi, position[j]);
+            if let Some((fij, field, _)) = self.pair(k, r, mi, dipoles[j]) {
+                f[n % 4] += fij;
+                b[n % 4] += field;
+            }
+        }
+        ((f[0] + f[1]) + (f[2] + f[3]), (b[0] + b[1]) + (b[2] + b[3]))
+    }
+
+    /// The constants of the SIMD pair kernel.
+    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+    fn lane_kernel(&self, k: &PairConstants) -> crate::many::lanes::PairKernel {
+        crate::many::lanes::PairKernel {
+            c2: k.c2,
+            s2: k.s2,
+            inv_width: k.inv_width,
+            periodic: k.periodic,
+            sigma2: self.sigma * self.sigma,
+            epsilon: self.epsilon,
+            wca: 2f64.powf(-1.0 / 3.0),
+        }
     }
 
     /// Verlet-list builds so far (the list is rebuilt when a body has moved more than half
@@ -624,17 +665,26 @@ impl Interaction for Dipoles {
             // Large systems: every body gathers its own neighbours (each pair twice), which
             // streams less memory than the half list's pair slots.
             let (start, list) = (&s.list_start, &s.list);
+            #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+            let (avx, lane_kernel) = (crate::many::lanes::use_avx(), self.lane_kernel(&constants));
             for_chunks(force, torque, |i, f, t| {
                 let mi = dipoles[i];
-                let (mut fi, mut bi) = (Vec3::ZERO, Vec3::ZERO);
-                for &j in &list[start[i]..start[i + 1]] {
-                    let j = j as usize;
-                    let r = Self::separation(&constants, c.position[i], c.position[j]);
-                    if let Some((fij, field, _)) = self.pair(&constants, r, mi, dipoles[j]) {
-                        fi += fij;
-                        bi += field;
-                    }
-                }
+                let neighbours = &list[start[i]..start[i + 1]];
+                #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+                let lanes = crate::many::lanes::gather_pairs_x4(
+                    avx,
+                    &lane_kernel,
+                    c.position[i],
+                    mi,
+                    c.position,
+                    &dipoles,
+                    neighbours,
+                );
+                #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
+                let lanes = None;
+                let (fi, bi) = lanes.unwrap_or_else(|| {
+                    self.gather_pairs(&constants, c.position[i], mi, c.position, &dipoles, neighbours)
+                });
                 *f = fi;
                 *t = c.rotation[i].tr_mul_vec(mi.cross(bi));
             });
@@ -759,5 +809,57 @@ mod tests {
         let open = Dipoles::new(Vec3::ZERO, 1.0, 1.0, Some(3.0), None).unwrap();
         let a = Vec3::new(10.0, -20.0, 30.0);
         assert_eq!(Dipoles::separation(&open.constants(), a, Vec3::ZERO), a);
+    }
+
+    /// The SIMD pair gather gives the scalar sum's bits: periodic and open boxes, pairs in
+    /// the WCA range, in the switch shell and beyond the cutoff, lists of every length mod 4.
+    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+    #[test]
+    fn simd_pair_gather_equals_the_scalar_sum_bit_for_bit() {
+        if !crate::many::lanes::use_avx() {
+            eprintln!("no AVX on this processor: the lanes are never used");
+            return;
+        }
+        let mut rng = Rng::new(17);
+        for (box_length, cutoff) in [(Some(9.0), 3.0), (None, 2.5)] {
+            let model = Dipoles::new(Vec3::new(0.0, 0.0, 1.0), 1.0, 1.0, Some(cutoff), box_length).unwrap();
+            let k = model.constants();
+            let lanes = model.lane_kernel(&k);
+            let side = box_length.unwrap_or(8.0);
+            let n = 64;
+            let position: Vec<Vec3> = (0..n)
+                .map(|_| Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * side)
+                .collect();
+            let dipoles: Vec<Vec3> = (0..n).map(|_| rng.unit_vector()).collect();
+            let mut taken = 0;
+            for trial in 0..400 {
+                let i = trial % n;
+                let len = trial % 13;
+                let list: Vec<u32> = (0..len)
+                    .map(|_| (rng.next_u64() % n as u64) as u32)
+                    .filter(|&j| j as usize != i)
+                    .collect();
+                let scalar = model.gather_pairs(&k, position[i], dipoles[i], &position, &dipoles, &list);
+                if let Some(simd) = crate::many::lanes::gather_pairs_x4(
+                    true,
+                    &lanes,
+                    position[i],
+                    dipoles[i],
+                    &position,
+                    &dipoles,
+                    &list,
+                ) {
+                    taken += 1;
+                    for (a, b) in [(simd.0, scalar.0), (simd.1, scalar.1)] {
+                        assert_eq!(
+                            a.to_array().map(f64::to_bits),
+                            b.to_array().map(f64::to_bits),
+                            "{a:?} vs {b:?}"
+                        );
+                    }
+                }
+            }
+            assert_eq!(taken, 400, "the lanes handed over a group");
+        }
     }
 }

@@ -18,7 +18,7 @@
 
 use std::arch::x86_64::{
     __m256d, _mm256_add_pd, _mm256_and_pd, _mm256_andnot_pd, _mm256_blendv_pd, _mm256_cmp_pd, _mm256_div_pd,
-    _mm256_loadu_pd, _mm256_movemask_pd, _mm256_mul_pd, _mm256_or_pd, _mm256_set1_pd, _mm256_setzero_pd,
+    _mm256_loadu_pd, _mm256_max_pd, _mm256_movemask_pd, _mm256_mul_pd, _mm256_or_pd, _mm256_set1_pd, _mm256_setzero_pd,
     _mm256_sqrt_pd, _mm256_storeu_pd, _mm256_sub_pd, _mm256_xor_pd, _CMP_EQ_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_NEQ_UQ,
 };
 use std::ops::{Add, Mul, Neg, Sub};
@@ -64,6 +64,10 @@ impl F {
     #[inline(always)]
     fn div(self, b: F) -> F {
         F(unsafe { _mm256_div_pd(self.0, b.0) })
+    }
+    #[inline(always)]
+    fn max(self, b: F) -> F {
+        F(unsafe { _mm256_max_pd(self.0, b.0) })
     }
     #[inline(always)]
     fn sqrt(self) -> F {
@@ -250,6 +254,13 @@ impl Sub for V {
     #[inline(always)]
     fn sub(self, b: V) -> V {
         self.zip(b, |x, y| x - y)
+    }
+}
+impl Mul<F> for V {
+    type Output = V;
+    #[inline(always)]
+    fn mul(self, s: F) -> V {
+        self.scale(s)
     }
 }
 
@@ -449,6 +460,133 @@ pub(crate) fn free_rotation_x4(
 ) -> bool {
     // SAFETY: `avx` is true only when `use_avx` detected AVX on this processor.
     avx && unsafe { kernel_avx(d, d_inv, inverse_norm, rotation, pi, h) }
+}
+
+/// The constants of the dipole pair kernel, as `Dipoles::kernel` uses them: squared cutoff
+/// and switch radii, `1/(r_c² − r_s²)`, the periodic box and its inverse, `σ²`, `ε`, and the
+/// WCA range `(σ/r)² > 2^{-1/3}`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PairKernel {
+    pub(crate) c2: f64,
+    pub(crate) s2: f64,
+    pub(crate) inv_width: f64,
+    pub(crate) periodic: Option<(f64, f64)>,
+    pub(crate) sigma2: f64,
+    pub(crate) epsilon: f64,
+    pub(crate) wca: f64,
+}
+
+/// The force and field on a body at `xi` with dipole `mi` from the neighbours `list`, four
+/// pairs at a time: pair `k` is summed in lane `k mod 4`, the lanes are combined as
+/// `(l₀ + l₁) + (l₂ + l₃)`, every lane performs the scalar kernel's operations in its order
+/// (no FMA), and a pair beyond the cutoff leaves its lane untouched, so the scalar path
+/// that sums the same way gives the same bits. `None` (nothing done) when a periodic
+/// separation needs the scalar path's large-quotient rounding, or without AVX.
+#[inline]
+pub(crate) fn gather_pairs_x4(
+    avx: bool,
+    k: &PairKernel,
+    xi: Vec3,
+    mi: Vec3,
+    position: &[Vec3],
+    dipole: &[Vec3],
+    list: &[u32],
+) -> Option<(Vec3, Vec3)> {
+    if !avx {
+        return None;
+    }
+    // SAFETY: `avx` is true only when `use_avx` detected AVX on this processor.
+    unsafe { gather_avx(k, xi, mi, position, dipole, list) }
+}
+
+#[target_feature(enable = "avx")]
+unsafe fn gather_avx(
+    k: &PairKernel,
+    xi: Vec3,
+    mi: Vec3,
+    position: &[Vec3],
+    dipole: &[Vec3],
+    list: &[u32],
+) -> Option<(Vec3, Vec3)> {
+    let zero = V {
+        x: F::splat(0.0),
+        y: F::splat(0.0),
+        z: F::splat(0.0),
+    };
+    let (mut fa, mut ba) = (zero, zero);
+    let splat = |v: Vec3| V {
+        x: F::splat(v.x),
+        y: F::splat(v.y),
+        z: F::splat(v.z),
+    };
+    let (xi4, mi4) = (splat(xi), splat(mi));
+    let (c2, s2, inv_width) = (F::splat(k.c2), F::splat(k.s2), F::splat(k.inv_width));
+    let live_lane = F::splat(0.0);
+    for group in list.chunks(LANES) {
+        // Padded lanes sit on the body itself (r = 0) and are masked out.
+        let mut xs = [xi; LANES];
+        let mut ms = [Vec3::ZERO; LANES];
+        let mut live = [0.0f64; LANES];
+        for (lane, &j) in group.iter().enumerate() {
+            xs[lane] = position[j as usize];
+            ms[lane] = dipole[j as usize];
+            live[lane] = 1.0;
+        }
+        let mut r = xi4 - V::gather(&xs);
+        if let Some((l, inv_l)) = k.periodic {
+            let limit = F::splat(2_251_799_813_685_248.0);
+            let m = F::splat(6_755_399_441_055_744.0);
+            let nearest = |x: F| -> Option<F> {
+                let q = x * inv_l;
+                // |q| < 2^51 in every lane, as the scalar path requires for this rounding.
+                let abs_q = q.max(-q);
+                if !abs_q.le(limit).and(abs_q.gt(-limit)).all() {
+                    return None;
+                }
+                Some(x - ((q + m) - m) * l)
+            };
+            r = V {
+                x: nearest(r.x)?,
+                y: nearest(r.y)?,
+                z: nearest(r.z)?,
+            };
+        }
+        let mj = V::gather(&ms);
+        let r2 = r.norm_squared();
+        let inside = r2.le(c2).and(F::from_array(live).gt(live_lane));
+        if !inside.any() {
+            continue;
+        }
+        let inv2 = F::splat(1.0).div(r2);
+        let inv = inv2.sqrt();
+        let inv3 = inv * inv2;
+        let inv5 = inv3 * inv2;
+        let (a, b, ab) = (mi4.dot(r), mj.dot(r), mi4.dot(mj));
+        let prod = a * b;
+        let force = (r * (ab - F::splat(5.0) * prod * inv2) + (mj * a + mi4 * b)) * (F::splat(3.0) * inv5);
+        let field = (r * (F::splat(3.0) * b * inv2) - mj) * inv3;
+        let energy = ab * inv3 - F::splat(3.0) * prod * inv5;
+        let t = (r2 - s2).max(F::splat(0.0)) * inv_width;
+        let sw = F::splat(1.0) - t * t * (F::splat(3.0) - F::splat(2.0) * t);
+        let ds = F::splat(12.0) * energy * t * (F::splat(1.0) - t) * inv_width;
+        let force = force * sw + r * ds;
+        let field = field * sw;
+        let s2w = F::splat(k.sigma2) * inv2;
+        let s6 = s2w * s2w * s2w;
+        let wca = r * (F::splat(24.0 * k.epsilon) * (F::splat(2.0) * s6 * s6 - s6) * inv2);
+        let repulsive = s2w.gt(F::splat(k.wca));
+        let total = force.replace(repulsive, force + wca);
+        fa = fa.replace(inside, fa + total);
+        ba = ba.replace(inside, ba + field);
+    }
+    let combine = |v: F| {
+        let a = v.to_array();
+        (a[0] + a[1]) + (a[2] + a[3])
+    };
+    Some((
+        Vec3::new(combine(fa.x), combine(fa.y), combine(fa.z)),
+        Vec3::new(combine(ba.x), combine(ba.y), combine(ba.z)),
+    ))
 }
 
 #[cfg(test)]
