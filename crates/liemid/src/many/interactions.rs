@@ -680,11 +680,12 @@ impl Interaction for Dipoles {
                     &dipoles,
                     neighbours,
                 );
-                #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
-                let lanes = None;
+                #[cfg(all(feature = "simd", target_arch = "x86_64"))]
                 let (fi, bi) = lanes.unwrap_or_else(|| {
                     self.gather_pairs(&constants, c.position[i], mi, c.position, &dipoles, neighbours)
                 });
+                #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
+                let (fi, bi) = self.gather_pairs(&constants, c.position[i], mi, c.position, &dipoles, neighbours);
                 *f = fi;
                 *t = c.rotation[i].tr_mul_vec(mi.cross(bi));
             });
