@@ -18,7 +18,7 @@
 
 use std::arch::x86_64::{
     __m256d, _mm256_add_pd, _mm256_and_pd, _mm256_andnot_pd, _mm256_blendv_pd, _mm256_cmp_pd, _mm256_div_pd,
-    _mm256_loadu_pd, _mm256_max_pd, _mm256_movemask_pd, _mm256_mul_pd, _mm256_or_pd, _mm256_set1_pd, _mm256_setzero_pd,
+    _mm256_loadu_pd, _mm256_max_pd, _mm256_movemask_pd, _mm256_set_pd, _mm256_mul_pd, _mm256_or_pd, _mm256_set1_pd, _mm256_setzero_pd,
     _mm256_sqrt_pd, _mm256_storeu_pd, _mm256_sub_pd, _mm256_xor_pd, _CMP_EQ_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_NEQ_UQ,
 };
 use std::ops::{Add, Mul, Neg, Sub};
@@ -171,6 +171,15 @@ struct V {
 }
 
 impl V {
+    /// Four vectors straight into the lanes (no round trip through memory).
+    #[inline(always)]
+    fn set(v: &[Vec3; LANES]) -> V {
+        V {
+            x: F(unsafe { _mm256_set_pd(v[3].x, v[2].x, v[1].x, v[0].x) }),
+            y: F(unsafe { _mm256_set_pd(v[3].y, v[2].y, v[1].y, v[0].y) }),
+            z: F(unsafe { _mm256_set_pd(v[3].z, v[2].z, v[1].z, v[0].z) }),
+        }
+    }
     #[inline(always)]
     fn gather(v: &[Vec3; LANES]) -> V {
         V {
@@ -532,7 +541,7 @@ unsafe fn gather_avx(
             ms[lane] = dipole[j as usize];
             live[lane] = 1.0;
         }
-        let mut r = xi4 - V::gather(&xs);
+        let mut r = xi4 - V::set(&xs);
         if let Some((l, inv_l)) = k.periodic {
             let limit = F::splat(2_251_799_813_685_248.0);
             let m = F::splat(6_755_399_441_055_744.0);
@@ -551,7 +560,7 @@ unsafe fn gather_avx(
                 z: nearest(r.z)?,
             };
         }
-        let mj = V::gather(&ms);
+        let mj = V::set(&ms);
         let r2 = r.norm_squared();
         let inside = r2.le(c2).and(F::from_array(live).gt(live_lane));
         if !inside.any() {
