@@ -157,8 +157,13 @@ struct Scratch {
     half_j: Vec<u32>,
     as_second_start: Vec<usize>,
     as_second: Vec<u32>,
-    /// Per pair: the force on the first body and the fields at the first and the second.
-    pair_out: Vec<[Vec3; 3]>,
+    /// The half list's sums: per body, the force and field from its partners `j > i`; per
+    /// chunk of first bodies, per pair, the force on and the field at the second body.
+    own: Vec<[Vec3; 2]>,
+    chunk_slots: Vec<Vec<[Vec3; 2]>>,
+    /// Where each body's pairs as second have their slot: (chunk, index in the chunk), in
+    /// pair order.
+    as_second_slot: Vec<(u32, u32)>,
     /// Per chunk of bodies, while the list is built in parallel: the neighbours found and
     /// each body's count (kept to reuse their memory).
     chunk_lists: Vec<(Vec<u32>, Vec<u32>)>,
@@ -179,7 +184,7 @@ pub const DEFAULT_SKIN: f64 = 0.3;
 /// → full list in lanes): 10³ bodies 1.37 → 1.68 (1 thread), 1.20 → 1.85 (2 threads); 10⁴
 /// 1.06 → 1.57, 1.83 → 2.74; so the default is 0 (the half list only on request). It does
 /// not depend on the processor, so a machine without AVX gives the same bits, slower.
-pub const HALF_LIST_MAX_BODIES: usize = 0;
+pub const HALF_LIST_MAX_BODIES: usize = 30_000;
 
 /// What one evaluation of the [`Dipoles`] pair sum needs of the model: the switch in squared
 /// radii (`S = 1` up to `s2`, `0` beyond `c2`, `inv_width = 1/(c2 − s2)`) and the periodic box
@@ -404,6 +409,38 @@ impl Dipoles {
         ((f[0] + f[1]) + (f[2] + f[3]), (b[0] + b[1]) + (b[2] + b[3]))
     }
 
+    /// Each pair of body `i` (at `xi`, dipole `mi`) with its partners `list` once, as the SIMD
+    /// lanes do it: the force and field on `i` summed as [`Dipoles::gather_pairs`] sums them,
+    /// and per pair the force on and the field at the partner into `slots` (zeros beyond the
+    /// cutoff).
+    #[allow(clippy::too_many_arguments)]
+    fn half_pairs(
+        &self,
+        k: &PairConstants,
+        xi: Vec3,
+        mi: Vec3,
+        position: &[Vec3],
+        dipoles: &[Vec3],
+        list: &[u32],
+        slots: &mut [[Vec3; 2]],
+    ) -> (Vec3, Vec3) {
+        let mut f = [Vec3::ZERO; 4];
+        let mut b = [Vec3::ZERO; 4];
+        for (n, (&j, slot)) in list.iter().zip(slots.iter_mut()).enumerate() {
+            let j = j as usize;
+            let r = Self::separation(k, xi, position[j]);
+            *slot = match self.pair_both(k, r, mi, dipoles[j]) {
+                Some((fij, bi, bj)) => {
+                    f[n % 4] += fij;
+                    b[n % 4] += bi;
+                    [-fij, bj]
+                }
+                None => [Vec3::ZERO; 2],
+            };
+        }
+        ((f[0] + f[1]) + (f[2] + f[3]), (b[0] + b[1]) + (b[2] + b[3]))
+    }
+
     /// The constants of the SIMD pair kernel.
     #[cfg(all(feature = "simd", target_arch = "x86_64"))]
     fn lane_kernel(&self, k: &PairConstants) -> crate::many::lanes::PairKernel {
@@ -517,6 +554,13 @@ impl Dipoles {
         for (p, &j) in s.half_j.iter().enumerate() {
             s.as_second[s.fill[j as usize]] = p as u32;
             s.fill[j as usize] += 1;
+        }
+        s.as_second_slot.clear();
+        for &p in &s.as_second {
+            let first = s.half_i[p as usize] as usize;
+            let k = first / chunk;
+            let local = p as usize - s.half_start[k * chunk];
+            s.as_second_slot.push((k as u32, local as u32));
         }
         s.list_start = list_start;
         s.list = list;
@@ -693,45 +737,71 @@ impl Interaction for Dipoles {
             return;
         }
         if !s.reference.is_empty() && s.reference.len() == c.position.len() && self.cutoff.is_some() {
-            // Each pair once (Newton's third law): its force and both fields into its slot,
-            // then every body sums its slots, as first and then as second, in pair order,
-            // so the result does not depend on the thread count.
-            s.pair_out.resize(s.half_i.len(), [Vec3::ZERO; 3]);
-            let (hi, hj) = (&s.half_i, &s.half_j);
+            // Each pair once (Newton's third law), body by body over its partners j > i in
+            // lanes: the force and field on i summed as the gather sums them, the force and
+            // field on j into the pair's slot (slots live with the chunk of their first
+            // body); then every body adds its slots as second, in pair order. Nothing
+            // depends on the thread count.
+            let chunk = crate::many::CHUNK;
+            let n = c.position.len();
+            s.own.resize(n, [Vec3::ZERO; 2]);
+            let (half_start, half_j) = (&s.half_start, &s.half_j);
             let position = c.position;
-            let one = |p: usize, out: &mut [Vec3; 3]| {
-                let (i, j) = (hi[p] as usize, hj[p] as usize);
-                let r = Self::separation(&constants, position[i], position[j]);
-                *out = match self.pair_both(&constants, r, dipoles[i], dipoles[j]) {
-                    Some((f, bi, bj)) => [f, bi, bj],
-                    None => [Vec3::ZERO; 3],
-                };
+            #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+            let (avx, lane_kernel) = (crate::many::lanes::use_avx(), self.lane_kernel(&constants));
+            let one_chunk = |k: usize, own: &mut [[Vec3; 2]], slots: &mut Vec<[Vec3; 2]>| {
+                let first = k * chunk;
+                let base = half_start[first];
+                slots.resize(half_start[first + own.len()] - base, [Vec3::ZERO; 2]);
+                for (q, o) in own.iter_mut().enumerate() {
+                    let i = first + q;
+                    let range = half_start[i]..half_start[i + 1];
+                    let partners = &half_j[range.clone()];
+                    let out = &mut slots[range.start - base..range.end - base];
+                    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+                    let lanes = crate::many::lanes::half_pairs_x4(
+                        avx,
+                        &lane_kernel,
+                        position[i],
+                        dipoles[i],
+                        position,
+                        &dipoles,
+                        partners,
+                        out,
+                    );
+                    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+                    let (fi, bi) = lanes.unwrap_or_else(|| {
+                        self.half_pairs(&constants, position[i], dipoles[i], position, &dipoles, partners, out)
+                    });
+                    #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
+                    let (fi, bi) =
+                        self.half_pairs(&constants, position[i], dipoles[i], position, &dipoles, partners, out);
+                    *o = [fi, bi];
+                }
             };
+            s.chunk_slots.resize_with(n.div_ceil(chunk), Vec::new);
             #[cfg(feature = "parallel")]
             {
                 use rayon::prelude::*;
-                const PAIRS: usize = 4096;
-                s.pair_out.par_chunks_mut(PAIRS).enumerate().for_each(|(k, chunk)| {
-                    for (q, out) in chunk.iter_mut().enumerate() {
-                        one(k * PAIRS + q, out);
-                    }
-                });
+                crate::many::contiguous_per_thread(
+                    s.own
+                        .par_chunks_mut(chunk)
+                        .zip(s.chunk_slots.par_iter_mut())
+                        .enumerate(),
+                )
+                .for_each(|(k, (own, slots))| one_chunk(k, own, slots));
             }
             #[cfg(not(feature = "parallel"))]
-            for (p, out) in s.pair_out.iter_mut().enumerate() {
-                one(p, out);
+            for (k, (own, slots)) in s.own.chunks_mut(chunk).zip(s.chunk_slots.iter_mut()).enumerate() {
+                one_chunk(k, own, slots);
             }
-            let (start, second_start, second, out) = (&s.half_start, &s.as_second_start, &s.as_second, &s.pair_out);
+            let (second_start, second, own, slots) = (&s.as_second_start, &s.as_second_slot, &s.own, &s.chunk_slots);
             for_chunks(force, torque, |i, f, t| {
-                let (mut fi, mut bi) = (Vec3::ZERO, Vec3::ZERO);
-                for o in &out[start[i]..start[i + 1]] {
+                let [mut fi, mut bi] = own[i];
+                for &(k, q) in &second[second_start[i]..second_start[i + 1]] {
+                    let o = &slots[k as usize][q as usize];
                     fi += o[0];
                     bi += o[1];
-                }
-                for &p in &second[second_start[i]..second_start[i + 1]] {
-                    let o = &out[p as usize];
-                    fi -= o[0];
-                    bi += o[2];
                 }
                 *f = fi;
                 *t = c.rotation[i].tr_mul_vec(dipoles[i].cross(bi));

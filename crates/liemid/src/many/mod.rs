@@ -173,7 +173,7 @@ pub struct Totals {
 /// every pass and every step, and finds them in its own caches (measured: 2 threads went
 /// from 1.3-1.6 to 1.7-1.8 times the speed of 1 for 10⁴ to 10⁶ torque-free bodies).
 #[cfg(feature = "parallel")]
-fn contiguous_per_thread<I: rayon::iter::IndexedParallelIterator>(chunks: I) -> rayon::iter::MinLen<I> {
+pub(crate) fn contiguous_per_thread<I: rayon::iter::IndexedParallelIterator>(chunks: I) -> rayon::iter::MinLen<I> {
     let threads = rayon::current_num_threads().max(1);
     let per_thread = (chunks.len() / threads).max(1);
     chunks.with_min_len(per_thread)
