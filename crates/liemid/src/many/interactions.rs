@@ -176,14 +176,16 @@ struct Scratch {
 /// The default Verlet skin, as LAMMPS's default for Lennard-Jones units.
 pub const DEFAULT_SKIN: f64 = 0.3;
 
-/// Bodies up to which the forces use the half list (each pair once, Newton's third law,
-/// through per-pair slots); above, each body gathers its full list (each pair twice, four
-/// pairs at a time in AVX lanes where the processor has AVX, the same bits as the scalar
-/// sum). Since the gather runs in lanes the full list is faster at every size measured
-/// (2026-12-02, 2-core machine, `liemid many --model dipoles`, M body-steps/s, half list
-/// → full list in lanes): 10³ bodies 1.37 → 1.68 (1 thread), 1.20 → 1.85 (2 threads); 10⁴
-/// 1.06 → 1.57, 1.83 → 2.74; so the default is 0 (the half list only on request). It does
-/// not depend on the processor, so a machine without AVX gives the same bits, slower.
+/// Bodies up to which the forces use the half list (each pair once, Newton's third law:
+/// the partner's share through per-pair slots); above, each body gathers its full list
+/// (each pair twice, no slots). Both run four pairs at a time in AVX lanes where the
+/// processor has AVX (the same bits as their scalar sums). The crossover, measured with
+/// `farm-bench --vs` (whole runs, list builds included) on this 2-core machine
+/// (2026-12-02), half list against full list: 0.89x the time at 10³ bodies (1 thread),
+/// 0.93x (2 threads), 0.98x at 10⁴, but 1.17x at 10⁵ (1 thread) and 1.19x (2 threads),
+/// where the slots and the serial transpose of the half list at each build cost more than
+/// the second kernel evaluation. It does not depend on the processor, so a machine without
+/// AVX gives the same bits, slower.
 pub const HALF_LIST_MAX_BODIES: usize = 30_000;
 
 /// What one evaluation of the [`Dipoles`] pair sum needs of the model: the switch in squared
