@@ -474,6 +474,8 @@ impl Dipoles {
         let limit = (0.5 * self.skin) * (0.5 * self.skin);
         let fresh = s.reference.len() == n
             && s.list_start.len() == n + 1
+            // The half list exists exactly when it is to be used (the limit may have changed).
+            && (n <= self.half_list_max_bodies) == (s.half_start.len() == n + 1)
             && c.position
                 .iter()
                 .zip(&s.reference)
@@ -527,42 +529,50 @@ impl Dipoles {
             list.extend_from_slice(entries);
         }
         s.chunk_lists = chunks;
-        // The half list and its transpose, in pair order.
+        // The half list and its transpose, in pair order (serial: built only when used).
         s.half_start.clear();
         s.half_i.clear();
         s.half_j.clear();
-        s.half_start.push(0);
-        for i in 0..n {
-            for &j in &list[list_start[i]..list_start[i + 1]] {
-                if (j as usize) > i {
-                    s.half_i.push(i as u32);
-                    s.half_j.push(j);
-                }
-            }
-            s.half_start.push(s.half_i.len());
-        }
         s.as_second_start.clear();
-        s.as_second_start.resize(n + 1, 0);
-        for &j in &s.half_j {
-            s.as_second_start[j as usize + 1] += 1;
-        }
-        for k in 0..n {
-            s.as_second_start[k + 1] += s.as_second_start[k];
-        }
-        s.fill.clear();
-        s.fill.extend_from_slice(&s.as_second_start);
         s.as_second.clear();
-        s.as_second.resize(s.half_j.len(), 0);
-        for (p, &j) in s.half_j.iter().enumerate() {
-            s.as_second[s.fill[j as usize]] = p as u32;
-            s.fill[j as usize] += 1;
-        }
         s.as_second_slot.clear();
-        for &p in &s.as_second {
-            let first = s.half_i[p as usize] as usize;
-            let k = first / chunk;
-            let local = p as usize - s.half_start[k * chunk];
-            s.as_second_slot.push((k as u32, local as u32));
+        if n <= self.half_list_max_bodies {
+            s.half_start.clear();
+            s.half_i.clear();
+            s.half_j.clear();
+            s.half_start.push(0);
+            for i in 0..n {
+                for &j in &list[list_start[i]..list_start[i + 1]] {
+                    if (j as usize) > i {
+                        s.half_i.push(i as u32);
+                        s.half_j.push(j);
+                    }
+                }
+                s.half_start.push(s.half_i.len());
+            }
+            s.as_second_start.clear();
+            s.as_second_start.resize(n + 1, 0);
+            for &j in &s.half_j {
+                s.as_second_start[j as usize + 1] += 1;
+            }
+            for k in 0..n {
+                s.as_second_start[k + 1] += s.as_second_start[k];
+            }
+            s.fill.clear();
+            s.fill.extend_from_slice(&s.as_second_start);
+            s.as_second.clear();
+            s.as_second.resize(s.half_j.len(), 0);
+            for (p, &j) in s.half_j.iter().enumerate() {
+                s.as_second[s.fill[j as usize]] = p as u32;
+                s.fill[j as usize] += 1;
+            }
+            s.as_second_slot.clear();
+            for &p in &s.as_second {
+                let first = s.half_i[p as usize] as usize;
+                let k = first / chunk;
+                let local = p as usize - s.half_start[k * chunk];
+                s.as_second_slot.push((k as u32, local as u32));
+            }
         }
         s.list_start = list_start;
         s.list = list;
