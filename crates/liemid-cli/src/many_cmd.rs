@@ -125,6 +125,11 @@ pub struct ManyArgs {
     /// the cutoff, a plain truncation.
     #[arg(long, allow_negative_numbers = true)]
     pub switch_start: Option<f64>,
+    /// How the dipole energy goes to zero at the cutoff: `switched` (the plain dipole up to
+    /// the switch start) or `shifted-force` (Allen and Germano's, LAMMPS's lj/sf/dipole/sf)
+    /// [default: switched].
+    #[arg(long)]
+    pub cutoff_form: Option<String>,
     /// Write the summary as JSON to FILE, or to standard output with `-`.
     #[arg(long)]
     pub json: Option<String>,
@@ -170,10 +175,20 @@ struct Settings {
     density: f64,
     cutoff: Option<f64>,
     switch_start: Option<f64>,
+    cutoff_form: liemid::interactions::CutoffForm,
     step: Option<f64>,
     t_end: Option<f64>,
     out: Option<PathBuf>,
     every: u64,
+}
+
+/// The cutoff form named `key`.
+fn parse_cutoff_form(key: &str) -> Result<liemid::interactions::CutoffForm, String> {
+    use liemid::interactions::CutoffForm;
+    [CutoffForm::Switched, CutoffForm::ShiftedForce]
+        .into_iter()
+        .find(|f| f.key() == key)
+        .ok_or_else(|| format!("unknown cutoff form \"{key}\" (switched, shifted-force)"))
 }
 
 fn settings(args: &ManyArgs) -> Result<Settings, String> {
@@ -186,6 +201,7 @@ fn settings(args: &ManyArgs) -> Result<Settings, String> {
         density: 0.3,
         cutoff: None,
         switch_start: None,
+        cutoff_form: liemid::interactions::CutoffForm::Switched,
         step: None,
         t_end: None,
         out: None,
@@ -212,7 +228,15 @@ fn settings(args: &ManyArgs) -> Result<Settings, String> {
             if let Some(sys) = Section::new(
                 &root,
                 "system",
-                &["model", "bodies", "seed", "density", "cutoff", "switch_start"],
+                &[
+                    "model",
+                    "bodies",
+                    "seed",
+                    "density",
+                    "cutoff",
+                    "switch_start",
+                    "cutoff_form",
+                ],
                 true,
             )? {
                 if let Some(m) = sys.string("model")? {
@@ -239,6 +263,9 @@ fn settings(args: &ManyArgs) -> Result<Settings, String> {
                 }
                 s.cutoff = sys.number("cutoff")?;
                 s.switch_start = sys.number("switch_start")?;
+                if let Some(f) = sys.string("cutoff_form")? {
+                    s.cutoff_form = parse_cutoff_form(f).map_err(|e| sys.err("cutoff_form", e))?;
+                }
             }
             if let Some(integ) = Section::new(
                 &root,
@@ -300,6 +327,12 @@ fn settings(args: &ManyArgs) -> Result<Settings, String> {
     }
     if args.switch_start.is_some() {
         s.switch_start = args.switch_start;
+    }
+    if let Some(f) = &args.cutoff_form {
+        s.cutoff_form = parse_cutoff_form(f).map_err(|e| format!("--cutoff-form: {e}"))?;
+    }
+    if s.cutoff_form == liemid::interactions::CutoffForm::ShiftedForce && s.switch_start.is_some() {
+        return Err("switch_start applies to the switched cutoff form, not to shifted-force".into());
     }
     if s.model != Model::Dipoles && (s.cutoff.is_some() || s.switch_start.is_some()) {
         return Err("cutoff and switch_start apply to the dipoles model only".into());
@@ -607,6 +640,7 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
                 }
                 m = m.with_switch_start(r_s).map_err(|e| input(e.to_string()))?;
             }
+            m.cutoff_form = args.cutoff_form;
             axis = m.moment;
             run_model(args, b, &m, run, &interrupt, observers(m.box_length)).map_err(|f| match f {
                 Failure::Run(m) => Failure::Run(format!("{m} (density {}, step {})", Num(args.density), Num(h))),
@@ -655,6 +689,7 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
     }
     let summary = json!({
         "model": args.model.key(),
+        "cutoff_form": if args.model == Model::Dipoles { json!(args.cutoff_form.key()) } else { json!(null) },
         "rotation": args.rotation.key(),
         "bodies": bodies.len(),
         "steps": steps,

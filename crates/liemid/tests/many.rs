@@ -4,7 +4,7 @@
 
 use liemid::free_flow::FreeFlow;
 use liemid::inertia::Inertia;
-use liemid::interactions::{Dipoles, Independent};
+use liemid::interactions::{CutoffForm, Dipoles, Independent};
 use liemid::many::{Bodies, FreeRotation, Interaction};
 use liemid::random::Rng;
 use liemid::{problems, so3, LieMidpointAlternating, LieMidpointExact, Mat3, RotationIntegrator, Vec3};
@@ -233,9 +233,15 @@ fn exact_rotation_of_torque_free_asymmetric_bodies_is_exact_at_a_large_step() {
 
 #[test]
 fn dipole_forces_and_torques_are_the_gradients_of_the_energy() {
-    // With a cutoff of 2.5 the switching shell [2.0, 2.5] holds the pairs two spacings apart.
-    for (cutoff, box_length) in [(None, None), (Some(2.5), Some(5.2))] {
-        let dipoles = Dipoles::new(Vec3::new(0.3, -0.2, 1.0), 1.0, 1.0, cutoff, box_length).unwrap();
+    // With a cutoff of 2.5 the switching shell [2.0, 2.5] holds the pairs two spacings apart;
+    // the shifted force (LAMMPS's lj/sf/dipole/sf) acts over the whole range.
+    for (cutoff, box_length, form) in [
+        (None, None, CutoffForm::Switched),
+        (Some(2.5), Some(5.2), CutoffForm::Switched),
+        (Some(2.5), Some(5.2), CutoffForm::ShiftedForce),
+    ] {
+        let mut dipoles = Dipoles::new(Vec3::new(0.3, -0.2, 1.0), 1.0, 1.0, cutoff, box_length).unwrap();
+        dipoles.cutoff_form = form;
         let mut b = dipolar_cluster(3, 1.15, 3);
         b.evaluate(&dipoles);
         let energy = |b: &Bodies| dipoles.potential_energy(b.configuration());
@@ -264,7 +270,7 @@ fn dipole_forces_and_torques_are_the_gradients_of_the_energy() {
         // Central differences: O(ε²) truncation and O(u |U| / ε) round-off, about 1e-8.
         assert!(
             worst < 1e-6,
-            "cutoff {cutoff:?}: finite differences differ by {worst:e}"
+            "cutoff {cutoff:?} {form:?}: finite differences differ by {worst:e}"
         );
     }
 }

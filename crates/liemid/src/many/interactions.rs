@@ -126,9 +126,11 @@ pub struct Dipoles {
     pub cutoff: Option<f64>,
     /// Side of the periodic box (none: open space).
     pub box_length: Option<f64>,
-    /// Where the switch begins, `r_s ≤ r_c` (used only with a cutoff; `r_s = r_c` is a
-    /// plain truncation).
+    /// Where the switch begins, `r_s ≤ r_c` (used only with a cutoff and
+    /// [`CutoffForm::Switched`]; `r_s = r_c` is a plain truncation).
     pub switch_start: f64,
+    /// How the dipole energy goes to zero at the cutoff.
+    pub cutoff_form: CutoffForm,
     /// The Verlet list's skin: with a cutoff, each body keeps the neighbours within
     /// `r_c + skin`, rebuilt once some body has moved more than `skin/2` since the last build
     /// (checked every evaluation); 0 rebuilds at every evaluation.
@@ -188,13 +190,41 @@ pub const DEFAULT_SKIN: f64 = 0.3;
 /// AVX gives the same bits, slower.
 pub const HALF_LIST_MAX_BODIES: usize = 30_000;
 
+/// How the dipole-dipole energy is brought to zero at the cutoff `r_c`: `U = S(r) U_dd`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum CutoffForm {
+    /// `S = 1` up to the switch start `r_s`, then the cubic in `r²` of [`Dipoles`] down to
+    /// 0 at `r_c`: the plain dipole inside `r_s`.
+    #[default]
+    Switched,
+    /// Allen and Germano's shifted force, as LAMMPS's `lj/sf/dipole/sf`:
+    /// `S = 1 − 4 (r/r_c)³ + 3 (r/r_c)⁴` over the whole range (`S` and `dS/dr` vanish at
+    /// `r_c`); the forces are `−∇(S U_dd)` (LAMMPS writes them as the `afac`, `bfac` terms,
+    /// which are the same), the torques `S` times the plain ones.
+    ///
+    /// Reference: M. P. Allen, G. Germano, Mol. Phys. 104 (2006) 3225.
+    ShiftedForce,
+}
+
+impl CutoffForm {
+    /// The name on the command line and in files.
+    #[must_use]
+    pub fn key(self) -> &'static str {
+        match self {
+            CutoffForm::Switched => "switched",
+            CutoffForm::ShiftedForce => "shifted-force",
+        }
+    }
+}
+
 /// What one evaluation of the [`Dipoles`] pair sum needs of the model: the switch in squared
-/// radii (`S = 1` up to `s2`, `0` beyond `c2`, `inv_width = 1/(c2 − s2)`) and the periodic box
-/// side with its inverse.
+/// radii (`S = 1` up to `s2`, `0` beyond `c2`, `inv_width = 1/(c2 − s2)`), or for the shifted
+/// force `1/r_c` (`inv_rc > 0`), and the periodic box side with its inverse.
 struct PairConstants {
     c2: f64,
     s2: f64,
     inv_width: f64,
+    inv_rc: f64,
     periodic: Option<(f64, f64)>,
 }
 
@@ -260,6 +290,7 @@ impl Dipoles {
             cutoff,
             box_length,
             switch_start: cutoff.map_or(0.0, |c| DEFAULT_SWITCH_FRACTION * c),
+            cutoff_form: CutoffForm::Switched,
             skin: DEFAULT_SKIN,
             half_list_max_bodies: HALF_LIST_MAX_BODIES,
             scratch: Mutex::new(Scratch::default()),
@@ -313,10 +344,12 @@ impl Dipoles {
         match self.cutoff {
             Some(c) => {
                 let (c2, s2) = (c * c, (self.switch_start * self.switch_start).min(c * c));
+                let shifted = self.cutoff_form == CutoffForm::ShiftedForce;
                 PairConstants {
                     c2,
                     s2,
-                    inv_width: if c2 > s2 { 1.0 / (c2 - s2) } else { 0.0 },
+                    inv_width: if c2 > s2 && !shifted { 1.0 / (c2 - s2) } else { 0.0 },
+                    inv_rc: if shifted { 1.0 / c } else { 0.0 },
                     periodic,
                 }
             }
@@ -324,6 +357,7 @@ impl Dipoles {
                 c2: f64::INFINITY,
                 s2: f64::INFINITY,
                 inv_width: 0.0,
+                inv_rc: 0.0,
                 periodic,
             },
         }
@@ -372,9 +406,18 @@ impl Dipoles {
         // above) and dS/d(r²) = −6 t (1 − t)/(r_c² − r_s²), so −U ∇S = 12 U t (1 − t)/(r_c² − r_s²) r.
         // Straight-line code: about half the pairs within the cutoff lie in the shell, so a
         // branch would be mispredicted often. Inside (t = 0), S = 1 and ∇S = 0 exactly.
-        let t = (r2 - sw.s2).max(0.0) * sw.inv_width;
-        let s = 1.0 - t * t * (3.0 - 2.0 * t);
-        let ds = 12.0 * energy * t * (1.0 - t) * sw.inv_width;
+        let (s, ds) = if sw.inv_rc > 0.0 {
+            // Shifted force: x = r/r_c, S = 1 − x³ (4 − 3x), −U ∇S = 12 U x³ (1 − x)/r² r.
+            let x = r2 * inv * sw.inv_rc;
+            let x3 = x * x * x;
+            (1.0 - x3 * (4.0 - 3.0 * x), 12.0 * energy * x3 * (1.0 - x) * inv2)
+        } else {
+            let t = (r2 - sw.s2).max(0.0) * sw.inv_width;
+            (
+                1.0 - t * t * (3.0 - 2.0 * t),
+                12.0 * energy * t * (1.0 - t) * sw.inv_width,
+            )
+        };
         let (force, field, field_j, mut energy) = (force * s + r * ds, field * s, field_j * s, energy * s);
         let mut total = force;
         let s2 = self.sigma * self.sigma * inv2;
@@ -450,6 +493,7 @@ impl Dipoles {
             c2: k.c2,
             s2: k.s2,
             inv_width: k.inv_width,
+            inv_rc: k.inv_rc,
             periodic: k.periodic,
             sigma2: self.sigma * self.sigma,
             epsilon: self.epsilon,
@@ -904,8 +948,13 @@ mod tests {
             return;
         }
         let mut rng = Rng::new(17);
-        for (box_length, cutoff) in [(Some(9.0), 3.0), (None, 2.5)] {
-            let model = Dipoles::new(Vec3::new(0.0, 0.0, 1.0), 1.0, 1.0, Some(cutoff), box_length).unwrap();
+        for (box_length, cutoff, form) in [
+            (Some(9.0), 3.0, CutoffForm::Switched),
+            (None, 2.5, CutoffForm::Switched),
+            (Some(9.0), 3.0, CutoffForm::ShiftedForce),
+        ] {
+            let mut model = Dipoles::new(Vec3::new(0.0, 0.0, 1.0), 1.0, 1.0, Some(cutoff), box_length).unwrap();
+            model.cutoff_form = form;
             let k = model.constants();
             let lanes = model.lane_kernel(&k);
             let side = box_length.unwrap_or(8.0);

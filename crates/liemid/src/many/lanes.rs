@@ -491,6 +491,7 @@ pub(crate) struct PairKernel {
     pub(crate) c2: f64,
     pub(crate) s2: f64,
     pub(crate) inv_width: f64,
+    pub(crate) inv_rc: f64,
     pub(crate) periodic: Option<(f64, f64)>,
     pub(crate) sigma2: f64,
     pub(crate) epsilon: f64,
@@ -559,10 +560,22 @@ fn pair_group(
     let field = (r * (F::splat(3.0) * b * inv2) - mj) * inv3;
     let field_j = (r * (F::splat(3.0) * a * inv2) - mi4) * inv3;
     let energy = ab * inv3 - F::splat(3.0) * prod * inv5;
-    let inv_width = F::splat(k.inv_width);
-    let t = (r2 - F::splat(k.s2)).max(F::splat(0.0)) * inv_width;
-    let sw = F::splat(1.0) - t * t * (F::splat(3.0) - F::splat(2.0) * t);
-    let ds = F::splat(12.0) * energy * t * (F::splat(1.0) - t) * inv_width;
+    let (sw, ds) = if k.inv_rc > 0.0 {
+        // Shifted force, as the scalar kernel.
+        let x = r2 * inv * F::splat(k.inv_rc);
+        let x3 = x * x * x;
+        (
+            F::splat(1.0) - x3 * (F::splat(4.0) - F::splat(3.0) * x),
+            F::splat(12.0) * energy * x3 * (F::splat(1.0) - x) * inv2,
+        )
+    } else {
+        let inv_width = F::splat(k.inv_width);
+        let t = (r2 - F::splat(k.s2)).max(F::splat(0.0)) * inv_width;
+        (
+            F::splat(1.0) - t * t * (F::splat(3.0) - F::splat(2.0) * t),
+            F::splat(12.0) * energy * t * (F::splat(1.0) - t) * inv_width,
+        )
+    };
     let force = force * sw + r * ds;
     let (field, field_j) = (field * sw, field_j * sw);
     let s2w = F::splat(k.sigma2) * inv2;

@@ -1,0 +1,66 @@
+//! `liemid many --cutoff-form`: LAMMPS's shifted-force dipole potential from the command
+//! line and from a scenario, and its input errors.
+
+mod common;
+use common::{json, run_in, scratch, stderr, stdout};
+
+#[test]
+fn the_shifted_force_form_runs_and_is_reported() {
+    let dir = scratch("many-sf");
+    let args = [
+        "many", "--model", "dipoles", "--bodies", "216", "--t-end", "0.02", "--json", "-",
+    ];
+    let sf = run_in(&dir, &[&args[..], &["--cutoff-form", "shifted-force"]].concat());
+    assert!(sf.status.success(), "{}", stderr(&sf));
+    let sf = json(&stdout(&sf));
+    assert_eq!(sf["cutoff_form"], "shifted-force");
+    let sw = json(&stdout(&run_in(&dir, &args)));
+    assert_eq!(sw["cutoff_form"], "switched");
+    // Another potential, another energy (the same start).
+    assert_ne!(sf["energy"][0], sw["energy"][0]);
+    std::fs::write(
+        dir.join("sf.toml"),
+        "[system]\nmodel = \"dipoles\"\nbodies = 216\ncutoff_form = \"shifted-force\"\n[integrator]\nt_end = 0.02\n",
+    )
+    .unwrap();
+    let file = json(&stdout(&run_in(
+        &dir,
+        &["many", "--scenario", "sf.toml", "--json", "-"],
+    )));
+    assert_eq!(file["energy"][0], sf["energy"][0]);
+}
+
+#[test]
+fn cutoff_form_errors_exit_2_naming_the_choices() {
+    let dir = scratch("many-sf-errors");
+    let o = run_in(
+        &dir,
+        &[
+            "many",
+            "--model",
+            "dipoles",
+            "--bodies",
+            "216",
+            "--cutoff-form",
+            "smooth",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("switched, shifted-force"), "{}", stderr(&o));
+    let o = run_in(
+        &dir,
+        &[
+            "many",
+            "--model",
+            "dipoles",
+            "--bodies",
+            "216",
+            "--cutoff-form",
+            "shifted-force",
+            "--switch-start",
+            "2",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("switch_start"), "{}", stderr(&o));
+}
