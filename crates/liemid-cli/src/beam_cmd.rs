@@ -8,6 +8,7 @@ use std::sync::Mutex;
 
 use serde_json::json;
 
+use crate::spins_cmd::pool;
 use crate::{CmdResult, Failure};
 use liemid_cli::beam_scenario::{self, BeamIntegrator, BeamScenario};
 use liemid_cli::beam_study::{self, RunFailure};
@@ -90,15 +91,6 @@ pub struct WorkPrecisionArgs {
     /// Write the study as JSON to FILE, or to standard output with `-`.
     #[arg(long)]
     pub json: Option<String>,
-}
-
-fn pool(threads: Option<u64>) -> Result<rayon::ThreadPool, Failure> {
-    let mut b = rayon::ThreadPoolBuilder::new();
-    if let Some(k) = threads {
-        let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
-        b = b.num_threads(usize::try_from(k).unwrap_or(usize::MAX).min(4 * cores));
-    }
-    b.build().map_err(|e| Failure::Run(format!("thread pool: {e}")))
 }
 
 fn load(args: &BeamArgs) -> Result<BeamScenario, Failure> {

@@ -121,7 +121,8 @@ fn load(file: Option<&Path>, common: &CommonArgs) -> Result<SpinScenario, Failur
     Ok(sc)
 }
 
-fn pool(threads: Option<u64>) -> Result<rayon::ThreadPool, Failure> {
+/// A thread pool of `threads` (at most four per core), or of all cores.
+pub(crate) fn pool(threads: Option<u64>) -> Result<rayon::ThreadPool, Failure> {
     let mut b = rayon::ThreadPoolBuilder::new();
     if let Some(k) = threads {
         let cores = std::thread::available_parallelism().map_or(1, |c| c.get());

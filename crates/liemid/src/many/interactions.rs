@@ -431,7 +431,38 @@ impl Dipoles {
 
     /// The force and field on a body at `xi` with dipole `mi` from its neighbours `list`,
     /// summed as the SIMD lanes sum them: pair `k` into accumulator `k mod 4`, combined as
-    /// `(a₀ + a₁) + (a₂ + a₃)`; the lanes give the same bits.
+    /// `(a₀ + a₁) + (a₂ + a₃)`; `partner(k, [force on j, field at j])` gets each pair's share
+    /// of the partner (zeros beyond the cutoff). The lanes give the same bits.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn lane_sums(
+        &self,
+        k: &PairConstants,
+        xi: Vec3,
+        mi: Vec3,
+        position: &[Vec3],
+        dipoles: &[Vec3],
+        list: &[u32],
+        mut partner: impl FnMut(usize, [Vec3; 2]),
+    ) -> (Vec3, Vec3) {
+        let mut f = [Vec3::ZERO; 4];
+        let mut b = [Vec3::ZERO; 4];
+        for (n, &j) in list.iter().enumerate() {
+            let j = j as usize;
+            let r = Self::separation(k, xi, position[j]);
+            match self.pair_both(k, r, mi, dipoles[j]) {
+                Some((fij, bi, bj)) => {
+                    f[n % 4] += fij;
+                    b[n % 4] += bi;
+                    partner(n, [-fij, bj]);
+                }
+                None => partner(n, [Vec3::ZERO; 2]),
+            }
+        }
+        ((f[0] + f[1]) + (f[2] + f[3]), (b[0] + b[1]) + (b[2] + b[3]))
+    }
+
+    /// [`Dipoles::lane_sums`] of the full list: the force and field on the body only.
     fn gather_pairs(
         &self,
         k: &PairConstants,
@@ -441,23 +472,10 @@ impl Dipoles {
         dipoles: &[Vec3],
         list: &[u32],
     ) -> (Vec3, Vec3) {
-        let mut f = [Vec3::ZERO; 4];
-        let mut b = [Vec3::ZERO; 4];
-        for (n, &j) in list.iter().enumerate() {
-            let j = j as usize;
-            let r = Self::separation(k, xi, position[j]);
-            if let Some((fij, field, _)) = self.pair(k, r, mi, dipoles[j]) {
-                f[n % 4] += fij;
-                b[n % 4] += field;
-            }
-        }
-        ((f[0] + f[1]) + (f[2] + f[3]), (b[0] + b[1]) + (b[2] + b[3]))
+        self.lane_sums(k, xi, mi, position, dipoles, list, |_, _| {})
     }
 
-    /// Each pair of body `i` (at `xi`, dipole `mi`) with its partners `list` once, as the SIMD
-    /// lanes do it: the force and field on `i` summed as [`Dipoles::gather_pairs`] sums them,
-    /// and per pair the force on and the field at the partner into `slots` (zeros beyond the
-    /// cutoff).
+    /// [`Dipoles::lane_sums`] of a half list: the partners' shares into `slots`.
     #[allow(clippy::too_many_arguments)]
     fn half_pairs(
         &self,
@@ -469,21 +487,7 @@ impl Dipoles {
         list: &[u32],
         slots: &mut [[Vec3; 2]],
     ) -> (Vec3, Vec3) {
-        let mut f = [Vec3::ZERO; 4];
-        let mut b = [Vec3::ZERO; 4];
-        for (n, (&j, slot)) in list.iter().zip(slots.iter_mut()).enumerate() {
-            let j = j as usize;
-            let r = Self::separation(k, xi, position[j]);
-            *slot = match self.pair_both(k, r, mi, dipoles[j]) {
-                Some((fij, bi, bj)) => {
-                    f[n % 4] += fij;
-                    b[n % 4] += bi;
-                    [-fij, bj]
-                }
-                None => [Vec3::ZERO; 2],
-            };
-        }
-        ((f[0] + f[1]) + (f[2] + f[3]), (b[0] + b[1]) + (b[2] + b[3]))
+        self.lane_sums(k, xi, mi, position, dipoles, list, |n, share| slots[n] = share)
     }
 
     /// The constants of the SIMD pair kernel.
