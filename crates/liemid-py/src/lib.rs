@@ -616,7 +616,7 @@ fn flat3(v: &[Vec3]) -> Vec<f64> {
 #[pymethods]
 impl ManyBodies {
     /// Bodies from flat arrays and a model: `("independent", gravity, center_of_mass)` or
-    /// `("dipoles", moment, sigma, epsilon, cutoff, box_length, switch_start)`.
+    /// `("dipoles", moment, sigma, epsilon, cutoff, box_length, switch_start, cutoff_form)`.
     #[new]
     #[pyo3(signature = (mass, inertia, free, position, momentum, rotation, pi, model))]
     #[allow(clippy::too_many_arguments)]
@@ -674,7 +674,7 @@ impl ManyBodies {
             }
             "dipoles" => {
                 #[allow(clippy::type_complexity)]
-                let (_, m, sigma, epsilon, cutoff, box_length, switch): (
+                let (_, m, sigma, epsilon, cutoff, box_length, switch, form): (
                     String,
                     Triple,
                     f64,
@@ -682,9 +682,19 @@ impl ManyBodies {
                     Option<f64>,
                     Option<f64>,
                     Option<f64>,
+                    String,
                 ) = model.extract()?;
                 let mut d = liemid::interactions::Dipoles::new(v3(m), sigma, epsilon, cutoff, box_length)
                     .map_err(|e| PyValueError::new_err(format!("Dipoles: {e}")))?;
+                d.cutoff_form = match form.as_str() {
+                    "switched" => liemid::interactions::CutoffForm::Switched,
+                    "shifted-force" => liemid::interactions::CutoffForm::ShiftedForce,
+                    other => {
+                        return Err(PyValueError::new_err(format!(
+                            "Dipoles: cutoff_form: unknown form {other:?} (\"switched\", \"shifted-force\")"
+                        )))
+                    }
+                };
                 if let Some(r_s) = switch {
                     d = d
                         .with_switch_start(r_s)

@@ -118,3 +118,23 @@ def test_the_extended_xyz_trajectory_opens_in_ase(tmp_path: Path, liemid_cli: st
     assert float(last.info["Time"]) == pytest.approx(0.02)
     # The bodies moved.
     assert not np.allclose(first.positions, last.positions)
+
+
+def test_the_shifted_force_cutoff_is_lammps_lj_sf_dipole_sf() -> None:
+    # Two parallel dipoles (along z) 1.5 apart along x, cutoff 2.5, no WCA overlap:
+    # U = S U_dd with U_dd = 1/r^3 and LAMMPS's S = 1 - 4 x^3 + 3 x^4, x = r/r_c.
+    x = 1.5 / 2.5
+    expected = (1.0 - 4.0 * x**3 + 3.0 * x**4) / 1.5**3
+    positions = [[1.0, 3.0, 3.0], [2.5, 3.0, 3.0]]
+    rotations = np.broadcast_to(np.eye(3), (2, 3, 3))
+    for form, value in [("shifted-force", expected), ("switched", 1.0 / 1.5**3)]:
+        sys_ = many.System(
+            [1.0, 1.0], [0.1, 0.1, 0.1], positions, rotations, np.zeros((2, 3)),
+            model=many.Dipoles(cutoff=2.5, box_length=6.0, cutoff_form=form),
+        )
+        assert abs(sys_.totals().energy - value) < 1e-14, form
+    with pytest.raises(ValueError, match="cutoff_form"):
+        many.System(
+            [1.0, 1.0], [0.1, 0.1, 0.1], positions, rotations, np.zeros((2, 3)),
+            model=many.Dipoles(cutoff=2.5, box_length=6.0, cutoff_form="smooth"),
+        )

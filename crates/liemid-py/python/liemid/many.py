@@ -41,7 +41,8 @@ class Independent:
 class Dipoles:
     """Point dipoles ``moment`` (body frame) with WCA repulsion (``sigma``, ``epsilon``), an
     optional ``cutoff`` (the dipole energy switched off smoothly from ``switch_start``,
-    default 0.8 cutoff) and periodic box of side ``box_length`` (at least twice the cutoff).
+    default 0.8 cutoff, or with ``cutoff_form="shifted-force"`` LAMMPS's ``lj/sf/dipole/sf``
+    form) and periodic box of side ``box_length`` (at least twice the cutoff).
     """
 
     moment: Tuple[float, float, float] = (0.0, 0.0, 1.0)
@@ -50,6 +51,7 @@ class Dipoles:
     cutoff: Optional[float] = None
     box_length: Optional[float] = None
     switch_start: Optional[float] = None
+    cutoff_form: str = "switched"
 
     def _spec(self) -> Tuple[Any, ...]:
         def opt(name: str, v: Optional[float]) -> Optional[float]:
@@ -63,6 +65,7 @@ class Dipoles:
             opt("cutoff", self.cutoff),
             opt("box_length", self.box_length),
             opt("switch_start", self.switch_start),
+            str(self.cutoff_form),
         )
 
 
