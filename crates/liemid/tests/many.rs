@@ -653,3 +653,51 @@ fn the_verlet_list_is_rebuilt_on_displacement_and_gives_the_forces_of_any_skin()
         "half and full lists differ by {df:e} (scale {scale:e})"
     );
 }
+
+#[test]
+fn the_spatial_sort_changes_no_bit_and_the_threads_none_either() {
+    // The full list with and without the cell-order copy of positions and dipoles, on a
+    // fluid whose bodies are pushed in a shuffled order (so that index order has no
+    // locality): the same pairs in the same order, hence the same bits.
+    let (lattice, _) = problems::dipolar_fluid(1000, 0.3, 6).unwrap();
+    let mut rng = Rng::new(9);
+    let mut perm: Vec<usize> = (0..lattice.len()).collect();
+    for k in (1..perm.len()).rev() {
+        perm.swap(k, (rng.next_u64() % (k as u64 + 1)) as usize);
+    }
+    let run = |sort: bool, threads: usize| {
+        let (_, mut model) = problems::dipolar_fluid(1000, 0.3, 6).unwrap();
+        model.half_list_max_bodies = 0;
+        model.spatial_sort = sort;
+        let mut b = Bodies::new();
+        for &i in &perm {
+            b.push(
+                lattice.mass[i],
+                lattice.inertia[i].moments,
+                true,
+                lattice.position[i],
+                lattice.momentum[i],
+                lattice.rotation[i],
+                lattice.pi[i],
+            )
+            .unwrap();
+        }
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| {
+            for _ in 0..60 {
+                b.step(&model, 2e-3).unwrap();
+            }
+        });
+        assert!(model.list_builds() >= 2, "the list was rebuilt (and re-sorted)");
+        assert_eq!(model.spatially_sorted(), sort);
+        b
+    };
+    let unsorted = run(false, 1);
+    for threads in [1, 2, 3] {
+        let sorted = run(true, threads);
+        assert!(
+            sorted.position == unsorted.position && sorted.pi == unsorted.pi && sorted.force == unsorted.force,
+            "sorted on {threads} threads differs"
+        );
+    }
+}

@@ -137,6 +137,10 @@ pub struct Dipoles {
     pub skin: f64,
     /// Bodies up to which the half list is used ([`HALF_LIST_MAX_BODIES`] by default).
     pub half_list_max_bodies: usize,
+    /// With the full list: keep the bodies' positions and dipoles in cell order (re-sorted
+    /// at each list build), so that a body's neighbours are near it in memory; the
+    /// results are the same bits either way (default `true`).
+    pub spatial_sort: bool,
     scratch: Mutex<Scratch>,
 }
 
@@ -171,6 +175,17 @@ struct Scratch {
     chunk_lists: Vec<(Vec<u32>, Vec<u32>)>,
     /// Positions at the last build (empty: no list yet).
     reference: Vec<Vec3>,
+    /// With [`Dipoles::spatial_sort`] and the full list: the bodies in cell order
+    /// (`order[k]` is a body, `rank[i]` its place), the list in those places, and each
+    /// step's positions and dipoles in that order.
+    order: Vec<u32>,
+    rank: Vec<u32>,
+    /// Whether the last build was asked to sort (it cannot without a cell list).
+    sort_requested: bool,
+    sorted_position: Vec<Vec3>,
+    sorted_dipole: Vec<Vec3>,
+    /// The force and field of each place, in cell order.
+    sorted_sums: Vec<[Vec3; 2]>,
     /// Builds of the list, for diagnostics.
     builds: u64,
 }
@@ -291,6 +306,7 @@ impl Dipoles {
             box_length,
             switch_start: cutoff.map_or(0.0, |c| DEFAULT_SWITCH_FRACTION * c),
             cutoff_form: CutoffForm::Switched,
+            spatial_sort: true,
             skin: DEFAULT_SKIN,
             half_list_max_bodies: HALF_LIST_MAX_BODIES,
             scratch: Mutex::new(Scratch::default()),
@@ -505,6 +521,14 @@ impl Dipoles {
         }
     }
 
+    /// Whether the current Verlet list keeps the bodies in cell order
+    /// ([`Dipoles::spatial_sort`] with the full list and a cell list).
+    #[must_use]
+    pub fn spatially_sorted(&self) -> bool {
+        let s = self.scratch.lock().expect("not poisoned");
+        !s.order.is_empty() && s.order.len() == s.reference.len()
+    }
+
     /// Verlet-list builds so far (the list is rebuilt when a body has moved more than half
     /// the skin).
     #[must_use]
@@ -524,6 +548,7 @@ impl Dipoles {
             && s.list_start.len() == n + 1
             // The half list exists exactly when it is to be used (the limit may have changed).
             && (n <= self.half_list_max_bodies) == (s.half_start.len() == n + 1)
+            && s.sort_requested == (self.spatial_sort && n > self.half_list_max_bodies)
             && c.position
                 .iter()
                 .zip(&s.reference)
@@ -544,17 +569,31 @@ impl Dipoles {
         let chunk = crate::many::CHUNK;
         let mut chunks = std::mem::take(&mut s.chunk_lists);
         chunks.resize_with(n.div_ceil(chunk), Default::default);
+        let sort = self.spatial_sort && n > self.half_list_max_bodies;
+        let (mut order, mut rank) = (std::mem::take(&mut s.order), std::mem::take(&mut s.rank));
         {
             let cells = self.build_cells_of(c, s, reach);
             let cells = cells.as_ref();
+            order.clear();
+            rank.clear();
+            if let (true, Some(cells)) = (sort, cells) {
+                // The bodies in cell order; the list then names neighbours by their place.
+                order.extend(cells.sorted.iter().map(|&i| i as u32));
+                rank.resize(n, 0);
+                for (k, &i) in order.iter().enumerate() {
+                    rank[i as usize] = k as u32;
+                }
+            }
+            let (order, rank) = (&*order, &*rank);
             let fill = |k: usize, (entries, counts): &mut (Vec<u32>, Vec<u32>)| {
                 entries.clear();
                 counts.clear();
-                for i in k * chunk..((k + 1) * chunk).min(n) {
+                for place in k * chunk..((k + 1) * chunk).min(n) {
+                    let i = if order.is_empty() { place } else { order[place] as usize };
                     let before = entries.len();
                     self.for_neighbours(i, c, cells, |j| {
                         if Self::separation(&constants, c.position[i], c.position[j]).norm_squared() <= reach2 {
-                            entries.push(j as u32);
+                            entries.push(if rank.is_empty() { j as u32 } else { rank[j] });
                         }
                     });
                     counts.push((entries.len() - before) as u32);
@@ -570,6 +609,9 @@ impl Dipoles {
                 fill(k, ch);
             }
         }
+        s.order = order;
+        s.rank = rank;
+        s.sort_requested = sort;
         for (entries, counts) in &chunks {
             for &count in counts {
                 list_start.push(list_start[list_start.len() - 1] + count as usize);
@@ -768,31 +810,85 @@ impl Interaction for Dipoles {
         if self.update_list(&c, s) && c.position.len() > self.half_list_max_bodies {
             // Large systems: every body gathers its own neighbours (each pair twice), which
             // streams less memory than the half list's pair slots.
-            let (start, list) = (&s.list_start, &s.list);
+            // With the spatial sort, the list names places in cell order: gather this step's
+            // positions and dipoles into that order once, so that the pair loop reads memory
+            // near each body (the same values, so the same bits).
+            let sorted = s.order.len() == c.position.len();
+            if sorted {
+                let order = &s.order;
+                s.sorted_position.resize(order.len(), Vec3::ZERO);
+                s.sorted_dipole.resize(order.len(), Vec3::ZERO);
+                let place = |first: usize, x: &mut [Vec3], m: &mut [Vec3]| {
+                    for (q, (x, m)) in x.iter_mut().zip(m.iter_mut()).enumerate() {
+                        let i = order[first + q] as usize;
+                        (*x, *m) = (c.position[i], dipoles[i]);
+                    }
+                };
+                #[cfg(feature = "parallel")]
+                {
+                    use rayon::prelude::*;
+                    let chunk = crate::many::CHUNK;
+                    s.sorted_position
+                        .par_chunks_mut(chunk)
+                        .zip(s.sorted_dipole.par_chunks_mut(chunk))
+                        .enumerate()
+                        .for_each(|(k, (x, m))| place(k * chunk, x, m));
+                }
+                #[cfg(not(feature = "parallel"))]
+                place(0, &mut s.sorted_position, &mut s.sorted_dipole);
+            }
             #[cfg(all(feature = "simd", target_arch = "x86_64"))]
             let (avx, lane_kernel) = (crate::many::lanes::use_avx(), self.lane_kernel(&constants));
-            for_chunks(force, torque, |i, f, t| {
-                let mi = dipoles[i];
-                let neighbours = &list[start[i]..start[i + 1]];
+            // The force and field on the body at place `k` (its neighbours' places in `list`).
+            let body = |k: usize, xi: Vec3, mi: Vec3, position: &[Vec3], dipole: &[Vec3]| -> (Vec3, Vec3) {
+                let neighbours = &s.list[s.list_start[k]..s.list_start[k + 1]];
                 #[cfg(all(feature = "simd", target_arch = "x86_64"))]
-                let lanes = crate::many::lanes::gather_pairs_x4(
-                    avx,
-                    &lane_kernel,
-                    c.position[i],
-                    mi,
-                    c.position,
-                    &dipoles,
-                    neighbours,
-                );
+                let lanes =
+                    crate::many::lanes::gather_pairs_x4(avx, &lane_kernel, xi, mi, position, dipole, neighbours);
                 #[cfg(all(feature = "simd", target_arch = "x86_64"))]
-                let (fi, bi) = lanes.unwrap_or_else(|| {
-                    self.gather_pairs(&constants, c.position[i], mi, c.position, &dipoles, neighbours)
-                });
+                let sums = lanes.unwrap_or_else(|| self.gather_pairs(&constants, xi, mi, position, dipole, neighbours));
                 #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
-                let (fi, bi) = self.gather_pairs(&constants, c.position[i], mi, c.position, &dipoles, neighbours);
-                *f = fi;
-                *t = c.rotation[i].tr_mul_vec(mi.cross(bi));
-            });
+                let sums = self.gather_pairs(&constants, xi, mi, position, dipole, neighbours);
+                sums
+            };
+            if sorted {
+                // In cell order, so that consecutive bodies share neighbours in cache; then
+                // each body takes its sums from its place.
+                let n = c.position.len();
+                let mut sums = std::mem::take(&mut s.sorted_sums);
+                sums.resize(n, [Vec3::ZERO; 2]);
+                let (x, m) = (&s.sorted_position, &s.sorted_dipole);
+                let place_sums = |first: usize, out: &mut [[Vec3; 2]]| {
+                    for (q, o) in out.iter_mut().enumerate() {
+                        let k = first + q;
+                        let (f, b) = body(k, x[k], m[k], x, m);
+                        *o = [f, b];
+                    }
+                };
+                #[cfg(feature = "parallel")]
+                {
+                    use rayon::prelude::*;
+                    let chunk = crate::many::CHUNK;
+                    crate::many::contiguous_per_thread(sums.par_chunks_mut(chunk).enumerate())
+                        .for_each(|(k, out)| place_sums(k * chunk, out));
+                }
+                #[cfg(not(feature = "parallel"))]
+                place_sums(0, &mut sums);
+                let rank = &s.rank;
+                for_chunks(force, torque, |i, f, t| {
+                    let [fi, bi] = sums[rank[i] as usize];
+                    *f = fi;
+                    *t = c.rotation[i].tr_mul_vec(dipoles[i].cross(bi));
+                });
+                s.sorted_sums = sums;
+            } else {
+                for_chunks(force, torque, |i, f, t| {
+                    let mi = dipoles[i];
+                    let (fi, bi) = body(i, c.position[i], mi, c.position, &dipoles);
+                    *f = fi;
+                    *t = c.rotation[i].tr_mul_vec(mi.cross(bi));
+                });
+            }
             s.dipoles = dipoles;
             return;
         }
