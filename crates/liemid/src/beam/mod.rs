@@ -559,6 +559,18 @@ impl BeamSystem {
         }
     }
 
+    /// Put node `node` at `position`, turned by `rotation` from its initial attitude (for
+    /// a clamped node nothing changes); forces are evaluated again.
+    pub fn set_pose(&mut self, node: usize, position: Vec3, rotation: Mat3) {
+        if let NodeRef::Body(i) = self.nodes[node] {
+            if self.bodies.free[i] {
+                self.bodies.position[i] = position;
+            }
+            self.bodies.rotation[i] = rotation * self.body_axes[i];
+            self.bodies.evaluate(&self.structure);
+        }
+    }
+
     /// One explicit step (see the module documentation).
     ///
     /// # Errors

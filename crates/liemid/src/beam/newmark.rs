@@ -89,10 +89,13 @@ impl Banded {
 #[derive(Clone, Debug)]
 pub struct Newmark {
     system: BeamSystem,
-    velocity: Vec<Vec3>,
-    acceleration: Vec<Vec3>,
-    omega: Vec<Vec3>,
-    alpha: Vec<Vec3>,
+    /// The motion at the start of the step, and that of the current Newton iterate.
+    now: Motion,
+    next: Motion,
+    /// The configuration at the start of the step, and the Newton right-hand side.
+    start_position: Vec<Vec3>,
+    start_rotation: Vec<Mat3>,
+    rhs: Vec<f64>,
     /// First degree of freedom of each body (translations first for free bodies).
     offset: Vec<usize>,
     dofs: usize,
@@ -159,10 +162,16 @@ impl Newmark {
             force: vec![Vec3::ZERO; n],
             torque: vec![Vec3::ZERO; n],
             system,
-            velocity,
-            acceleration,
-            omega,
-            alpha,
+            next: Motion::zeros(n),
+            now: Motion {
+                acceleration,
+                alpha,
+                velocity,
+                omega,
+            },
+            start_position: vec![Vec3::ZERO; n],
+            start_rotation: vec![Mat3::IDENTITY; n],
+            rhs: vec![0.0; dofs],
             offset,
             dofs,
             scale: extent,
@@ -201,23 +210,29 @@ impl Newmark {
         }
         let n = self.system.bodies.len();
         let t_new = self.system.bodies.t + h;
-        let x0 = self.system.bodies.position.clone();
-        let r0 = self.system.bodies.rotation.clone();
-        let free = self.system.bodies.free.clone();
+        self.start_position.copy_from_slice(&self.system.bodies.position);
+        self.start_rotation.copy_from_slice(&self.system.bodies.rotation);
         // Predictor: a_{n+1} = a_n.
+        let now = &self.now;
+        let b = &mut self.system.bodies;
         for i in 0..n {
-            let b = &mut self.system.bodies;
-            if free[i] {
-                b.position[i] = x0[i] + self.velocity[i] * h + self.acceleration[i] * (0.5 * h * h);
+            if b.free[i] {
+                b.position[i] = b.position[i] + now.velocity[i] * h + now.acceleration[i] * (0.5 * h * h);
             }
-            b.rotation[i] = r0[i] * so3::exp(self.omega[i] * h + self.alpha[i] * (0.5 * h * h));
+            b.rotation[i] = b.rotation[i] * so3::exp(now.omega[i] * h + now.alpha[i] * (0.5 * h * h));
         }
         let c = 4.0 / (h * h);
-        let mut rhs = vec![0.0; self.dofs];
         let mut last = f64::INFINITY;
-        for iteration in 1..=30u32 {
+        let mut iterations = 0;
+        while iterations < MAX_ITERATIONS {
             // Accelerations of the iterate, and the residual r = f − inertia.
-            let (acc, alp, _, omg) = self.kinematics(h, &x0, &r0);
+            self.next.of_iterate(
+                &self.now,
+                &self.system.bodies,
+                &self.start_position,
+                &self.start_rotation,
+                h,
+            );
             let b = &self.system.bodies;
             let config = Configuration {
                 t: t_new,
@@ -227,28 +242,29 @@ impl Newmark {
                 rotation: &b.rotation,
             };
             self.system.structure.compute(config, &mut self.force, &mut self.torque);
+            let next = &self.next;
             for i in 0..n {
-                let o = self.offset[i];
-                let mut k = o;
-                if free[i] {
-                    let r = self.force[i] - acc[i] * b.mass[i];
-                    rhs[k..k + 3].copy_from_slice(&r.to_array());
+                let mut k = self.offset[i];
+                if b.free[i] {
+                    let r = self.force[i] - next.acceleration[i] * b.mass[i];
+                    self.rhs[k..k + 3].copy_from_slice(&r.to_array());
                     k += 3;
                 }
-                let m = b.inertia[i].moments;
-                let r = self.torque[i] - m.component_mul(alp[i]) - omg[i].cross(m.component_mul(omg[i]));
-                rhs[k..k + 3].copy_from_slice(&r.to_array());
+                let (m, w) = (b.inertia[i].moments, next.omega[i]);
+                let r = self.torque[i] - m.component_mul(next.alpha[i]) - w.cross(m.component_mul(w));
+                self.rhs[k..k + 3].copy_from_slice(&r.to_array());
             }
-            self.assemble(c, h, &r0, &omg);
-            if !self.matrix.solve(&mut rhs) {
+            self.assemble(c, h);
+            if !self.matrix.solve(&mut self.rhs) {
                 break;
             }
+            iterations += 1;
+            let rhs = &self.rhs;
+            let b = &mut self.system.bodies;
             let mut largest: f64 = 0.0;
             for i in 0..n {
-                let o = self.offset[i];
-                let b = &mut self.system.bodies;
-                let mut k = o;
-                if free[i] {
+                let mut k = self.offset[i];
+                if b.free[i] {
                     let d = Vec3::new(rhs[k], rhs[k + 1], rhs[k + 2]);
                     b.position[i] += d;
                     largest = largest.max(d.max_abs() / self.scale);
@@ -261,53 +277,34 @@ impl Newmark {
             self.iterations += 1;
             last = largest;
             if largest < 1e-10 {
-                (self.acceleration, self.alpha, self.velocity, self.omega) = self.kinematics(h, &x0, &r0);
+                self.next.of_iterate(
+                    &self.now,
+                    &self.system.bodies,
+                    &self.start_position,
+                    &self.start_rotation,
+                    h,
+                );
+                std::mem::swap(&mut self.now, &mut self.next);
                 self.system.bodies.t = t_new;
                 self.steps += 1;
-                return Ok(iteration);
+                return Ok(iterations);
             }
         }
-        self.system.bodies.position = x0;
-        self.system.bodies.rotation = r0;
+        self.system.bodies.position.copy_from_slice(&self.start_position);
+        self.system.bodies.rotation.copy_from_slice(&self.start_rotation);
         Err(Error::NewtonDidNotConverge {
             method: "Newmark (average acceleration)",
-            equation: "the equations of motion at the end of the step",
+            equation: "the equations of motion at the end of the step (largest correction as the residual)",
             t: t_new - h,
             h,
             residual: last,
-            iterations: 30,
+            iterations,
         })
     }
 
-    /// `a, A, v, W` at the end of the step for the current iterate.
-    fn kinematics(&self, h: f64, x0: &[Vec3], r0: &[Mat3]) -> Kinematics {
-        let b = &self.system.bodies;
-        let n = b.len();
-        let c = 4.0 / (h * h);
-        let mut k: Kinematics = (
-            Vec::with_capacity(n),
-            Vec::with_capacity(n),
-            Vec::with_capacity(n),
-            Vec::with_capacity(n),
-        );
-        for i in 0..n {
-            let a = if b.free[i] {
-                (b.position[i] - x0[i] - self.velocity[i] * h) * c - self.acceleration[i]
-            } else {
-                Vec3::ZERO
-            };
-            let theta = so3::log(&(r0[i].transpose() * b.rotation[i]));
-            let alpha = (theta - self.omega[i] * h) * c - self.alpha[i];
-            k.0.push(a);
-            k.1.push(alpha);
-            k.2.push(self.velocity[i] + (self.acceleration[i] + a) * (0.5 * h));
-            k.3.push(self.omega[i] + (self.alpha[i] + alpha) * (0.5 * h));
-        }
-        k
-    }
-
     /// `4M/h² + K` at the current iterate, `K` by central differences element by element.
-    fn assemble(&mut self, c: f64, h: f64, r0: &[Mat3], omega: &[Vec3]) {
+    fn assemble(&mut self, c: f64, h: f64) {
+        let (r0, omega) = (&self.start_rotation, &self.next.omega);
         self.matrix.clear();
         let b = &self.system.bodies;
         for i in 0..b.len() {
@@ -401,5 +398,46 @@ impl Newmark {
     }
 }
 
-/// Accelerations, angular accelerations, velocities, angular velocities.
-type Kinematics = (Vec<Vec3>, Vec<Vec3>, Vec<Vec3>, Vec<Vec3>);
+/// Newton iterations before a step is given up.
+const MAX_ITERATIONS: u32 = 30;
+
+/// Per body: acceleration, angular acceleration (body frame), velocity, angular velocity
+/// (body frame).
+#[derive(Clone, Debug)]
+struct Motion {
+    acceleration: Vec<Vec3>,
+    alpha: Vec<Vec3>,
+    velocity: Vec<Vec3>,
+    omega: Vec<Vec3>,
+}
+
+impl Motion {
+    fn zeros(n: usize) -> Self {
+        Motion {
+            acceleration: vec![Vec3::ZERO; n],
+            alpha: vec![Vec3::ZERO; n],
+            velocity: vec![Vec3::ZERO; n],
+            omega: vec![Vec3::ZERO; n],
+        }
+    }
+
+    /// The motion at the end of the step for the iterate `b`, from the step's start
+    /// (`x0`, `r0`, motion `now`): `a = 4(Δx − h v)/h² − a_n`, `A = 4(Θ − h W)/h² − A_n`
+    /// with `Θ = log(R₀ᵀ R)`, and the velocities by the trapezoidal rule.
+    fn of_iterate(&mut self, now: &Motion, b: &crate::many::Bodies, x0: &[Vec3], r0: &[Mat3], h: f64) {
+        let c = 4.0 / (h * h);
+        for i in 0..b.len() {
+            let a = if b.free[i] {
+                (b.position[i] - x0[i] - now.velocity[i] * h) * c - now.acceleration[i]
+            } else {
+                Vec3::ZERO
+            };
+            let theta = so3::log(&(r0[i].transpose() * b.rotation[i]));
+            let alpha = (theta - now.omega[i] * h) * c - now.alpha[i];
+            self.acceleration[i] = a;
+            self.alpha[i] = alpha;
+            self.velocity[i] = now.velocity[i] + (now.acceleration[i] + a) * (0.5 * h);
+            self.omega[i] = now.omega[i] + (now.alpha[i] + alpha) * (0.5 * h);
+        }
+    }
+}

@@ -305,17 +305,3 @@ impl BeamProblem {
         self.frame.names.iter().map(|(n, _)| n.clone()).collect()
     }
 }
-
-impl BeamSystem {
-    /// Put node `node` at `position`, turned by `rotation` from its initial attitude (for
-    /// a clamped node nothing changes); forces are evaluated again.
-    pub fn set_pose(&mut self, node: usize, position: crate::linalg::Vec3, rotation: crate::linalg::Mat3) {
-        if let super::NodeRef::Body(i) = self.nodes[node] {
-            if self.bodies.free[i] {
-                self.bodies.position[i] = position;
-            }
-            self.bodies.rotation[i] = rotation * self.body_axes[i];
-            self.bodies.evaluate(&self.structure);
-        }
-    }
-}
