@@ -429,33 +429,56 @@ fn run_model<I: Interaction>(
     let bar = progress(steps, "steps", steps as f64 * bodies.len() as f64 >= 2e7);
     let mut stepping = 0.0;
     let t0 = bodies.t;
-    for k in 1..=steps {
+    // Steps are taken in blocks that end where something is observed (the totals, the
+    // trajectory, the last step) and hold at most about 5·10⁵ body-steps, so that a stop
+    // request is seen within a fraction of a second. A block of NVE steps is one
+    // `Bodies::advance` (a team of threads for all its steps; the same bits as single
+    // steps); the last step lands on t_end.
+    let block_cap = (500_000 / bodies.len().max(1) as u64).max(1);
+    let next_multiple = |k: u64, m: u64| if m == u64::MAX { u64::MAX } else { (k / m + 1) * m };
+    let mut k = 0;
+    while k < steps {
         if let Some((signal, code)) = interrupt.requested() {
             bar.finish_and_clear();
             return Err(Failure::Signal(
                 code,
                 format!(
-                    "{signal}: stopped at t = {} after {} of {steps} steps{}",
+                    "{signal}: stopped at t = {} after {k} of {steps} steps{}",
                     Num(bodies.t),
-                    k - 1,
                     keep(out, frames)
                 ),
             ));
         }
-        // The nominal step, except for the last one, which lands on t_end.
-        let target = if k == steps { t_end } else { t0 + k as f64 * h };
-        let dt = target - bodies.t;
+        let end = next_multiple(k, args.every)
+            .min(next_multiple(k, traj_every))
+            .min(steps)
+            .min(k + block_cap);
         let start = Instant::now();
         let result = match &thermostat {
-            Some(th) => bodies.step_langevin(model, dt, th),
-            None => bodies.step(model, dt),
+            Some(th) => (k..end).try_for_each(|j| {
+                // The nominal step, except for the last one, which lands on t_end.
+                let target = if j + 1 == steps { t_end } else { t0 + (j + 1) as f64 * h };
+                let dt = target - bodies.t;
+                bodies.step_langevin(model, dt, th).map(|()| bodies.t = target)
+            }),
+            None => {
+                let nominal = if end == steps { end - 1 - k } else { end - k };
+                bodies.advance(model, h, nominal).and_then(|()| {
+                    if end == steps {
+                        bodies.t = t0 + (steps - 1) as f64 * h;
+                        bodies.step(model, t_end - bodies.t)?;
+                    }
+                    Ok(())
+                })
+            }
         };
+        stepping += start.elapsed().as_secs_f64();
         if let Err(e) = result {
             bar.finish_and_clear();
-            return Err(Failure::Run(format!("step {k}: {e}{}", keep(out, frames))));
+            return Err(Failure::Run(format!("steps {}-{end}: {e}{}", k + 1, keep(out, frames))));
         }
-        stepping += start.elapsed().as_secs_f64();
-        bodies.t = target;
+        bodies.t = if end == steps { t_end } else { t0 + end as f64 * h };
+        k = end;
         if k % args.every == 0 || k == steps {
             if let Err(e) = write(&bodies, &mut out) {
                 return Err(Failure::Run(format!("{e}{}", keep(out, frames))));
@@ -464,9 +487,7 @@ fn run_model<I: Interaction>(
         if let Err(e) = observe(&bodies, &mut frames, k) {
             return Err(Failure::Run(format!("{e}{}", keep(out, frames))));
         }
-        if k % 64 == 0 {
-            bar.set_position(k);
-        }
+        bar.set_position(k);
     }
     bar.finish_and_clear();
     if let Some(w) = out {

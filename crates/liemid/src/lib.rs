@@ -53,6 +53,7 @@ pub mod rigid;
 pub mod rotation;
 pub mod so3;
 pub mod spin;
+mod team;
 pub mod vector;
 
 pub use composition::{Composition, Scheme};

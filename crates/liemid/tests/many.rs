@@ -701,3 +701,69 @@ fn the_spatial_sort_changes_no_bit_and_the_threads_none_either() {
         );
     }
 }
+
+#[test]
+fn advance_is_step_bit_for_bit_with_list_rebuilds_on_any_team() {
+    // `Bodies::advance` runs the steps by a team of threads (two spin barriers a step) and
+    // completes a step whose list went stale by `compute`: the same bits as single steps,
+    // for 1, 2 and 3 threads, across several list rebuilds, in blocks of any length.
+    let steps = 150;
+    let reference = {
+        let (mut b, model) = problems::dipolar_fluid(1000, 0.3, 4).unwrap();
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        pool.install(|| {
+            for _ in 0..steps {
+                b.step(&model, 2e-3).unwrap();
+            }
+        });
+        assert!(
+            model.list_builds() >= 3,
+            "the list was rebuilt: {}",
+            model.list_builds()
+        );
+        b
+    };
+    for threads in [1, 2, 3] {
+        for block in [1u64, 7, 150] {
+            let (mut b, model) = problems::dipolar_fluid(1000, 0.3, 4).unwrap();
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| {
+                let mut done = 0;
+                while done < steps {
+                    let k = block.min(steps - done);
+                    b.advance(&model, 2e-3, k).unwrap();
+                    done += k;
+                }
+            });
+            assert!(
+                b.position == reference.position
+                    && b.momentum == reference.momentum
+                    && b.rotation == reference.rotation
+                    && b.pi == reference.pi
+                    && b.force == reference.force
+                    && b.torque == reference.torque,
+                "advance in blocks of {block} on {threads} threads differs from step"
+            );
+            assert_eq!(b.t, reference.t, "time");
+        }
+    }
+}
+
+#[test]
+fn advance_reports_a_failing_body_as_step_does() {
+    // A step too large for the spins: `advance` fails with the same error as `step`, on
+    // one and two threads.
+    let make = || {
+        let (mut b, model) = problems::dipolar_fluid(1000, 0.3, 4).unwrap();
+        b.pi[700] = Vec3::new(0.0, 0.0, 1e6);
+        (b, model)
+    };
+    let (mut a, model) = make();
+    let expected = a.step(&model, 1e-3).unwrap_err().to_string();
+    for threads in [1, 2] {
+        let (mut b, model) = make();
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        let got = pool.install(|| b.advance(&model, 1e-3, 5)).unwrap_err().to_string();
+        assert_eq!(got, expected, "{threads} threads");
+    }
+}

@@ -37,4 +37,13 @@ fn many_body_steps_allocate_nothing_once_warm() {
     });
     let during = counting::allocations() - before;
     assert_eq!(during, 0, "{during} allocations in 30 many-body steps");
+    // `advance` by a team of threads: what forming the team costs (rayon's broadcast) once
+    // per call, nothing per step.
+    let allocations_of = |fluid: &mut liemid::many::Bodies, steps: u64| {
+        let before = counting::allocations();
+        pool.install(|| fluid.advance(&dipoles, 1e-3, steps).unwrap());
+        counting::allocations() - before
+    };
+    let (few, many) = (allocations_of(&mut fluid, 2), allocations_of(&mut fluid, 20));
+    assert_eq!(few, many, "advance allocated per step: {few} in 2 steps, {many} in 20");
 }

@@ -155,6 +155,47 @@ pub trait Interaction: Sync {
     fn compute_local(&self, config: Configuration<'_>, force: &mut [Vec3], torque: &mut [Vec3]) {
         self.compute(config, force, torque);
     }
+    /// For [`Bodies::advance`]: call `team` with an evaluation of the forces of `bodies`
+    /// bodies in phases by a team of threads, if the interaction has what it needs ready
+    /// (e.g. the neighbour list of the last evaluation); `false` when it has not called it.
+    /// The default is `false`: `advance` then takes ordinary steps.
+    fn team_forces(&self, bodies: usize, team: &mut dyn FnMut(&dyn TeamForces)) -> bool {
+        let _ = (bodies, team);
+        false
+    }
+}
+
+/// Forces and torques evaluated by a team of threads in three phases per step, for
+/// [`Bodies::advance`]: `prepare` (per body, after its motion), `pairs` (per chunk of
+/// [`CHUNK`] bodies, reading every body), `forces` (per body). It must give exactly what
+/// [`Interaction::compute`] gives, bit for bit.
+///
+/// # Safety (of the calls)
+/// [`Bodies::advance`] makes the calls in this order, which implementations may rely on
+/// for the buffers they share between threads: every step, each part calls `prepare` for
+/// each of its chunks, the parts meet at a barrier, each calls `pairs` with its chunks,
+/// the parts meet again, each calls `forces` for each of its chunks; a part's chunks are
+/// the same for the whole team and no two parts share one; the next step's `prepare` of a
+/// chunk follows its `forces`. Nothing else is called while the team lives.
+pub trait TeamForces: Sync {
+    /// After the motion of the run of bodies `run` (chunk `first / CHUNK`), starting at
+    /// body `first`: prepare their per-body data. `false` when what the evaluation was
+    /// built on no longer holds for one of them (a body moved beyond the neighbour list's
+    /// skin): the team then stops and [`Interaction::compute`] completes the step.
+    ///
+    /// # Safety
+    /// See the trait.
+    unsafe fn prepare(&self, first: usize, run: Configuration<'_>) -> bool;
+    /// The pair pass of chunks `chunks`; `config` is every body.
+    ///
+    /// # Safety
+    /// See the trait.
+    unsafe fn pairs(&self, chunks: std::ops::Range<usize>, config: Configuration<'_>);
+    /// The forces and torques of the run of bodies `run` starting at body `first`.
+    ///
+    /// # Safety
+    /// See the trait.
+    unsafe fn forces(&self, first: usize, run: Configuration<'_>, force: &mut [Vec3], torque: &mut [Vec3]);
 }
 
 /// Totals of a many-body state.
@@ -331,6 +372,153 @@ pub(crate) fn free_rotation(
     Ok(())
 }
 
+#[derive(Clone, Copy)]
+/// What the motion of a step between the impulses reads: the bodies' constants, the free
+/// rotation, the step.
+struct Motion<'a> {
+    inertia: &'a [PrincipalInertia],
+    free: &'a [bool],
+    mass: &'a [f64],
+    /// The exact flows, for [`FreeRotation::Exact`].
+    exact: Option<&'a [FreeFlow]>,
+    lanes: bool,
+    h: f64,
+    /// The time at the start of the step (for error messages).
+    t: f64,
+}
+
+impl Motion<'_> {
+    /// The start impulse, the drift of free bodies and the torque-free rotation (exact, or
+    /// the midpoint Lie rule in two half steps as in EA, four bodies at a time in SIMD lanes
+    /// where they take the common path) of the run of bodies `c` starting at `start`.
+    /// `false` when a body's midpoint equation failed (recorded in `failure`; the run is
+    /// then left part-way).
+    #[inline]
+    fn move_chunk(&self, start: usize, c: &mut Chunk<'_>, failure: &Mutex<Option<(usize, Error)>>) -> bool {
+        let (h, hh) = (self.h, 0.5 * self.h);
+        let n = c.momentum.len();
+        let (free, mass, inertia) = (
+            &self.free[start..start + n],
+            &self.mass[start..start + n],
+            &self.inertia[start..start + n],
+        );
+        let (p, pi, x, r) = (&mut *c.momentum, &mut *c.pi, &mut *c.position, &mut *c.rotation);
+        kick_chunk(free, p, pi, c.force, c.torque, hh);
+        for k in 0..n {
+            if free[k] {
+                x[k] += p[k] * (h / mass[k]);
+            }
+        }
+        if let Some(flows) = self.exact {
+            for k in 0..n {
+                let (p_end, r_end) = flows[start + k].flow(Vec3::load_split(&pi[k]), &r[k], h);
+                (pi[k], r[k]) = (p_end, r_end);
+            }
+            return true;
+        }
+        let mut k = 0;
+        while k < n {
+            let end = (k + GROUP).min(n);
+            if rotate_group(self.lanes, &inertia[k..end], &mut r[k..end], &mut pi[k..end], hh) {
+                k = end;
+                continue;
+            }
+            // The scalar path: the rest of the chunk, and groups the lanes hand over.
+            for k in k..end {
+                if let Err(e) = free_rotation(&inertia[k], &mut r[k], &mut pi[k], hh) {
+                    let err = newton_error("many-body splitting", "midpoint equation (M)", self.t, h, e);
+                    keep_first_failure(failure, start + k, err);
+                    return false;
+                }
+            }
+            k = end;
+        }
+        true
+    }
+}
+
+/// The mutable state of all bodies as raw parts, for a team whose threads each take their
+/// own chunks ([`Bodies::advance`]).
+struct SharedBodies {
+    n: usize,
+    momentum: *mut Vec3,
+    pi: *mut Vec3,
+    position: *mut Vec3,
+    rotation: *mut Mat3,
+    force: *mut Vec3,
+    torque: *mut Vec3,
+}
+
+// SAFETY: the threads of a team take disjoint chunks, and read other chunks only between
+// barriers that separate those reads from the writes (see `Bodies::team_steps`).
+unsafe impl Send for SharedBodies {}
+unsafe impl Sync for SharedBodies {}
+
+impl SharedBodies {
+    fn new(c: Chunk<'_>) -> Self {
+        SharedBodies {
+            n: c.momentum.len(),
+            momentum: c.momentum.as_mut_ptr(),
+            pi: c.pi.as_mut_ptr(),
+            position: c.position.as_mut_ptr(),
+            rotation: c.rotation.as_mut_ptr(),
+            force: c.force.as_mut_ptr(),
+            torque: c.torque.as_mut_ptr(),
+        }
+    }
+
+    /// Chunk `k`'s state.
+    ///
+    /// # Safety
+    /// No other reference to chunk `k`'s entries may live while the result does.
+    #[allow(clippy::mut_from_ref)]
+    unsafe fn chunk(&self, k: usize) -> (usize, Chunk<'_>) {
+        let first = k * CHUNK;
+        let len = CHUNK.min(self.n - first);
+        // SAFETY: `first + len <= n`; exclusive by the caller's promise.
+        unsafe {
+            (
+                first,
+                Chunk {
+                    momentum: std::slice::from_raw_parts_mut(self.momentum.add(first), len),
+                    pi: std::slice::from_raw_parts_mut(self.pi.add(first), len),
+                    position: std::slice::from_raw_parts_mut(self.position.add(first), len),
+                    rotation: std::slice::from_raw_parts_mut(self.rotation.add(first), len),
+                    force: std::slice::from_raw_parts_mut(self.force.add(first), len),
+                    torque: std::slice::from_raw_parts_mut(self.torque.add(first), len),
+                },
+            )
+        }
+    }
+
+    /// Every body's positions and attitudes.
+    ///
+    /// # Safety
+    /// No body's position or attitude may be written while the result lives.
+    unsafe fn configuration<'a>(&'a self, t: f64, mass: &'a [f64], free: &'a [bool]) -> Configuration<'a> {
+        // SAFETY: `n` entries each; shared by the caller's promise.
+        unsafe {
+            Configuration {
+                t,
+                mass,
+                free,
+                position: std::slice::from_raw_parts(self.position, self.n),
+                rotation: std::slice::from_raw_parts(self.rotation, self.n),
+            }
+        }
+    }
+}
+
+/// How a team's run of steps ended.
+enum TeamEnd {
+    /// All steps taken.
+    Done,
+    /// A step's motion is done, but [`TeamForces::prepare`] found its evaluation stale.
+    Stale,
+    /// A body failed (the state is mid-step).
+    Failed(Error),
+}
+
 impl Bodies {
     /// An empty system at `t = 0`.
     #[must_use]
@@ -464,6 +652,28 @@ impl Bodies {
         });
     }
 
+    /// The step's [`Motion`] (constants) and its mutable state, borrowed apart.
+    fn split(&mut self, h: f64) -> (Motion<'_>, Chunk<'_>) {
+        let motion = Motion {
+            inertia: &self.inertia,
+            free: &self.free,
+            mass: &self.mass,
+            exact: (self.rotation_kind == FreeRotation::Exact).then_some(self.flows.as_slice()),
+            lanes: lanes_available(),
+            h,
+            t: self.t,
+        };
+        let state = Chunk {
+            momentum: &mut self.momentum,
+            pi: &mut self.pi,
+            position: &mut self.position,
+            rotation: &mut self.rotation,
+            force: &mut self.force,
+            torque: &mut self.torque,
+        };
+        (motion, state)
+    }
+
     /// One step of the splitting integrator (see the module documentation).
     ///
     /// # Errors
@@ -480,58 +690,19 @@ impl Bodies {
         let t = self.t;
         let failure: Mutex<Option<(usize, Error)>> = Mutex::new(None);
         let failure_ref = &failure;
-        let (inertia, free, mass) = (&self.inertia, &self.free, &self.mass);
-        let lanes = lanes_available();
         let local = interaction.is_local();
-        let exact = (self.rotation_kind == FreeRotation::Exact).then_some(self.flows.as_slice());
-        let all = Chunk {
-            momentum: &mut self.momentum,
-            pi: &mut self.pi,
-            position: &mut self.position,
-            rotation: &mut self.rotation,
-            force: &mut self.force,
-            torque: &mut self.torque,
-        };
-        // One pass over each chunk: the start impulse, the drift of free bodies, and the
-        // torque-free rotation (exact, or the midpoint Lie rule in two half steps as in EA,
-        // four bodies at a time in SIMD lanes where they take the common path); for a local
+        let (motion, all) = self.split(h);
+        let (free, mass) = (motion.free, motion.mass);
+        // One pass over each chunk: the motion (`Motion::move_chunk`); for a local
         // interaction also the new forces and torques and the end impulse, so the step
         // sweeps memory once.
-        for_each_chunk(all, |start, c| {
-            let (p, pi, x, r) = (c.momentum, c.pi, c.position, c.rotation);
-            let n = p.len();
+        for_each_chunk(all, |start, mut c| {
+            if !motion.move_chunk(start, &mut c, failure_ref) {
+                return;
+            }
+            let n = c.momentum.len();
             let (free, mass) = (&free[start..start + n], &mass[start..start + n]);
-            kick_chunk(free, p, pi, c.force, c.torque, hh);
-            for k in 0..n {
-                if free[k] {
-                    x[k] += p[k] * (h / mass[k]);
-                }
-            }
-            if let Some(flows) = exact {
-                for k in 0..n {
-                    let (p_end, r_end) = flows[start + k].flow(Vec3::load_split(&pi[k]), &r[k], h);
-                    (pi[k], r[k]) = (p_end, r_end);
-                }
-            }
-            let mut k = if exact.is_some() { n } else { 0 };
-            while k < n {
-                let end = (k + GROUP).min(n);
-                let (i, j) = (start + k, start + end);
-                if rotate_group(lanes, &inertia[i..j], &mut r[k..end], &mut pi[k..end], hh) {
-                    k = end;
-                    continue;
-                }
-                // The scalar path: the rest of the chunk, and groups the lanes hand over.
-                for k in k..end {
-                    let i = start + k;
-                    if let Err(e) = free_rotation(&inertia[i], &mut r[k], &mut pi[k], hh) {
-                        let err = newton_error("many-body splitting", "midpoint equation (M)", t, h, e);
-                        keep_first_failure(failure_ref, i, err);
-                        return;
-                    }
-                }
-                k = end;
-            }
+            let (p, pi, x, r) = (c.momentum, c.pi, c.position, c.rotation);
             if local {
                 let config = Configuration {
                     t: t + h,
@@ -556,6 +727,139 @@ impl Bodies {
             self.kick(h);
         }
         Ok(())
+    }
+
+    /// `steps` steps of [`Bodies::step`] with step `h`: the same bits, with less
+    /// synchronisation. When the interaction offers [`TeamForces`]
+    /// ([`Interaction::team_forces`]), the threads of the pool stay together for all the
+    /// steps as a team, each moving and evaluating its own chunks, with two spin barriers per
+    /// step (after the motion, after the pair pass) instead of four hand-offs through the
+    /// pool; a step whose evaluation went stale (a neighbour list to rebuild) is completed by
+    /// [`Interaction::compute`], and the team formed again. Otherwise it takes ordinary
+    /// steps.
+    ///
+    /// # Errors
+    /// As [`Bodies::step`]; the system is then left mid-step.
+    pub fn advance<I: Interaction + ?Sized>(&mut self, interaction: &I, h: f64, steps: u64) -> Result<()> {
+        if !(h.is_finite() && h != 0.0) {
+            return Err(Error::InvalidStep { h });
+        }
+        let mut done = 0;
+        while done < steps {
+            if !self.forces_valid {
+                self.evaluate(interaction);
+            }
+            let mut outcome = None;
+            let (n, remaining) = (self.len(), steps - done);
+            interaction.team_forces(n, &mut |team| outcome = Some(self.team_steps(team, h, remaining)));
+            let Some((completed, end)) = outcome else {
+                self.step(interaction, h)?;
+                done += 1;
+                continue;
+            };
+            done += completed;
+            match end {
+                TeamEnd::Done => {}
+                TeamEnd::Stale => {
+                    // As `step` ends: the time, the forces, the end impulse.
+                    self.t += h;
+                    self.evaluate(interaction);
+                    self.kick(h);
+                    done += 1;
+                }
+                TeamEnd::Failed(e) => {
+                    self.forces_valid = false;
+                    return Err(e);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Up to `steps` steps by a team (see [`Bodies::advance`]); the steps completed and how
+    /// the team ended. The forces are valid at the start and, after [`TeamEnd::Done`], at
+    /// the end.
+    fn team_steps(&mut self, team: &dyn TeamForces, h: f64, steps: u64) -> (u64, TeamEnd) {
+        use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+        let n = self.len();
+        let chunks = n.div_ceil(CHUNK);
+        let failure: Mutex<Option<(usize, Error)>> = Mutex::new(None);
+        let (stale, failed, completed) = (AtomicBool::new(false), AtomicBool::new(false), AtomicU64::new(0));
+        let (motion, all) = self.split(h);
+        let (free, mass) = (motion.free, motion.mass);
+        let shared = SharedBodies::new(all);
+        crate::team::run(chunks >= 2, |part, barrier| {
+            let mine = part.range(chunks);
+            let mut motion = motion;
+            for step in 0..steps {
+                let t_end = motion.t + h;
+                let mut fresh = true;
+                for k in mine.clone() {
+                    // SAFETY: chunk `k` is this part's; no other part touches it in this phase.
+                    let (first, mut c) = unsafe { shared.chunk(k) };
+                    if !motion.move_chunk(first, &mut c, &failure) {
+                        failed.store(true, Ordering::Relaxed);
+                    }
+                    let len = c.momentum.len();
+                    let run = Configuration {
+                        t: t_end,
+                        mass: &mass[first..first + len],
+                        free: &free[first..first + len],
+                        position: c.position,
+                        rotation: c.rotation,
+                    };
+                    // SAFETY: the calling order of `TeamForces`.
+                    fresh &= unsafe { team.prepare(first, run) };
+                }
+                if !fresh {
+                    stale.store(true, Ordering::Relaxed);
+                }
+                barrier.wait();
+                if stale.load(Ordering::Relaxed) || failed.load(Ordering::Relaxed) {
+                    if part.index() == 0 {
+                        completed.store(step, Ordering::Relaxed);
+                    }
+                    return;
+                }
+                // SAFETY: nobody writes positions or attitudes until the next barrier.
+                let config = unsafe { shared.configuration(t_end, mass, free) };
+                // SAFETY: the calling order of `TeamForces`.
+                unsafe { team.pairs(mine.clone(), config) };
+                barrier.wait();
+                for k in mine.clone() {
+                    // SAFETY: chunk `k` is this part's; other parts read none of it now.
+                    let (first, c) = unsafe { shared.chunk(k) };
+                    let len = c.momentum.len();
+                    let (free, mass) = (&free[first..first + len], &mass[first..first + len]);
+                    let run = Configuration {
+                        t: t_end,
+                        mass,
+                        free,
+                        position: c.position,
+                        rotation: c.rotation,
+                    };
+                    // SAFETY: the calling order of `TeamForces`.
+                    unsafe { team.forces(first, run, c.force, c.torque) };
+                    kick_chunk(free, c.momentum, c.pi, c.force, c.torque, 0.5 * h);
+                }
+                motion.t = t_end;
+            }
+            if part.index() == 0 {
+                completed.store(steps, Ordering::Relaxed);
+            }
+        });
+        let completed = completed.load(Ordering::Relaxed);
+        for _ in 0..completed {
+            self.t += h;
+        }
+        let end = if let Some((_, e)) = failure.into_inner().expect("not poisoned") {
+            TeamEnd::Failed(e)
+        } else if stale.load(Ordering::Relaxed) {
+            TeamEnd::Stale
+        } else {
+            TeamEnd::Done
+        };
+        (completed, end)
     }
 
     /// One step of a symmetric composition of the splitting integrator.

@@ -20,7 +20,7 @@
 //! T. E. Ouldridge, M. V. Tretyakov, *New Langevin and gradient thermostats for rigid body
 //! dynamics*, J. Chem. Phys. 142, 144114 (2015).
 
-use super::{for_each_chunk, free_rotation, keep_first_failure, kick_chunk, Bodies, Chunk, FreeRotation, Interaction};
+use super::{for_each_chunk, free_rotation, keep_first_failure, kick_chunk, Bodies, Interaction};
 use crate::error::{Error, Result};
 use crate::linalg::Vec3;
 use crate::rotation::newton_error;
@@ -121,17 +121,9 @@ impl Bodies {
             ((1.0 - cr * cr) * thermostat.temperature).sqrt(),
         );
         let failure: Mutex<Option<(usize, Error)>> = Mutex::new(None);
-        let (inertia, free, mass) = (&self.inertia, &self.free, &self.mass);
-        let exact = (self.rotation_kind == FreeRotation::Exact).then_some(self.flows.as_slice());
         let seed = thermostat.seed;
-        let all = Chunk {
-            momentum: &mut self.momentum,
-            pi: &mut self.pi,
-            position: &mut self.position,
-            rotation: &mut self.rotation,
-            force: &mut self.force,
-            torque: &mut self.torque,
-        };
+        let (motion, all) = self.split(h);
+        let (inertia, free, mass, exact) = (motion.inertia, motion.free, motion.mass, motion.exact);
         for_each_chunk(all, |start, ch| {
             let (p, pi, x, r) = (ch.momentum, ch.pi, ch.position, ch.rotation);
             let n = p.len();

@@ -3,6 +3,7 @@
 //! only reduction (a maximum) does not depend on the order.
 
 use crate::linalg::Vec3;
+pub(crate) use crate::team::{Part, SpinBarrier};
 
 /// Sites per parallel work item.
 pub const CHUNK: usize = 1024;
@@ -117,89 +118,11 @@ impl Shared {
     }
 }
 
-/// A worker's share of a sweep: part `index` of `count`.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Part {
-    index: usize,
-    count: usize,
-}
-
-impl Part {
-    /// The contiguous share of `len` items of this part (fixed by the part count alone).
-    #[inline]
-    pub(crate) fn range(&self, len: usize) -> std::ops::Range<usize> {
-        (self.index * len / self.count)..((self.index + 1) * len / self.count)
-    }
-}
-
-/// A barrier that spins (then yields) instead of sleeping: the sweeps it separates take
-/// tens of microseconds, less than a sleeping thread needs to wake.
-pub(crate) struct SpinBarrier {
-    threads: usize,
-    arrived: std::sync::atomic::AtomicUsize,
-    generation: std::sync::atomic::AtomicUsize,
-}
-
-impl SpinBarrier {
-    fn new(threads: usize) -> Self {
-        SpinBarrier {
-            threads,
-            arrived: std::sync::atomic::AtomicUsize::new(0),
-            generation: std::sync::atomic::AtomicUsize::new(0),
-        }
-    }
-
-    /// Wait until every thread has arrived; what each wrote before is visible to all after.
-    pub(crate) fn wait(&self) {
-        use std::sync::atomic::Ordering;
-        if self.threads == 1 {
-            return;
-        }
-        let generation = self.generation.load(Ordering::Acquire);
-        if self.arrived.fetch_add(1, Ordering::AcqRel) + 1 == self.threads {
-            self.arrived.store(0, Ordering::Relaxed);
-            self.generation.fetch_add(1, Ordering::Release);
-        } else {
-            let mut spins = 0u32;
-            while self.generation.load(Ordering::Acquire) == generation {
-                if spins < 4096 {
-                    std::hint::spin_loop();
-                    spins += 1;
-                } else {
-                    std::thread::yield_now();
-                }
-            }
-        }
-    }
-}
-
 /// Sites below which a team is one thread (the barriers would cost more than they save).
 #[cfg_attr(not(feature = "parallel"), allow(dead_code))]
 pub const TEAM_SITES: usize = 2048;
 
-/// Run `work` once on every thread of the current pool (one thread for fewer than
-/// [`TEAM_SITES`] sites or without the `parallel` feature), each with its [`Part`] and a
-/// shared barrier for the sweeps it separates. Each part's share is fixed by the part
-/// count, and each element is computed the same way whoever computes it, so the result
-/// does not depend on the number of threads.
+/// [`crate::team::run`] for a sweep over `sites` sites: one thread below [`TEAM_SITES`].
 pub(crate) fn team(sites: usize, work: impl Fn(Part, &SpinBarrier) + Sync) {
-    #[cfg(feature = "parallel")]
-    {
-        let threads = rayon::current_num_threads();
-        if threads > 1 && sites >= TEAM_SITES {
-            let barrier = SpinBarrier::new(threads);
-            rayon::broadcast(|ctx| {
-                work(
-                    Part {
-                        index: ctx.index(),
-                        count: ctx.num_threads(),
-                    },
-                    &barrier,
-                )
-            });
-            return;
-        }
-    }
-    let _ = sites;
-    work(Part { index: 0, count: 1 }, &SpinBarrier::new(1));
+    crate::team::run(sites >= TEAM_SITES, work);
 }
