@@ -608,10 +608,20 @@ impl Dipoles {
                 for place in k * chunk..((k + 1) * chunk).min(n) {
                     let i = if order.is_empty() { place } else { order[place] as usize };
                     let before = entries.len();
-                    self.for_neighbours(i, c, cells, |j| {
-                        if Self::separation(&constants, c.position[i], c.position[j]).norm_squared() <= reach2 {
-                            entries.push(if rank.is_empty() { j as u32 } else { rank[j] });
+                    let xi = c.position[i];
+                    // Branch-free: every candidate of a run is written, and kept when within
+                    // reach (a branch taken by a quarter of the candidates at random was
+                    // mispredicted often).
+                    self.for_neighbour_runs(i, c, cells, |run| {
+                        let base = entries.len();
+                        entries.resize(base + run.len(), 0);
+                        let mut kept = base;
+                        for &j in run {
+                            let within = Self::separation(&constants, xi, c.position[j]).norm_squared() <= reach2;
+                            entries[kept] = if rank.is_empty() { j as u32 } else { rank[j] };
+                            kept += usize::from(within && j != i);
                         }
+                        entries.truncate(kept);
                     });
                     counts.push((entries.len() - before) as u32);
                 }
@@ -777,11 +787,32 @@ impl Dipoles {
 
     /// Visit the neighbours `j ≠ i` of `i` in a fixed order.
     fn for_neighbours(&self, i: usize, c: &Configuration<'_>, cells: Option<&Cells<'_>>, mut f: impl FnMut(usize)) {
-        let Some(cells) = cells else {
-            for j in 0..c.position.len() {
+        self.for_neighbour_runs(i, c, cells, |run| {
+            for &j in run {
                 if j != i {
                     f(j);
                 }
+            }
+        });
+    }
+
+    /// Visit the candidate neighbours of `i` as runs of bodies, in a fixed order: the bodies
+    /// of the stencil's cells (all bodies without a cell list), `i` among them.
+    fn for_neighbour_runs(
+        &self,
+        i: usize,
+        c: &Configuration<'_>,
+        cells: Option<&Cells<'_>>,
+        mut f: impl FnMut(&[usize]),
+    ) {
+        let Some(cells) = cells else {
+            let mut run = [0usize; 64];
+            for first in (0..c.position.len()).step_by(run.len()) {
+                let len = run.len().min(c.position.len() - first);
+                for (k, r) in run[..len].iter_mut().enumerate() {
+                    *r = first + k;
+                }
+                f(&run[..len]);
             }
             return;
         };
@@ -826,16 +857,24 @@ impl Dipoles {
             (out, len)
         };
         let ((xs, nx), (ys, ny), (zs, nz)) = (axis(cx, n[0]), axis(cy, n[1]), axis(cz, n[2]));
+        // Cells of a row that follow each other in x are contiguous in `sorted`: visit the
+        // stencil's x cells of a row as at most two runs (two where the box wraps), in the
+        // same order as cell by cell, without a loop exit per cell.
+        let mut runs = [(0usize, 0usize); 2];
+        let mut n_runs = 0;
+        for &x in &xs[..nx] {
+            if n_runs > 0 && runs[n_runs - 1].1 == x {
+                runs[n_runs - 1].1 = x + 1;
+            } else {
+                runs[n_runs] = (x, x + 1);
+                n_runs += 1;
+            }
+        }
         for &z in &zs[..nz] {
             for &y in &ys[..ny] {
                 let row = (z * n[1] + y) * n[0];
-                for &x in &xs[..nx] {
-                    let k = row + x;
-                    for &j in &cells.sorted[cells.start[k]..cells.start[k + 1]] {
-                        if j != i {
-                            f(j);
-                        }
-                    }
+                for &(lo, hi) in &runs[..n_runs] {
+                    f(&cells.sorted[cells.start[row + lo]..cells.start[row + hi]]);
                 }
             }
         }
