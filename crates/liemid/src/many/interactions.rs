@@ -565,7 +565,7 @@ impl Dipoles {
             && s.list_start.len() == n + 1
             // The half list exists exactly when it is to be used (the limit may have changed).
             && (n <= self.half_list_max_bodies) == (s.half_start.len() == n + 1)
-            && s.sort_requested == (self.spatial_sort && n > self.half_list_max_bodies)
+            && s.sort_requested == self.spatial_sort
             && c.position
                 .iter()
                 .zip(&s.reference)
@@ -586,7 +586,7 @@ impl Dipoles {
         let chunk = crate::many::CHUNK;
         let mut chunks = std::mem::take(&mut s.chunk_lists);
         chunks.resize_with(n.div_ceil(chunk), Default::default);
-        let sort = self.spatial_sort && n > self.half_list_max_bodies;
+        let sort = self.spatial_sort;
         let (mut order, mut rank) = (std::mem::take(&mut s.order), std::mem::take(&mut s.rank));
         {
             let cells = self.build_cells_of(c, s, reach);
@@ -881,6 +881,35 @@ impl Dipoles {
     }
 }
 
+/// This step's positions and dipoles in place order (`order[place]` is a body; the
+/// identity without the spatial sort), in parallel over chunks of places.
+fn gather_places(s: &mut Scratch, position: &[Vec3], dipoles: &[Vec3]) {
+    let n = position.len();
+    let order = &s.order;
+    s.sorted_position.resize(n, Vec3::ZERO);
+    s.sorted_dipole.resize(n, Vec3::ZERO);
+    let place = |first: usize, x: &mut [Vec3], m: &mut [Vec3]| {
+        for (q, (x, m)) in x.iter_mut().zip(m.iter_mut()).enumerate() {
+            let i = if order.is_empty() { first + q } else { order[first + q] as usize };
+            (*x, *m) = (position[i], dipoles[i]);
+        }
+    };
+    #[cfg(feature = "parallel")]
+    {
+        use rayon::prelude::*;
+        let chunk = crate::many::CHUNK;
+        crate::many::contiguous_per_thread(
+            s.sorted_position
+                .par_chunks_mut(chunk)
+                .zip(s.sorted_dipole.par_chunks_mut(chunk))
+                .enumerate(),
+        )
+        .for_each(|(k, (x, m))| place(k * chunk, x, m));
+    }
+    #[cfg(not(feature = "parallel"))]
+    place(0, &mut s.sorted_position, &mut s.sorted_dipole);
+}
+
 /// The pair pass of the half list over chunks of owners: what it reads.
 struct HalfPass<'a> {
     model: &'a Dipoles,
@@ -976,10 +1005,11 @@ fn half_list_body(
 }
 
 /// The half-list evaluation of [`Dipoles`] by a team of threads ([`TeamForces`]), on the
-/// list of the last build: `prepare` writes each body's dipole and checks its displacement
-/// against the skin, `pairs` is [`HalfPass::chunk`] over the part's chunks, `forces` is
-/// [`half_list_body`]: the operations of [`Dipoles::compute`]'s half-list path, so the same
-/// bits. The buffers the phases share are taken from the scratch for the team's life.
+/// list of the last build: `prepare` puts each body's position and dipole at its place and
+/// checks its displacement against the skin, `pairs` is [`HalfPass::chunk`] over the
+/// part's chunks of places, `forces` is [`half_list_body`] at each body's place: the
+/// operations of [`Dipoles::compute`]'s half-list path, so the same bits. The buffers the
+/// phases share are taken from the scratch for the team's life.
 struct DipoleTeam<'a> {
     model: &'a Dipoles,
     scratch: std::sync::MutexGuard<'a, Scratch>,
@@ -987,17 +1017,21 @@ struct DipoleTeam<'a> {
     limit: f64,
     n: usize,
     /// Taken from the scratch (given back on drop), written by the phases through the
-    /// pointers below: each body's dipole, its own sums, each chunk's pair slots.
-    dipoles: Vec<Vec3>,
+    /// pointers below: positions and dipoles by place, each place's own sums, each chunk's
+    /// pair slots.
+    place_position: Vec<Vec3>,
+    place_dipole: Vec<Vec3>,
     own: Vec<[Vec3; 2]>,
     slots: Vec<Vec<[Vec3; 2]>>,
-    dipoles_ptr: *mut Vec3,
+    position_ptr: *mut Vec3,
+    dipole_ptr: *mut Vec3,
     own_ptr: *mut [Vec3; 2],
     slots_ptr: *mut Vec<[Vec3; 2]>,
 }
 
-// SAFETY: the phases write disjoint chunks of the three buffers and read other chunks only
-// in a later phase, after a barrier (the calling order of `TeamForces`).
+// SAFETY: the phases write disjoint entries of the four buffers (a part writes its bodies'
+// places, its chunks' sums and slots) and read others' only in a later phase, after a
+// barrier (the calling order of `TeamForces`).
 unsafe impl Sync for DipoleTeam<'_> {}
 
 impl<'a> DipoleTeam<'a> {
@@ -1014,39 +1048,61 @@ impl<'a> DipoleTeam<'a> {
             && s.list_start.len() == n + 1
             && s.half_start.len() == n + 1
             && s.as_second_start.len() == n + 1
-            && !s.sort_requested
-            && s.dipoles.len() == n
+            && s.sort_requested == model.spatial_sort
+            && (s.rank.is_empty() || s.rank.len() == n)
+            && s.sorted_position.len() == n
+            && s.sorted_dipole.len() == n
             && s.own.len() == n
             && s.chunk_slots.len() == chunks;
         if !ready {
             return None;
         }
-        let (mut dipoles, mut own, mut slots) = (
-            std::mem::take(&mut s.dipoles),
+        let (mut place_position, mut place_dipole, mut own, mut slots) = (
+            std::mem::take(&mut s.sorted_position),
+            std::mem::take(&mut s.sorted_dipole),
             std::mem::take(&mut s.own),
             std::mem::take(&mut s.chunk_slots),
         );
-        let (dipoles_ptr, own_ptr, slots_ptr) = (dipoles.as_mut_ptr(), own.as_mut_ptr(), slots.as_mut_ptr());
+        let (position_ptr, dipole_ptr, own_ptr, slots_ptr) = (
+            place_position.as_mut_ptr(),
+            place_dipole.as_mut_ptr(),
+            own.as_mut_ptr(),
+            slots.as_mut_ptr(),
+        );
         Some(DipoleTeam {
             model,
             scratch,
             constants: model.constants(),
             limit: (0.5 * model.skin) * (0.5 * model.skin),
             n,
-            dipoles,
+            place_position,
+            place_dipole,
             own,
             slots,
-            dipoles_ptr,
+            position_ptr,
+            dipole_ptr,
             own_ptr,
             slots_ptr,
         })
+    }
+
+    /// The place of body `i`.
+    #[inline]
+    fn place(&self, i: usize) -> usize {
+        let rank = &self.scratch.rank;
+        if rank.is_empty() {
+            i
+        } else {
+            rank[i] as usize
+        }
     }
 }
 
 impl Drop for DipoleTeam<'_> {
     fn drop(&mut self) {
         let s = &mut *self.scratch;
-        s.dipoles = std::mem::take(&mut self.dipoles);
+        s.sorted_position = std::mem::take(&mut self.place_position);
+        s.sorted_dipole = std::mem::take(&mut self.place_dipole);
         s.own = std::mem::take(&mut self.own);
         s.chunk_slots = std::mem::take(&mut self.slots);
     }
@@ -1056,12 +1112,17 @@ impl TeamForces for DipoleTeam<'_> {
     unsafe fn prepare(&self, first: usize, run: Configuration<'_>) -> bool {
         let len = run.position.len();
         assert!(first + len <= self.n);
-        // SAFETY: these bodies' dipoles are this part's alone in this phase.
-        let dipoles = unsafe { std::slice::from_raw_parts_mut(self.dipoles_ptr.add(first), len) };
         let reference = &self.scratch.reference[first..first + len];
         let mut fresh = true;
-        for (q, m) in dipoles.iter_mut().enumerate() {
-            *m = run.rotation[q] * self.model.moment;
+        for q in 0..len {
+            let p = self.place(first + q);
+            assert!(p < self.n);
+            // SAFETY: the places of this part's bodies are written by it alone, and read by
+            // nobody, in this phase.
+            unsafe {
+                *self.position_ptr.add(p) = run.position[q];
+                *self.dipole_ptr.add(p) = run.rotation[q] * self.model.moment;
+            }
             fresh &= (run.position[q] - reference[q]).norm_squared() <= self.limit;
         }
         fresh
@@ -1071,16 +1132,14 @@ impl TeamForces for DipoleTeam<'_> {
         let chunk = crate::many::CHUNK;
         assert!(config.position.len() == self.n && chunks.end <= self.n.div_ceil(chunk));
         let s = &*self.scratch;
-        // SAFETY: no dipole is written in this phase.
-        let dipoles = unsafe { std::slice::from_raw_parts(self.dipoles_ptr, self.n) };
-        let pass = HalfPass::new(
-            self.model,
-            &self.constants,
-            config.position,
-            dipoles,
-            &s.half_start,
-            &s.half_j,
-        );
+        // SAFETY: no position or dipole is written in this phase.
+        let (position, dipoles) = unsafe {
+            (
+                std::slice::from_raw_parts(self.position_ptr, self.n),
+                std::slice::from_raw_parts(self.dipole_ptr, self.n),
+            )
+        };
+        let pass = HalfPass::new(self.model, &self.constants, position, dipoles, &s.half_start, &s.half_j);
         for k in chunks {
             let first = k * chunk;
             let len = chunk.min(self.n - first);
@@ -1099,21 +1158,17 @@ impl TeamForces for DipoleTeam<'_> {
         let len = run.position.len();
         assert!(first + len <= self.n && force.len() == len && torque.len() == len);
         let s = &*self.scratch;
-        // SAFETY: sums, slots and dipoles are not written in this phase.
-        let (own, dipoles) = unsafe {
-            (
-                std::slice::from_raw_parts(self.own_ptr.add(first), len),
-                std::slice::from_raw_parts(self.dipoles_ptr.add(first), len),
-            )
-        };
         let slot = |k: usize, q: usize| {
-            // SAFETY: as above; `k` is a chunk of the list.
+            // SAFETY: slots are not written in this phase; `k` is a chunk of the list.
             unsafe { (&*self.slots_ptr.add(k))[q] }
         };
         for q in 0..len {
-            let i = first + q;
-            let seconds = &s.as_second_slot[s.as_second_start[i]..s.as_second_start[i + 1]];
-            (force[q], torque[q]) = half_list_body(own[q], seconds, slot, &run.rotation[q], dipoles[q]);
+            let p = self.place(first + q);
+            assert!(p < self.n);
+            let seconds = &s.as_second_slot[s.as_second_start[p]..s.as_second_start[p + 1]];
+            // SAFETY: sums and dipoles are not written in this phase.
+            let (own, dipole) = unsafe { (*self.own_ptr.add(p), *self.dipole_ptr.add(p)) };
+            (force[q], torque[q]) = half_list_body(own, seconds, slot, &run.rotation[q], dipole);
         }
     }
 }
@@ -1134,27 +1189,7 @@ impl Interaction for Dipoles {
             // near each body (the same values, so the same bits).
             let sorted = s.order.len() == c.position.len();
             if sorted {
-                let order = &s.order;
-                s.sorted_position.resize(order.len(), Vec3::ZERO);
-                s.sorted_dipole.resize(order.len(), Vec3::ZERO);
-                let place = |first: usize, x: &mut [Vec3], m: &mut [Vec3]| {
-                    for (q, (x, m)) in x.iter_mut().zip(m.iter_mut()).enumerate() {
-                        let i = order[first + q] as usize;
-                        (*x, *m) = (c.position[i], dipoles[i]);
-                    }
-                };
-                #[cfg(feature = "parallel")]
-                {
-                    use rayon::prelude::*;
-                    let chunk = crate::many::CHUNK;
-                    s.sorted_position
-                        .par_chunks_mut(chunk)
-                        .zip(s.sorted_dipole.par_chunks_mut(chunk))
-                        .enumerate()
-                        .for_each(|(k, (x, m))| place(k * chunk, x, m));
-                }
-                #[cfg(not(feature = "parallel"))]
-                place(0, &mut s.sorted_position, &mut s.sorted_dipole);
+                gather_places(s, c.position, &dipoles);
             }
             #[cfg(all(feature = "simd", target_arch = "x86_64"))]
             let (avx, lane_kernel) = (crate::many::lanes::use_avx(), self.lane_kernel(&constants));
@@ -1217,11 +1252,14 @@ impl Interaction for Dipoles {
             // force and field on the partner into the pair's slot (slots live with the chunk
             // of their owner); then every body adds its slots as partner, in pair order.
             // Nothing depends on the thread count.
+            // With the spatial sort the list, the sums and the slots are in places (cell
+            // order), so that a body's partners and its slots as partner are near it in memory.
             let chunk = crate::many::CHUNK;
             let n = c.position.len();
+            gather_places(s, c.position, &dipoles);
             s.own.resize(n, [Vec3::ZERO; 2]);
             s.chunk_slots.resize_with(n.div_ceil(chunk), Vec::new);
-            let pass = HalfPass::new(self, &constants, c.position, &dipoles, &s.half_start, &s.half_j);
+            let pass = HalfPass::new(self, &constants, &s.sorted_position, &s.sorted_dipole, &s.half_start, &s.half_j);
             #[cfg(feature = "parallel")]
             {
                 use rayon::prelude::*;
@@ -1238,9 +1276,11 @@ impl Interaction for Dipoles {
                 pass.chunk(k, own, slots);
             }
             let (second_start, second, own, slots) = (&s.as_second_start, &s.as_second_slot, &s.own, &s.chunk_slots);
+            let rank = &s.rank;
             for_chunks(force, torque, |i, f, t| {
-                let seconds = &second[second_start[i]..second_start[i + 1]];
-                (*f, *t) = half_list_body(own[i], seconds, |k, q| slots[k][q], &c.rotation[i], dipoles[i]);
+                let p = if rank.is_empty() { i } else { rank[i] as usize };
+                let seconds = &second[second_start[p]..second_start[p + 1]];
+                (*f, *t) = half_list_body(own[p], seconds, |k, q| slots[k][q], &c.rotation[i], dipoles[i]);
             });
             s.dipoles = dipoles;
             return;
@@ -1277,18 +1317,34 @@ impl Interaction for Dipoles {
         let mut guard = self.scratch.lock().expect("not poisoned");
         let cells = self.build_cells(&c, &mut guard);
         let constants = self.constants();
-        let mut energy = 0.0;
-        for i in 0..c.position.len() {
-            self.for_neighbours(i, &c, cells.as_ref(), |j| {
-                if j > i {
-                    let r = Self::separation(&constants, c.position[i], c.position[j]);
-                    if let Some((_, _, e)) = self.pair(&constants, r, dipoles[i], dipoles[j]) {
-                        energy += e;
+        // Each pair once (j > i), summed body by body within fixed chunks of bodies, in
+        // parallel, and the chunks' sums added in chunk order: the same bits for any number
+        // of threads.
+        let n = c.position.len();
+        let chunk = crate::many::CHUNK;
+        let cells = cells.as_ref();
+        let chunk_energy = |k: usize| {
+            let mut energy = 0.0;
+            for i in k * chunk..((k + 1) * chunk).min(n) {
+                self.for_neighbours(i, &c, cells, |j| {
+                    if j > i {
+                        let r = Self::separation(&constants, c.position[i], c.position[j]);
+                        if let Some((_, _, e)) = self.pair(&constants, r, dipoles[i], dipoles[j]) {
+                            energy += e;
+                        }
                     }
-                }
-            });
-        }
-        energy
+                });
+            }
+            energy
+        };
+        #[cfg(feature = "parallel")]
+        let sums: Vec<f64> = {
+            use rayon::prelude::*;
+            (0..n.div_ceil(chunk)).into_par_iter().map(chunk_energy).collect()
+        };
+        #[cfg(not(feature = "parallel"))]
+        let sums: Vec<f64> = (0..n.div_ceil(chunk)).map(chunk_energy).collect();
+        sums.iter().sum()
     }
 }
 
