@@ -161,6 +161,8 @@ fn owns_pair(i: usize, j: usize) -> bool {
 #[derive(Debug, Default)]
 struct Scratch {
     dipoles: Vec<Vec3>,
+    /// The positions wrapped into the box, at the last cell build.
+    wrapped: Vec<Vec3>,
     cell_start: Vec<usize>,
     sorted: Vec<usize>,
     cell_of: Vec<usize>,
@@ -265,6 +267,12 @@ struct Cells<'a> {
     size: f64,
     /// Cells each way the neighbours can lie in (cells at least `cutoff / reach` wide).
     reach: isize,
+    /// The periodic box as the cells see it (`n · size`), and each body's position wrapped
+    /// into it (the position itself without a box): a candidate in a stencil cell reached
+    /// across the box lies at its wrapped position plus the run's offset (multiples of
+    /// `span`).
+    span: f64,
+    wrapped: &'a [Vec3],
     periodic: bool,
     start: &'a [usize],
     sorted: &'a [usize],
@@ -602,6 +610,12 @@ impl Dipoles {
                 }
             }
             let (order, rank) = (&*order, &*rank);
+            // Distances to the candidates' images in the stencil cells (no minimum image per
+            // candidate) where that image is the nearest one: in a box at least twice the
+            // reach, or without a box.
+            let images = cells
+                .filter(|cl| !cl.periodic || cl.span >= 2.0 * reach)
+                .map(|cl| cl.wrapped);
             let fill = |k: usize, (entries, counts): &mut (Vec<u32>, Vec<u32>)| {
                 entries.clear();
                 counts.clear();
@@ -609,15 +623,21 @@ impl Dipoles {
                     let i = if order.is_empty() { place } else { order[place] as usize };
                     let before = entries.len();
                     let xi = c.position[i];
+                    let wrapped = images.map(|w| (w, w[i]));
                     // Branch-free: every candidate of a run is written, and kept when within
                     // reach (a branch taken by a quarter of the candidates at random was
                     // mispredicted often).
-                    self.for_neighbour_runs(i, c, cells, |run| {
+                    self.for_neighbour_runs(i, c, cells, |run, offset| {
                         let base = entries.len();
                         entries.resize(base + run.len(), 0);
                         let mut kept = base;
                         for &j in run {
-                            let within = Self::separation(&constants, xi, c.position[j]).norm_squared() <= reach2;
+                            let within = match wrapped {
+                                // The candidate's image in this stencil cell: the nearest one
+                                // within reach, as the box is at least twice the reach.
+                                Some((w, wi)) => (wi - (w[j] + offset)).norm_squared() <= reach2,
+                                None => Self::separation(&constants, xi, c.position[j]).norm_squared() <= reach2,
+                            };
                             entries[kept] = if rank.is_empty() { j as u32 } else { rank[j] };
                             kept += usize::from(within && j != i);
                         }
@@ -758,6 +778,16 @@ impl Dipoles {
         };
         s.cell_of.clear();
         s.cell_of.extend(c.position.iter().map(|&p| cell(p)));
+        let span = n[0] as f64 * size;
+        s.wrapped.clear();
+        s.wrapped.extend(c.position.iter().map(|&p| {
+            if periodic {
+                let wrap = |v: f64| v - (v / span).floor() * span;
+                Vec3::new(wrap(p.x), wrap(p.y), wrap(p.z))
+            } else {
+                p
+            }
+        }));
         s.cell_start.clear();
         s.cell_start.resize(ncells + 1, 0);
         for &k in &s.cell_of {
@@ -780,6 +810,8 @@ impl Dipoles {
             size,
             reach,
             periodic,
+            span,
+            wrapped: &s.wrapped,
             start: &s.cell_start,
             sorted: &s.sorted,
         })
@@ -787,7 +819,7 @@ impl Dipoles {
 
     /// Visit the neighbours `j ≠ i` of `i` in a fixed order.
     fn for_neighbours(&self, i: usize, c: &Configuration<'_>, cells: Option<&Cells<'_>>, mut f: impl FnMut(usize)) {
-        self.for_neighbour_runs(i, c, cells, |run| {
+        self.for_neighbour_runs(i, c, cells, |run, _| {
             for &j in run {
                 if j != i {
                     f(j);
@@ -797,13 +829,14 @@ impl Dipoles {
     }
 
     /// Visit the candidate neighbours of `i` as runs of bodies, in a fixed order: the bodies
-    /// of the stencil's cells (all bodies without a cell list), `i` among them.
+    /// of the stencil's cells (all bodies without a cell list), `i` among them, each run
+    /// with the offset of its image ([`Cells::wrapped`]; zero without a cell list).
     fn for_neighbour_runs(
         &self,
         i: usize,
         c: &Configuration<'_>,
         cells: Option<&Cells<'_>>,
-        mut f: impl FnMut(&[usize]),
+        mut f: impl FnMut(&[usize], Vec3),
     ) {
         let Some(cells) = cells else {
             let mut run = [0usize; 64];
@@ -812,7 +845,7 @@ impl Dipoles {
                 for (k, r) in run[..len].iter_mut().enumerate() {
                     *r = first + k;
                 }
-                f(&run[..len]);
+                f(&run[..len], Vec3::ZERO);
             }
             return;
         };
@@ -834,24 +867,25 @@ impl Dipoles {
         let w = cells.reach;
         let axis = |c: isize, k: usize| {
             let k = k as isize;
-            let mut out = [0usize; 5];
+            // (cell, image offset in boxes) for each stencil cell along the axis.
+            let mut out = [(0usize, 0.0f64); 5];
             let mut len = 0;
             for d in -w..=w {
                 let v = c + d;
-                let v = if cells.periodic {
+                let (v, image) = if cells.periodic {
                     if v < 0 {
-                        v + k
+                        (v + k, -1.0)
                     } else if v >= k {
-                        v - k
+                        (v - k, 1.0)
                     } else {
-                        v
+                        (v, 0.0)
                     }
                 } else if v < 0 || v >= k {
                     continue;
                 } else {
-                    v
+                    (v, 0.0)
                 };
-                out[len] = v as usize;
+                out[len] = (v as usize, image);
                 len += 1;
             }
             (out, len)
@@ -860,21 +894,23 @@ impl Dipoles {
         // Cells of a row that follow each other in x are contiguous in `sorted`: visit the
         // stencil's x cells of a row as at most two runs (two where the box wraps), in the
         // same order as cell by cell, without a loop exit per cell.
-        let mut runs = [(0usize, 0usize); 2];
+        let mut runs = [(0usize, 0usize, 0.0f64); 2];
         let mut n_runs = 0;
-        for &x in &xs[..nx] {
+        for &(x, image) in &xs[..nx] {
             if n_runs > 0 && runs[n_runs - 1].1 == x {
                 runs[n_runs - 1].1 = x + 1;
             } else {
-                runs[n_runs] = (x, x + 1);
+                runs[n_runs] = (x, x + 1, image);
                 n_runs += 1;
             }
         }
-        for &z in &zs[..nz] {
-            for &y in &ys[..ny] {
+        let span = cells.span;
+        for &(z, oz) in &zs[..nz] {
+            for &(y, oy) in &ys[..ny] {
                 let row = (z * n[1] + y) * n[0];
-                for &(lo, hi) in &runs[..n_runs] {
-                    f(&cells.sorted[cells.start[row + lo]..cells.start[row + hi]]);
+                for &(lo, hi, ox) in &runs[..n_runs] {
+                    let offset = Vec3::new(ox * span, oy * span, oz * span);
+                    f(&cells.sorted[cells.start[row + lo]..cells.start[row + hi]], offset);
                 }
             }
         }
