@@ -4,6 +4,7 @@
 use std::sync::Mutex;
 
 use crate::linalg::{Mat3, Vec3};
+use crate::many::half_list::HalfList;
 use crate::many::{Configuration, Interaction, TeamForces};
 
 /// Each body on its own: a free body feels `F = m g`; a rotor (fixed point) feels the
@@ -144,20 +145,6 @@ pub struct Dipoles {
     scratch: Mutex<Scratch>,
 }
 
-/// Which body of a pair keeps it in the half list: the lower index when `i + j` is even,
-/// the higher when it is odd. Each body then owns about half of its pairs whatever the
-/// order of the indices (with "the lower index owns" the low indices own nearly all their
-/// pairs once the fluid has mixed, and the first thread did 75 % of the pair work on two
-/// threads).
-#[inline]
-fn owns_pair(i: usize, j: usize) -> bool {
-    if (i + j) % 2 == 0 {
-        i < j
-    } else {
-        j < i
-    }
-}
-
 #[derive(Debug, Default)]
 struct Scratch {
     dipoles: Vec<Vec3>,
@@ -171,22 +158,14 @@ struct Scratch {
     /// `list[list_start[i]..list_start[i + 1]]`, in the cell traversal's fixed order.
     list_start: Vec<usize>,
     list: Vec<u32>,
-    /// The half list (each pair once, kept by the body [`owns_pair`] names): pair `p` joins
-    /// its owner `half_i[p]` and `half_j[p]`;
-    /// the pairs where `i` comes first are `half_start[i]..half_start[i + 1]`, those where it
-    /// comes second `as_second[as_second_start[i]..as_second_start[i + 1]]` (increasing).
-    half_start: Vec<usize>,
-    half_i: Vec<u32>,
-    half_j: Vec<u32>,
-    as_second_start: Vec<usize>,
-    as_second: Vec<u32>,
-    /// The half list's sums: per body, the force and field from the partners it owns; per
-    /// chunk of first bodies, per pair, the force on and the field at the second body.
+    /// The half list (each pair once) over places, used up to
+    /// [`Dipoles::half_list_max_bodies`] bodies.
+    half: HalfList,
+    /// The half list's sums: per place, the force and field from the partners it owns; per
+    /// partition, its window of the partners' shares and the shares of one owner.
     own: Vec<[Vec3; 2]>,
-    chunk_slots: Vec<Vec<[Vec3; 2]>>,
-    /// Where each body's pairs as second have their slot: (chunk, index in the chunk), in
-    /// pair order.
-    as_second_slot: Vec<(u32, u32)>,
+    windows: Vec<Vec<[Vec3; 2]>>,
+    shares: Vec<Vec<[Vec3; 2]>>,
     /// Per chunk of bodies, while the list is built in parallel: the neighbours found and
     /// each body's count (kept to reuse their memory).
     chunk_lists: Vec<(Vec<u32>, Vec<u32>)>,
@@ -211,16 +190,15 @@ struct Scratch {
 pub const DEFAULT_SKIN: f64 = 0.3;
 
 /// Bodies up to which the forces use the half list (each pair once, Newton's third law:
-/// the partner's share through per-pair slots); above, each body gathers its full list
-/// (each pair twice, no slots). Both run four pairs at a time in AVX lanes where the
-/// processor has AVX (the same bits as their scalar sums). The crossover, measured with
-/// `farm-bench --vs` (whole runs, list builds included) on this 2-core machine
-/// (2026-12-02), half list against full list: 0.89x the time at 10³ bodies (1 thread),
-/// 0.93x (2 threads), 0.98x at 10⁴, but 1.17x at 10⁵ (1 thread) and 1.19x (2 threads),
-/// where the slots and the serial transpose of the half list at each build cost more than
-/// the second kernel evaluation. It does not depend on the processor, so a machine without
-/// AVX gives the same bits, slower.
-pub const HALF_LIST_MAX_BODIES: usize = 30_000;
+/// the partners' shares through per-partition windows, [`crate::many`]'s `half_list`);
+/// above, each body gathers its full list (each pair twice, no windows). Both run four
+/// pairs at a time in AVX lanes where the processor has AVX (the same bits as their scalar
+/// sums). Measured on this 2-core machine (2026-12-02, whole runs, list builds included),
+/// the half list with windows against the full list: 0.96x the time at 10⁵ bodies on one
+/// thread, 0.84x on two, and 0.84x at 10⁶ on two (229 against 274 ms a step), so it is
+/// used at every size by default; the full list stays for a limit set lower. (With one
+/// slot per pair instead of windows the half list lost above about 3·10⁴ bodies.)
+pub const HALF_LIST_MAX_BODIES: usize = usize::MAX;
 
 /// How the dipole-dipole energy is brought to zero at the cutoff `r_c`: `U = S(r) U_dd`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -572,7 +550,7 @@ impl Dipoles {
         let fresh = s.reference.len() == n
             && s.list_start.len() == n + 1
             // The half list exists exactly when it is to be used (the limit may have changed).
-            && (n <= self.half_list_max_bodies) == (s.half_start.len() == n + 1)
+            && (n <= self.half_list_max_bodies) == s.half.is_built_for(n)
             && s.sort_requested == self.spatial_sort
             && c.position
                 .iter()
@@ -666,50 +644,11 @@ impl Dipoles {
             list.extend_from_slice(entries);
         }
         s.chunk_lists = chunks;
-        // The half list and its transpose, in pair order (serial: built only when used).
-        s.half_start.clear();
-        s.half_i.clear();
-        s.half_j.clear();
-        s.as_second_start.clear();
-        s.as_second.clear();
-        s.as_second_slot.clear();
+        // The half list and its partitions' windows (serial: built only when used).
         if n <= self.half_list_max_bodies {
-            s.half_start.clear();
-            s.half_i.clear();
-            s.half_j.clear();
-            s.half_start.push(0);
-            for i in 0..n {
-                for &j in &list[list_start[i]..list_start[i + 1]] {
-                    if owns_pair(i, j as usize) {
-                        s.half_i.push(i as u32);
-                        s.half_j.push(j);
-                    }
-                }
-                s.half_start.push(s.half_i.len());
-            }
-            s.as_second_start.clear();
-            s.as_second_start.resize(n + 1, 0);
-            for &j in &s.half_j {
-                s.as_second_start[j as usize + 1] += 1;
-            }
-            for k in 0..n {
-                s.as_second_start[k + 1] += s.as_second_start[k];
-            }
-            s.fill.clear();
-            s.fill.extend_from_slice(&s.as_second_start);
-            s.as_second.clear();
-            s.as_second.resize(s.half_j.len(), 0);
-            for (p, &j) in s.half_j.iter().enumerate() {
-                s.as_second[s.fill[j as usize]] = p as u32;
-                s.fill[j as usize] += 1;
-            }
-            s.as_second_slot.clear();
-            for &p in &s.as_second {
-                let first = s.half_i[p as usize] as usize;
-                let k = first / chunk;
-                let local = p as usize - s.half_start[k * chunk];
-                s.as_second_slot.push((k as u32, local as u32));
-            }
+            s.half.build(n, &list_start, &list);
+        } else {
+            s.half.clear();
         }
         s.list_start = list_start;
         s.list = list;
@@ -926,7 +865,11 @@ fn gather_places(s: &mut Scratch, position: &[Vec3], dipoles: &[Vec3]) {
     s.sorted_dipole.resize(n, Vec3::ZERO);
     let place = |first: usize, x: &mut [Vec3], m: &mut [Vec3]| {
         for (q, (x, m)) in x.iter_mut().zip(m.iter_mut()).enumerate() {
-            let i = if order.is_empty() { first + q } else { order[first + q] as usize };
+            let i = if order.is_empty() {
+                first + q
+            } else {
+                order[first + q] as usize
+            };
             (*x, *m) = (position[i], dipoles[i]);
         }
     };
@@ -946,7 +889,7 @@ fn gather_places(s: &mut Scratch, position: &[Vec3], dipoles: &[Vec3]) {
     place(0, &mut s.sorted_position, &mut s.sorted_dipole);
 }
 
-/// The pair pass of the half list over chunks of owners: what it reads.
+/// The pair pass of the half list over partitions of owners: what it reads.
 struct HalfPass<'a> {
     model: &'a Dipoles,
     constants: &'a PairConstants,
@@ -954,8 +897,7 @@ struct HalfPass<'a> {
     lanes: (bool, crate::many::lanes::PairKernel),
     position: &'a [Vec3],
     dipoles: &'a [Vec3],
-    half_start: &'a [usize],
-    half_j: &'a [u32],
+    half: &'a HalfList,
 }
 
 impl<'a> HalfPass<'a> {
@@ -964,8 +906,7 @@ impl<'a> HalfPass<'a> {
         constants: &'a PairConstants,
         position: &'a [Vec3],
         dipoles: &'a [Vec3],
-        half_start: &'a [usize],
-        half_j: &'a [u32],
+        half: &'a HalfList,
     ) -> Self {
         HalfPass {
             model,
@@ -974,23 +915,29 @@ impl<'a> HalfPass<'a> {
             lanes: (crate::many::lanes::use_avx(), model.lane_kernel(constants)),
             position,
             dipoles,
-            half_start,
-            half_j,
+            half,
         }
     }
 
-    /// Chunk `k` of owners: each owner's force and field from the partners it owns into
-    /// `own`, the partners' shares into `slots` (the chunk's pairs in order).
-    fn chunk(&self, k: usize, own: &mut [[Vec3; 2]], slots: &mut Vec<[Vec3; 2]>) {
-        let first = k * crate::many::CHUNK;
-        let (half_start, position, dipoles) = (self.half_start, self.position, self.dipoles);
-        let base = half_start[first];
-        slots.resize(half_start[first + own.len()] - base, [Vec3::ZERO; 2]);
+    /// Partition `p` of owners: each owner's force and field from the partners it owns
+    /// into `own` (the partition's places), the partners' shares added into `window` in
+    /// pair order (`share` holds one owner's shares on the way).
+    #[cfg_attr(
+        not(all(feature = "simd", target_arch = "x86_64")),
+        allow(clippy::unnecessary_literal_unwrap)
+    )]
+    fn partition(&self, p: usize, own: &mut [[Vec3; 2]], window: &mut Vec<[Vec3; 2]>, share: &mut Vec<[Vec3; 2]>) {
+        let half = self.half;
+        let (position, dipoles) = (self.position, self.dipoles);
+        let first = half.owners(p, position.len()).start;
+        window.clear();
+        window.resize(half.window_len(p), [Vec3::ZERO; 2]);
         for (q, o) in own.iter_mut().enumerate() {
             let i = first + q;
-            let range = half_start[i]..half_start[i + 1];
-            let partners = &self.half_j[range.clone()];
-            let out = &mut slots[range.start - base..range.end - base];
+            let range = half.start[i]..half.start[i + 1];
+            let partners = &half.partner[range.clone()];
+            share.clear();
+            share.resize(partners.len(), [Vec3::ZERO; 2]);
             #[cfg(all(feature = "simd", target_arch = "x86_64"))]
             let lanes = crate::many::lanes::half_pairs_x4(
                 self.lanes.0,
@@ -1000,10 +947,10 @@ impl<'a> HalfPass<'a> {
                 position,
                 dipoles,
                 partners,
-                out,
+                share,
             );
             #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
-            let lanes = None;
+            let lanes: Option<(Vec3, Vec3)> = None;
             let (fi, bi) = lanes.unwrap_or_else(|| {
                 self.model.half_pairs(
                     self.constants,
@@ -1012,40 +959,32 @@ impl<'a> HalfPass<'a> {
                     position,
                     dipoles,
                     partners,
-                    out,
+                    share,
                 )
             });
+            for (s, &slot) in share.iter().zip(&half.partner_slot[range]) {
+                let w = &mut window[slot as usize];
+                w[0] += s[0];
+                w[1] += s[1];
+            }
             *o = [fi, bi];
         }
     }
 }
 
-/// A body's force and torque from the half list: its own sums plus its shares as partner
-/// (`slot(chunk, index)` for each of `seconds`, in pair order); the torque is
+/// A body's force and torque from its force and field `[f, b]`: the torque is
 /// `Rᵀ (m × B)` in the body frame.
 #[inline]
-fn half_list_body(
-    own: [Vec3; 2],
-    seconds: &[(u32, u32)],
-    slot: impl Fn(usize, usize) -> [Vec3; 2],
-    rotation: &Mat3,
-    dipole: Vec3,
-) -> (Vec3, Vec3) {
-    let [mut f, mut b] = own;
-    for &(k, q) in seconds {
-        let o = slot(k as usize, q as usize);
-        f += o[0];
-        b += o[1];
-    }
+fn force_and_torque([f, b]: [Vec3; 2], rotation: &Mat3, dipole: Vec3) -> (Vec3, Vec3) {
     (f, rotation.tr_mul_vec(dipole.cross(b)))
 }
 
 /// The half-list evaluation of [`Dipoles`] by a team of threads ([`TeamForces`]), on the
 /// list of the last build: `prepare` puts each body's position and dipole at its place and
-/// checks its displacement against the skin, `pairs` is [`HalfPass::chunk`] over the
-/// part's chunks of places, `forces` is [`half_list_body`] at each body's place: the
-/// operations of [`Dipoles::compute`]'s half-list path, so the same bits. The buffers the
-/// phases share are taken from the scratch for the team's life.
+/// checks its displacement against the skin, `pairs` is [`HalfPass::partition`] over the
+/// part's partitions, `forces` is [`HalfList::total`] at each body's place: the operations
+/// of [`Dipoles::compute`]'s half-list path, so the same bits. The buffers the phases
+/// share are taken from the scratch for the team's life.
 struct DipoleTeam<'a> {
     model: &'a Dipoles,
     scratch: std::sync::MutexGuard<'a, Scratch>,
@@ -1053,21 +992,23 @@ struct DipoleTeam<'a> {
     limit: f64,
     n: usize,
     /// Taken from the scratch (given back on drop), written by the phases through the
-    /// pointers below: positions and dipoles by place, each place's own sums, each chunk's
-    /// pair slots.
+    /// pointers below: positions and dipoles by place, each place's own sums, each
+    /// partition's window and share buffer.
     place_position: Vec<Vec3>,
     place_dipole: Vec<Vec3>,
     own: Vec<[Vec3; 2]>,
-    slots: Vec<Vec<[Vec3; 2]>>,
+    windows: Vec<Vec<[Vec3; 2]>>,
+    shares: Vec<Vec<[Vec3; 2]>>,
     position_ptr: *mut Vec3,
     dipole_ptr: *mut Vec3,
     own_ptr: *mut [Vec3; 2],
-    slots_ptr: *mut Vec<[Vec3; 2]>,
+    windows_ptr: *mut Vec<[Vec3; 2]>,
+    shares_ptr: *mut Vec<[Vec3; 2]>,
 }
 
-// SAFETY: the phases write disjoint entries of the four buffers (a part writes its bodies'
-// places, its chunks' sums and slots) and read others' only in a later phase, after a
-// barrier (the calling order of `TeamForces`).
+// SAFETY: the phases write disjoint entries of the buffers (a part writes its bodies'
+// places, and its partitions' sums, windows and shares) and read others' only in a later
+// phase, after a barrier (the calling order of `TeamForces`).
 unsafe impl Sync for DipoleTeam<'_> {}
 
 impl<'a> DipoleTeam<'a> {
@@ -1077,33 +1018,35 @@ impl<'a> DipoleTeam<'a> {
         model.cutoff?;
         let mut scratch = model.scratch.lock().expect("not poisoned");
         let s = &mut *scratch;
-        let chunks = n.div_ceil(crate::many::CHUNK);
+        let parts = s.half.partitions();
         let ready = n > 0
             && n <= model.half_list_max_bodies
             && s.reference.len() == n
             && s.list_start.len() == n + 1
-            && s.half_start.len() == n + 1
-            && s.as_second_start.len() == n + 1
+            && s.half.is_built_for(n)
             && s.sort_requested == model.spatial_sort
             && (s.rank.is_empty() || s.rank.len() == n)
             && s.sorted_position.len() == n
             && s.sorted_dipole.len() == n
             && s.own.len() == n
-            && s.chunk_slots.len() == chunks;
+            && s.windows.len() == parts
+            && s.shares.len() == parts;
         if !ready {
             return None;
         }
-        let (mut place_position, mut place_dipole, mut own, mut slots) = (
+        let (mut place_position, mut place_dipole, mut own, mut windows, mut shares) = (
             std::mem::take(&mut s.sorted_position),
             std::mem::take(&mut s.sorted_dipole),
             std::mem::take(&mut s.own),
-            std::mem::take(&mut s.chunk_slots),
+            std::mem::take(&mut s.windows),
+            std::mem::take(&mut s.shares),
         );
-        let (position_ptr, dipole_ptr, own_ptr, slots_ptr) = (
+        let (position_ptr, dipole_ptr, own_ptr, windows_ptr, shares_ptr) = (
             place_position.as_mut_ptr(),
             place_dipole.as_mut_ptr(),
             own.as_mut_ptr(),
-            slots.as_mut_ptr(),
+            windows.as_mut_ptr(),
+            shares.as_mut_ptr(),
         );
         Some(DipoleTeam {
             model,
@@ -1114,11 +1057,13 @@ impl<'a> DipoleTeam<'a> {
             place_position,
             place_dipole,
             own,
-            slots,
+            windows,
+            shares,
             position_ptr,
             dipole_ptr,
             own_ptr,
-            slots_ptr,
+            windows_ptr,
+            shares_ptr,
         })
     }
 
@@ -1140,7 +1085,8 @@ impl Drop for DipoleTeam<'_> {
         s.sorted_position = std::mem::take(&mut self.place_position);
         s.sorted_dipole = std::mem::take(&mut self.place_dipole);
         s.own = std::mem::take(&mut self.own);
-        s.chunk_slots = std::mem::take(&mut self.slots);
+        s.windows = std::mem::take(&mut self.windows);
+        s.shares = std::mem::take(&mut self.shares);
     }
 }
 
@@ -1150,7 +1096,7 @@ impl TeamForces for DipoleTeam<'_> {
         assert!(first + len <= self.n);
         let reference = &self.scratch.reference[first..first + len];
         let mut fresh = true;
-        for q in 0..len {
+        for (q, x0) in reference.iter().enumerate() {
             let p = self.place(first + q);
             assert!(p < self.n);
             // SAFETY: the places of this part's bodies are written by it alone, and read by
@@ -1159,15 +1105,18 @@ impl TeamForces for DipoleTeam<'_> {
                 *self.position_ptr.add(p) = run.position[q];
                 *self.dipole_ptr.add(p) = run.rotation[q] * self.model.moment;
             }
-            fresh &= (run.position[q] - reference[q]).norm_squared() <= self.limit;
+            fresh &= (run.position[q] - *x0).norm_squared() <= self.limit;
         }
         fresh
     }
 
-    unsafe fn pairs(&self, chunks: std::ops::Range<usize>, config: Configuration<'_>) {
-        let chunk = crate::many::CHUNK;
-        assert!(config.position.len() == self.n && chunks.end <= self.n.div_ceil(chunk));
-        let s = &*self.scratch;
+    fn pair_items(&self) -> usize {
+        self.scratch.half.partitions()
+    }
+
+    unsafe fn pairs(&self, items: std::ops::Range<usize>, config: Configuration<'_>) {
+        let half = &self.scratch.half;
+        assert!(config.position.len() == self.n && items.end <= half.partitions());
         // SAFETY: no position or dipole is written in this phase.
         let (position, dipoles) = unsafe {
             (
@@ -1175,36 +1124,37 @@ impl TeamForces for DipoleTeam<'_> {
                 std::slice::from_raw_parts(self.dipole_ptr, self.n),
             )
         };
-        let pass = HalfPass::new(self.model, &self.constants, position, dipoles, &s.half_start, &s.half_j);
-        for k in chunks {
-            let first = k * chunk;
-            let len = chunk.min(self.n - first);
-            // SAFETY: chunk `k`'s sums and slots are this part's alone in this phase.
-            let (own, slots) = unsafe {
+        let pass = HalfPass::new(self.model, &self.constants, position, dipoles, half);
+        for p in items {
+            let owners = half.owners(p, self.n);
+            // SAFETY: partition `p`'s sums, window and shares are this part's alone in this
+            // phase.
+            let (own, window, share) = unsafe {
                 (
-                    std::slice::from_raw_parts_mut(self.own_ptr.add(first), len),
-                    &mut *self.slots_ptr.add(k),
+                    std::slice::from_raw_parts_mut(self.own_ptr.add(owners.start), owners.len()),
+                    &mut *self.windows_ptr.add(p),
+                    &mut *self.shares_ptr.add(p),
                 )
             };
-            pass.chunk(k, own, slots);
+            pass.partition(p, own, window, share);
         }
     }
 
     unsafe fn forces(&self, first: usize, run: Configuration<'_>, force: &mut [Vec3], torque: &mut [Vec3]) {
         let len = run.position.len();
         assert!(first + len <= self.n && force.len() == len && torque.len() == len);
-        let s = &*self.scratch;
-        let slot = |k: usize, q: usize| {
-            // SAFETY: slots are not written in this phase; `k` is a chunk of the list.
-            unsafe { (&*self.slots_ptr.add(k))[q] }
+        let half = &self.scratch.half;
+        let window = |p: usize| -> &[[Vec3; 2]] {
+            assert!(p < half.partitions());
+            // SAFETY: windows are not written in this phase.
+            unsafe { (*self.windows_ptr.add(p)).as_slice() }
         };
         for q in 0..len {
             let p = self.place(first + q);
             assert!(p < self.n);
-            let seconds = &s.as_second_slot[s.as_second_start[p]..s.as_second_start[p + 1]];
             // SAFETY: sums and dipoles are not written in this phase.
             let (own, dipole) = unsafe { (*self.own_ptr.add(p), *self.dipole_ptr.add(p)) };
-            (force[q], torque[q]) = half_list_body(own, seconds, slot, &run.rotation[q], dipole);
+            (force[q], torque[q]) = force_and_torque(half.total(p, own, window), &run.rotation[q], dipole);
         }
     }
 }
@@ -1283,40 +1233,48 @@ impl Interaction for Dipoles {
             return;
         }
         if !s.reference.is_empty() && s.reference.len() == c.position.len() && self.cutoff.is_some() {
-            // Each pair once (Newton's third law), body by body over the partners it owns in
-            // lanes: the force and field on the owner summed as the gather sums them, the
-            // force and field on the partner into the pair's slot (slots live with the chunk
-            // of their owner); then every body adds its slots as partner, in pair order.
-            // Nothing depends on the thread count.
-            // With the spatial sort the list, the sums and the slots are in places (cell
-            // order), so that a body's partners and its slots as partner are near it in memory.
-            let chunk = crate::many::CHUNK;
+            // Each pair once (Newton's third law), partition by partition of owners, each
+            // owner over its partners in lanes (the force and field on the owner summed as
+            // the gather sums them), the partners' shares into the partition's window; then
+            // every body adds the windows covering its place, in partition order
+            // (`HalfList`). Nothing depends on the thread count. With the spatial sort
+            // the list, the sums and the windows are in places (cell order), so that a
+            // partition's partners are few chunks of places, near it.
             let n = c.position.len();
             gather_places(s, c.position, &dipoles);
             s.own.resize(n, [Vec3::ZERO; 2]);
-            s.chunk_slots.resize_with(n.div_ceil(chunk), Vec::new);
-            let pass = HalfPass::new(self, &constants, &s.sorted_position, &s.sorted_dipole, &s.half_start, &s.half_j);
+            let parts = s.half.partitions();
+            s.windows.resize_with(parts, Vec::new);
+            s.shares.resize_with(parts, Vec::new);
+            let pass = HalfPass::new(self, &constants, &s.sorted_position, &s.sorted_dipole, &s.half);
+            let per = s.half.partition_places;
             #[cfg(feature = "parallel")]
             {
                 use rayon::prelude::*;
                 crate::many::contiguous_per_thread(
                     s.own
-                        .par_chunks_mut(chunk)
-                        .zip(s.chunk_slots.par_iter_mut())
+                        .par_chunks_mut(per)
+                        .zip(s.windows.par_iter_mut())
+                        .zip(s.shares.par_iter_mut())
                         .enumerate(),
                 )
-                .for_each(|(k, (own, slots))| pass.chunk(k, own, slots));
+                .for_each(|(p, ((own, window), share))| pass.partition(p, own, window, share));
             }
             #[cfg(not(feature = "parallel"))]
-            for (k, (own, slots)) in s.own.chunks_mut(chunk).zip(s.chunk_slots.iter_mut()).enumerate() {
-                pass.chunk(k, own, slots);
+            for (p, ((own, window), share)) in s
+                .own
+                .chunks_mut(per)
+                .zip(s.windows.iter_mut())
+                .zip(s.shares.iter_mut())
+                .enumerate()
+            {
+                pass.partition(p, own, window, share);
             }
-            let (second_start, second, own, slots) = (&s.as_second_start, &s.as_second_slot, &s.own, &s.chunk_slots);
-            let rank = &s.rank;
+            let (half, own, windows, rank) = (&s.half, &s.own, &s.windows, &s.rank);
             for_chunks(force, torque, |i, f, t| {
                 let p = if rank.is_empty() { i } else { rank[i] as usize };
-                let seconds = &second[second_start[p]..second_start[p + 1]];
-                (*f, *t) = half_list_body(own[p], seconds, |k, q| slots[k][q], &c.rotation[i], dipoles[i]);
+                let total = half.total(p, own[p], |k| windows[k].as_slice());
+                (*f, *t) = force_and_torque(total, &c.rotation[i], dipoles[i]);
             });
             s.dipoles = dipoles;
             return;

@@ -29,6 +29,7 @@
 //! order and every reduction runs in index order, so results are bit-for-bit identical for
 //! any number of threads.
 
+mod half_list;
 pub mod interactions;
 #[cfg(all(feature = "simd", target_arch = "x86_64"))]
 mod lanes;
@@ -167,16 +168,17 @@ pub trait Interaction: Sync {
 
 /// Forces and torques evaluated by a team of threads in three phases per step, for
 /// [`Bodies::advance`]: `prepare` (per body, after its motion), `pairs` (per chunk of
-/// [`CHUNK`] bodies, reading every body), `forces` (per body). It must give exactly what
+/// work item, reading every body), `forces` (per body). It must give exactly what
 /// [`Interaction::compute`] gives, bit for bit.
 ///
 /// # Safety (of the calls)
 /// [`Bodies::advance`] makes the calls in this order, which implementations may rely on
 /// for the buffers they share between threads: every step, each part calls `prepare` for
-/// each of its chunks, the parts meet at a barrier, each calls `pairs` with its chunks,
-/// the parts meet again, each calls `forces` for each of its chunks; a part's chunks are
-/// the same for the whole team and no two parts share one; the next step's `prepare` of a
-/// chunk follows its `forces`. Nothing else is called while the team lives.
+/// each of its chunks of bodies, the parts meet at a barrier, each calls `pairs` with its
+/// range of the pair pass's work items, the parts meet again, each calls `forces` for each
+/// of its chunks; a part's chunks and items are the same for the whole team and no two
+/// parts share one; the next step's `prepare` of a chunk follows its `forces`. Nothing else
+/// is called while the team lives.
 pub trait TeamForces: Sync {
     /// After the motion of the run of bodies `run` (chunk `first / CHUNK`), starting at
     /// body `first`: prepare their per-body data. `false` when what the evaluation was
@@ -186,11 +188,14 @@ pub trait TeamForces: Sync {
     /// # Safety
     /// See the trait.
     unsafe fn prepare(&self, first: usize, run: Configuration<'_>) -> bool;
-    /// The pair pass of chunks `chunks`; `config` is every body.
+    /// The number of work items of the pair pass (fixed while the team lives); each part
+    /// takes a contiguous range of them.
+    fn pair_items(&self) -> usize;
+    /// The pair pass of the work items `items`; `config` is every body.
     ///
     /// # Safety
     /// See the trait.
-    unsafe fn pairs(&self, chunks: std::ops::Range<usize>, config: Configuration<'_>);
+    unsafe fn pairs(&self, items: std::ops::Range<usize>, config: Configuration<'_>);
     /// The forces and torques of the run of bodies `run` starting at body `first`.
     ///
     /// # Safety
@@ -788,6 +793,7 @@ impl Bodies {
         let (motion, all) = self.split(h);
         let (free, mass) = (motion.free, motion.mass);
         let shared = SharedBodies::new(all);
+        let items = team.pair_items();
         crate::team::run(chunks >= 2, |part, barrier| {
             let mine = part.range(chunks);
             let mut motion = motion;
@@ -824,7 +830,7 @@ impl Bodies {
                 // SAFETY: nobody writes positions or attitudes until the next barrier.
                 let config = unsafe { shared.configuration(t_end, mass, free) };
                 // SAFETY: the calling order of `TeamForces`.
-                unsafe { team.pairs(mine.clone(), config) };
+                unsafe { team.pairs(part.range(items), config) };
                 barrier.wait();
                 for k in mine.clone() {
                     // SAFETY: chunk `k` is this part's; other parts read none of it now.
