@@ -30,13 +30,11 @@ pub(crate) const PARTITIONS: usize = 16;
 /// order of the indices (with "the lower index owns" the low indices own nearly all their
 /// pairs once the fluid has mixed, and the first thread did 75 % of the pair work on two
 /// threads).
-#[inline]
+/// Written without a branch: the parity is random, and as a branch it was mispredicted
+/// half the time in the list build.
+#[inline(always)]
 pub(crate) fn owns_pair(i: usize, j: usize) -> bool {
-    if (i + j) % 2 == 0 {
-        i < j
-    } else {
-        j < i
-    }
+    ((i + j) & 1 == 0) == (i < j)
 }
 
 /// The half list over places and its partitions' windows.
@@ -56,8 +54,8 @@ pub(crate) struct HalfList {
     /// as (partition, chunk index in its window), in partition order.
     cover_start: Vec<usize>,
     cover: Vec<(u32, u32)>,
-    /// Scratch of the build: per chunk, the last partition that marked it and its index.
-    mark: Vec<(u32, u32)>,
+    /// Scratch of the build, per partition: each chunk's index in its window.
+    marks: Vec<Vec<u32>>,
 }
 
 impl HalfList {
@@ -76,49 +74,84 @@ impl HalfList {
         self.cover.clear();
     }
 
-    /// Build from the full list of `n` places (`list[list_start[i]..list_start[i + 1]]`
-    /// the neighbours of place `i`).
-    pub(crate) fn build(&mut self, n: usize, list_start: &[usize], list: &[u32]) {
+    /// Build for `n` places from the pairs found in parallel over fixed chunks of places:
+    /// per chunk, each place's count of owned pairs and the partners, in place order.
+    /// The partitions' windows are found in parallel over the partitions.
+    pub(crate) fn build(&mut self, n: usize, chunk_pairs: &[(Vec<u32>, Vec<u32>)]) {
         self.clear();
         self.start.push(0);
-        for i in 0..n {
-            for &j in &list[list_start[i]..list_start[i + 1]] {
-                if owns_pair(i, j as usize) {
-                    self.partner.push(j);
-                }
+        for (partners, counts) in chunk_pairs {
+            for &count in counts {
+                self.start.push(self.start[self.start.len() - 1] + count as usize);
             }
-            self.start.push(self.partner.len());
+            self.partner.extend_from_slice(partners);
         }
+        assert_eq!(self.start.len(), n + 1, "a count per place");
         let chunks = n.div_ceil(CHUNK);
         self.partition_places = (chunks / PARTITIONS).max(1) * CHUNK;
         let parts = n.div_ceil(self.partition_places);
-        self.mark.clear();
-        self.mark.resize(chunks, (u32::MAX, 0));
         self.partner_slot.resize(self.partner.len(), 0);
-        let mut per_chunk = std::mem::take(&mut self.cover_start);
-        per_chunk.clear();
-        per_chunk.resize(chunks + 1, 0);
         self.window_chunks.resize_with(parts, Vec::new);
+        self.marks.resize_with(parts, Vec::new);
+        // Each partition's pairs are a contiguous range: split the slots accordingly.
+        let mut slots: Vec<&mut [u32]> = Vec::with_capacity(parts);
+        let mut rest = self.partner_slot.as_mut_slice();
         for p in 0..parts {
-            let owners = self.owners(p, n);
-            let pairs = self.start[owners.start]..self.start[owners.end];
-            let window = &mut self.window_chunks[p];
+            let owners = (p * self.partition_places).min(n)..((p + 1) * self.partition_places).min(n);
+            let len = self.start[owners.end] - self.start[owners.start];
+            let (head, tail) = rest.split_at_mut(len);
+            slots.push(head);
+            rest = tail;
+        }
+        let (start, partner, places) = (&self.start, &self.partner, self.partition_places);
+        let one = |p: usize, slot: &mut [u32], window: &mut Vec<u32>, mark: &mut Vec<u32>| {
+            let owners = (p * places).min(n)..((p + 1) * places).min(n);
+            let pairs = &partner[start[owners.start]..start[owners.end]];
+            mark.clear();
+            mark.resize(chunks, u32::MAX);
             window.clear();
-            for &j in &self.partner[pairs.clone()] {
+            for &j in pairs {
                 let c = j as usize / CHUNK;
-                if self.mark[c].0 != p as u32 {
-                    self.mark[c] = (p as u32, 0);
+                if mark[c] == u32::MAX {
+                    mark[c] = 0;
                     window.push(c as u32);
                 }
             }
             window.sort_unstable();
             for (k, &c) in window.iter().enumerate() {
-                self.mark[c as usize].1 = k as u32;
-                per_chunk[c as usize + 1] += 1;
+                mark[c as usize] = k as u32;
             }
-            for q in pairs {
-                let j = self.partner[q] as usize;
-                self.partner_slot[q] = (self.mark[j / CHUNK].1 as usize * CHUNK + j % CHUNK) as u32;
+            for (slot, &j) in slot.iter_mut().zip(pairs) {
+                let j = j as usize;
+                *slot = (mark[j / CHUNK] as usize * CHUNK + j % CHUNK) as u32;
+            }
+        };
+        #[cfg(feature = "parallel")]
+        {
+            use rayon::prelude::*;
+            slots
+                .into_par_iter()
+                .zip(self.window_chunks.par_iter_mut())
+                .zip(self.marks.par_iter_mut())
+                .enumerate()
+                .for_each(|(p, ((slot, window), mark))| one(p, slot, window, mark));
+        }
+        #[cfg(not(feature = "parallel"))]
+        for (p, ((slot, window), mark)) in slots
+            .into_iter()
+            .zip(self.window_chunks.iter_mut())
+            .zip(self.marks.iter_mut())
+            .enumerate()
+        {
+            one(p, slot, window, mark);
+        }
+        // The covers of each chunk, in partition order (a counting sort by chunk).
+        let mut per_chunk = std::mem::take(&mut self.cover_start);
+        per_chunk.clear();
+        per_chunk.resize(chunks + 1, 0);
+        for window in &self.window_chunks {
+            for &c in window {
+                per_chunk[c as usize + 1] += 1;
             }
         }
         for c in 0..chunks {

@@ -4,7 +4,7 @@
 use std::sync::Mutex;
 
 use crate::linalg::{Mat3, Vec3};
-use crate::many::half_list::HalfList;
+use crate::many::half_list::{self, HalfList};
 use crate::many::{Configuration, Interaction, TeamForces};
 
 /// Each body on its own: a free body feels `F = m g`; a rotor (fixed point) feels the
@@ -148,13 +148,17 @@ pub struct Dipoles {
 #[derive(Debug, Default)]
 struct Scratch {
     dipoles: Vec<Vec3>,
-    /// The positions wrapped into the box, at the last cell build.
+    /// The positions wrapped into the box in cell order (`wrapped[k]` is body `sorted[k]`),
+    /// at the last cell build.
     wrapped: Vec<Vec3>,
+    /// Each body's index in cell order (`sorted[cell_rank[i]] == i`).
+    cell_rank: Vec<u32>,
     cell_start: Vec<usize>,
     sorted: Vec<usize>,
     cell_of: Vec<usize>,
     fill: Vec<usize>,
-    /// The Verlet list: the neighbours of `i` within `r_c + skin` at the last build are
+    /// The full Verlet list (empty while the half list is used): the neighbours of `i`
+    /// within `r_c + skin` at the last build are
     /// `list[list_start[i]..list_start[i + 1]]`, in the cell traversal's fixed order.
     list_start: Vec<usize>,
     list: Vec<u32>,
@@ -245,12 +249,14 @@ struct Cells<'a> {
     size: f64,
     /// Cells each way the neighbours can lie in (cells at least `cutoff / reach` wide).
     reach: isize,
-    /// The periodic box as the cells see it (`n · size`), and each body's position wrapped
-    /// into it (the position itself without a box): a candidate in a stencil cell reached
-    /// across the box lies at its wrapped position plus the run's offset (multiples of
-    /// `span`).
+    /// The periodic box as the cells see it (`n · size`), and the bodies' positions wrapped
+    /// into it in cell order (`wrapped[k]` is body `sorted[k]`; the positions themselves
+    /// without a box): a candidate in a stencil cell reached across the box lies at its
+    /// wrapped position plus the run's offset (multiples of `span`).
     span: f64,
     wrapped: &'a [Vec3],
+    /// Each body's index in cell order.
+    cell_rank: &'a [u32],
     periodic: bool,
     start: &'a [usize],
     sorted: &'a [usize],
@@ -547,10 +553,14 @@ impl Dipoles {
         };
         let n = c.position.len();
         let limit = (0.5 * self.skin) * (0.5 * self.skin);
+        let half = n <= self.half_list_max_bodies;
         let fresh = s.reference.len() == n
-            && s.list_start.len() == n + 1
-            // The half list exists exactly when it is to be used (the limit may have changed).
-            && (n <= self.half_list_max_bodies) == s.half.is_built_for(n)
+            // The list built is the one to be used (the limit may have changed).
+            && if half {
+                s.half.is_built_for(n) && s.list_start.is_empty()
+            } else {
+                s.list_start.len() == n + 1 && !s.half.is_built_for(n)
+            }
             && s.sort_requested == self.spatial_sort
             && c.position
                 .iter()
@@ -593,7 +603,7 @@ impl Dipoles {
             // reach, or without a box.
             let images = cells
                 .filter(|cl| !cl.periodic || cl.span >= 2.0 * reach)
-                .map(|cl| cl.wrapped);
+                .map(|cl| (cl.wrapped, cl.cell_rank));
             let fill = |k: usize, (entries, counts): &mut (Vec<u32>, Vec<u32>)| {
                 entries.clear();
                 counts.clear();
@@ -601,25 +611,52 @@ impl Dipoles {
                     let i = if order.is_empty() { place } else { order[place] as usize };
                     let before = entries.len();
                     let xi = c.position[i];
-                    let wrapped = images.map(|w| (w, w[i]));
+                    // Body i's wrapped position (its entry in cell order).
+                    let xi_wrapped = images.map_or(Vec3::ZERO, |(w, cell_rank)| w[cell_rank[i] as usize]);
                     // Branch-free: every candidate of a run is written, and kept when within
                     // reach (a branch taken by a quarter of the candidates at random was
                     // mispredicted often).
-                    self.for_neighbour_runs(i, c, cells, |run, offset| {
-                        let base = entries.len();
-                        entries.resize(base + run.len(), 0);
-                        let mut kept = base;
-                        for &j in run {
-                            let within = match wrapped {
-                                // The candidate's image in this stencil cell: the nearest one
-                                // within reach, as the box is at least twice the reach.
-                                Some((w, wi)) => (wi - (w[j] + offset)).norm_squared() <= reach2,
-                                None => Self::separation(&constants, xi, c.position[j]).norm_squared() <= reach2,
-                            };
-                            entries[kept] = if rank.is_empty() { j as u32 } else { rank[j] };
-                            kept += usize::from(within && j != i);
+                    self.for_neighbour_runs(i, c, cells, |run, first, offset| {
+                        // Written into the spare capacity, every candidate, the count of
+                        // kept ones advancing only past those within reach (no resize, which
+                        // was a call per run).
+                        entries.reserve(run.len());
+                        let spare = &mut entries.spare_capacity_mut()[..run.len()];
+                        let mut kept = 0;
+                        let sorted = !rank.is_empty();
+                        let mut keep = |k: usize, j: usize, within: bool| {
+                            // With the sort, the place of the body at `first + k` in cell
+                            // order is that index itself.
+                            let entry = if sorted { first + k } else { j };
+                            spare[kept].write(entry as u32);
+                            // The half list keeps the pairs this place owns.
+                            // (`&`, not `&&`: no branch on the random `within`.)
+                            let owned = !half | half_list::owns_pair(place, entry);
+                            kept += usize::from(within & (j != i) & owned);
+                        };
+                        match images {
+                            // The candidate's image in this stencil cell, read in cell order:
+                            // the nearest one within reach, as the box is at least twice the
+                            // reach.
+                            Some((w, _)) => {
+                                for (k, (&j, wj)) in run.iter().zip(&w[first..first + run.len()]).enumerate() {
+                                    keep(k, j, (xi_wrapped - (*wj + offset)).norm_squared() <= reach2);
+                                }
+                            }
+                            None => {
+                                for (k, &j) in run.iter().enumerate() {
+                                    keep(
+                                        k,
+                                        j,
+                                        Self::separation(&constants, xi, c.position[j]).norm_squared() <= reach2,
+                                    );
+                                }
+                            }
                         }
-                        entries.truncate(kept);
+                        let len = entries.len() + kept;
+                        // SAFETY: the first `kept` spare entries were written (each kept
+                        // entry was written before the count passed it).
+                        unsafe { entries.set_len(len) };
                     });
                     counts.push((entries.len() - before) as u32);
                 }
@@ -637,19 +674,20 @@ impl Dipoles {
         s.order = order;
         s.rank = rank;
         s.sort_requested = sort;
-        for (entries, counts) in &chunks {
-            for &count in counts {
-                list_start.push(list_start[list_start.len() - 1] + count as usize);
-            }
-            list.extend_from_slice(entries);
-        }
-        s.chunk_lists = chunks;
-        // The half list and its partitions' windows (serial: built only when used).
-        if n <= self.half_list_max_bodies {
-            s.half.build(n, &list_start, &list);
+        // The half list and its partitions' windows, or the full list, joined in chunk order.
+        if half {
+            s.half.build(n, &chunks);
+            list_start.clear();
         } else {
             s.half.clear();
+            for (entries, counts) in &chunks {
+                for &count in counts {
+                    list_start.push(list_start[list_start.len() - 1] + count as usize);
+                }
+                list.extend_from_slice(entries);
+            }
         }
+        s.chunk_lists = chunks;
         s.list_start = list_start;
         s.list = list;
         s.reference.clear();
@@ -717,16 +755,6 @@ impl Dipoles {
         };
         s.cell_of.clear();
         s.cell_of.extend(c.position.iter().map(|&p| cell(p)));
-        let span = n[0] as f64 * size;
-        s.wrapped.clear();
-        s.wrapped.extend(c.position.iter().map(|&p| {
-            if periodic {
-                let wrap = |v: f64| v - (v / span).floor() * span;
-                Vec3::new(wrap(p.x), wrap(p.y), wrap(p.z))
-            } else {
-                p
-            }
-        }));
         s.cell_start.clear();
         s.cell_start.resize(ncells + 1, 0);
         for &k in &s.cell_of {
@@ -743,6 +771,22 @@ impl Dipoles {
             s.sorted[s.fill[k]] = i;
             s.fill[k] += 1;
         }
+        s.cell_rank.clear();
+        s.cell_rank.resize(n_bodies, 0);
+        for (k, &i) in s.sorted.iter().enumerate() {
+            s.cell_rank[i] = k as u32;
+        }
+        let span = n[0] as f64 * size;
+        s.wrapped.clear();
+        s.wrapped.extend(s.sorted.iter().map(|&i| {
+            let p = c.position[i];
+            if periodic {
+                let wrap = |v: f64| v - (v / span).floor() * span;
+                Vec3::new(wrap(p.x), wrap(p.y), wrap(p.z))
+            } else {
+                p
+            }
+        }));
         Some(Cells {
             n,
             origin,
@@ -751,6 +795,7 @@ impl Dipoles {
             periodic,
             span,
             wrapped: &s.wrapped,
+            cell_rank: &s.cell_rank,
             start: &s.cell_start,
             sorted: &s.sorted,
         })
@@ -758,7 +803,7 @@ impl Dipoles {
 
     /// Visit the neighbours `j ≠ i` of `i` in a fixed order.
     fn for_neighbours(&self, i: usize, c: &Configuration<'_>, cells: Option<&Cells<'_>>, mut f: impl FnMut(usize)) {
-        self.for_neighbour_runs(i, c, cells, |run, _| {
+        self.for_neighbour_runs(i, c, cells, |run, _, _| {
             for &j in run {
                 if j != i {
                     f(j);
@@ -769,13 +814,16 @@ impl Dipoles {
 
     /// Visit the candidate neighbours of `i` as runs of bodies, in a fixed order: the bodies
     /// of the stencil's cells (all bodies without a cell list), `i` among them, each run
-    /// with the offset of its image ([`Cells::wrapped`]; zero without a cell list).
+    /// with where it starts in cell order (in [`Cells::sorted`] and [`Cells::wrapped`]; the
+    /// first body's index without a cell list) and the offset of its image (zero without a
+    /// cell list).
+    #[inline(always)]
     fn for_neighbour_runs(
         &self,
         i: usize,
         c: &Configuration<'_>,
         cells: Option<&Cells<'_>>,
-        mut f: impl FnMut(&[usize], Vec3),
+        mut f: impl FnMut(&[usize], usize, Vec3),
     ) {
         let Some(cells) = cells else {
             let mut run = [0usize; 64];
@@ -784,7 +832,7 @@ impl Dipoles {
                 for (k, r) in run[..len].iter_mut().enumerate() {
                     *r = first + k;
                 }
-                f(&run[..len], Vec3::ZERO);
+                f(&run[..len], first, Vec3::ZERO);
             }
             return;
         };
@@ -849,7 +897,8 @@ impl Dipoles {
                 let row = (z * n[1] + y) * n[0];
                 for &(lo, hi, ox) in &runs[..n_runs] {
                     let offset = Vec3::new(ox * span, oy * span, oz * span);
-                    f(&cells.sorted[cells.start[row + lo]..cells.start[row + hi]], offset);
+                    let (a, b) = (cells.start[row + lo], cells.start[row + hi]);
+                    f(&cells.sorted[a..b], a, offset);
                 }
             }
         }
@@ -1022,7 +1071,6 @@ impl<'a> DipoleTeam<'a> {
         let ready = n > 0
             && n <= model.half_list_max_bodies
             && s.reference.len() == n
-            && s.list_start.len() == n + 1
             && s.half.is_built_for(n)
             && s.sort_requested == model.spatial_sort
             && (s.rank.is_empty() || s.rank.len() == n)
