@@ -767,3 +767,28 @@ fn advance_reports_a_failing_body_as_step_does() {
         assert_eq!(got, expected, "{threads} threads");
     }
 }
+
+#[test]
+fn the_potential_energy_over_the_half_list_is_the_cell_sum_on_any_thread_count() {
+    // With a fresh list the potential energy sums each listed pair once, partition by
+    // partition; without one, over the cells. The same terms in another order: equal to
+    // round-off; and the same bits for 1, 2 and 3 threads.
+    let (mut b, model) = problems::dipolar_fluid(2000, 0.3, 5).unwrap();
+    for _ in 0..30 {
+        b.step(&model, 2e-3).unwrap();
+    }
+    let energy_with = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| model.potential_energy(b.configuration()))
+    };
+    let listed = energy_with(1);
+    for threads in [2, 3] {
+        assert_eq!(energy_with(threads).to_bits(), listed.to_bits(), "{threads} threads");
+    }
+    let (_, no_list) = problems::dipolar_fluid(2000, 0.3, 5).unwrap();
+    let cells = no_list.potential_energy(b.configuration());
+    assert!(
+        listed != 0.0 && ((listed - cells) / cells).abs() < 1e-12,
+        "{listed} vs {cells}"
+    );
+}

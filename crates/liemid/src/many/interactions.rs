@@ -545,18 +545,15 @@ impl Dipoles {
         self.scratch.lock().expect("not poisoned").builds
     }
 
-    /// Rebuild the Verlet list if it is missing, stale (a body moved more than `skin/2`
-    /// since the last build) or for another number of bodies; `true` when there is one.
-    fn update_list(&self, c: &Configuration<'_>, s: &mut Scratch) -> bool {
-        let Some(cutoff) = self.cutoff else {
-            return false;
-        };
+    /// Whether the Verlet list of the last build holds for `c`: the list to be used (half or
+    /// full, sorted or not) was built for this many bodies, and no body has moved more than
+    /// half the skin since.
+    fn list_is_fresh(&self, c: &Configuration<'_>, s: &Scratch) -> bool {
         let n = c.position.len();
         let limit = (0.5 * self.skin) * (0.5 * self.skin);
-        let half = n <= self.half_list_max_bodies;
-        let fresh = s.reference.len() == n
+        s.reference.len() == n
             // The list built is the one to be used (the limit may have changed).
-            && if half {
+            && if n <= self.half_list_max_bodies {
                 s.half.is_built_for(n) && s.list_start.is_empty()
             } else {
                 s.list_start.len() == n + 1 && !s.half.is_built_for(n)
@@ -565,8 +562,18 @@ impl Dipoles {
             && c.position
                 .iter()
                 .zip(&s.reference)
-                .all(|(x, x0)| (*x - *x0).norm_squared() <= limit);
-        if fresh {
+                .all(|(x, x0)| (*x - *x0).norm_squared() <= limit)
+    }
+
+    /// Rebuild the Verlet list if it is missing, stale (a body moved more than `skin/2`
+    /// since the last build) or for another number of bodies; `true` when there is one.
+    fn update_list(&self, c: &Configuration<'_>, s: &mut Scratch) -> bool {
+        let Some(cutoff) = self.cutoff else {
+            return false;
+        };
+        let n = c.position.len();
+        let half = n <= self.half_list_max_bodies;
+        if self.list_is_fresh(c, s) {
             return true;
         }
         let reach = cutoff + self.skin;
@@ -1357,12 +1364,43 @@ impl Interaction for Dipoles {
     fn potential_energy(&self, c: Configuration<'_>) -> f64 {
         let dipoles: Vec<Vec3> = c.rotation.iter().map(|r| *r * self.moment).collect();
         let mut guard = self.scratch.lock().expect("not poisoned");
-        let cells = self.build_cells(&c, &mut guard);
         let constants = self.constants();
+        let n = c.position.len();
+        if self.cutoff.is_some() && n > 0 && self.list_is_fresh(&c, &guard) && guard.half.is_built_for(n) {
+            // The half list holds every pair within the cutoff: each pair once, partition
+            // by partition in parallel, the partitions' sums added in order (the same bits
+            // for any number of threads; the cell sum below adds the same terms in another
+            // order, equal to round-off). Five times fewer candidates than the cells.
+            let s = &*guard;
+            let place = |q: usize| if s.order.is_empty() { q } else { s.order[q] as usize };
+            let half = &s.half;
+            let partition_energy = |p: usize| {
+                let mut energy = 0.0;
+                for o in half.owners(p, n) {
+                    let i = place(o);
+                    for &j in &half.partner[half.start[o]..half.start[o + 1]] {
+                        let j = place(j as usize);
+                        let r = Self::separation(&constants, c.position[i], c.position[j]);
+                        if let Some((_, _, e)) = self.pair(&constants, r, dipoles[i], dipoles[j]) {
+                            energy += e;
+                        }
+                    }
+                }
+                energy
+            };
+            #[cfg(feature = "parallel")]
+            let sums: Vec<f64> = {
+                use rayon::prelude::*;
+                (0..half.partitions()).into_par_iter().map(partition_energy).collect()
+            };
+            #[cfg(not(feature = "parallel"))]
+            let sums: Vec<f64> = (0..half.partitions()).map(partition_energy).collect();
+            return sums.iter().sum();
+        }
+        let cells = self.build_cells(&c, &mut guard);
         // Each pair once (j > i), summed body by body within fixed chunks of bodies, in
         // parallel, and the chunks' sums added in chunk order: the same bits for any number
         // of threads.
-        let n = c.position.len();
         let chunk = crate::many::CHUNK;
         let cells = cells.as_ref();
         let chunk_energy = |k: usize| {
