@@ -92,10 +92,19 @@ fn throughput(c: &mut Criterion) {
         for threads in [1, 2] {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             let mut state = bodies.clone();
+            group.throughput(Throughput::Elements(n as u64));
             group.bench_with_input(
-                BenchmarkId::new(format!("dipoles, {threads} threads"), n),
+                BenchmarkId::new(format!("dipoles, step, {threads} threads"), n),
                 &n,
                 |b, _| b.iter(|| pool.install(|| state.step(&dipoles, 1e-3).unwrap())),
+            );
+            // Ten steps by a team of threads (`Bodies::advance`), as `liemid many` takes them
+            // between two samples of the totals.
+            group.throughput(Throughput::Elements(10 * n as u64));
+            group.bench_with_input(
+                BenchmarkId::new(format!("dipoles, advance 10, {threads} threads"), n),
+                &n,
+                |b, _| b.iter(|| pool.install(|| state.advance(&dipoles, 1e-3, 10).unwrap())),
             );
         }
     }

@@ -1223,8 +1223,8 @@ impl Interaction for Dipoles {
         let dipoles = std::mem::take(&mut s.dipoles);
         let constants = self.constants();
         if self.update_list(&c, s) && c.position.len() > self.half_list_max_bodies {
-            // Large systems: every body gathers its own neighbours (each pair twice), which
-            // streams less memory than the half list's pair slots.
+            // Above `half_list_max_bodies` (not by default): every body gathers its own
+            // neighbours (each pair twice).
             // With the spatial sort, the list names places in cell order: gather this step's
             // positions and dipoles into that order once, so that the pair loop reads memory
             // near each body (the same values, so the same bits).

@@ -665,8 +665,8 @@ unsafe fn gather_avx(
     Some((combine(fa), combine(ba)))
 }
 
-/// Each pair of a half list once: for body `i` at `xi` with dipole `mi` and its partners
-/// `list` (`j > i`), the force and field on `i` summed in lanes as [`gather_pairs_x4`]
+/// Each pair of a half list once: for body `i` at `xi` with dipole `mi` and the partners
+/// it owns `list`, the force and field on `i` summed in lanes as [`gather_pairs_x4`]
 /// sums them, and per pair `p` the force on `j` and the field at `j` into `slots[p]`
 /// (zeros beyond the cutoff), every lane as the scalar kernel. `None` (slots possibly
 /// written, to be rewritten by the scalar path) when a periodic separation needs the scalar
