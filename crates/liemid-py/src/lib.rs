@@ -723,6 +723,8 @@ impl ManyBodies {
     }
 
     /// `steps` steps of `h` on `threads` threads (0: all cores); bit-identical for any count.
+    /// The steps are taken by `Bodies::advance` (a team of threads for the dipolar fluid's
+    /// neighbour list; the same bits as single steps).
     #[pyo3(signature = (h, steps, threads))]
     fn step(&mut self, py: Python<'_>, h: f64, steps: u64, threads: usize) -> PyResult<()> {
         if !(h.is_finite() && h != 0.0) {
@@ -736,14 +738,9 @@ impl ManyBodies {
             .map_err(|e| PyValueError::new_err(format!("threads: {e}")))?;
         let ManyBodies { bodies, model } = self;
         let result = py.detach(|| {
-            pool.install(|| {
-                for _ in 0..steps {
-                    match model {
-                        Model::Independent(m) => bodies.step(m, h)?,
-                        Model::Dipoles(m) => bodies.step(m, h)?,
-                    }
-                }
-                Ok::<(), Error>(())
+            pool.install(|| match model {
+                Model::Independent(m) => bodies.advance(m, h, steps),
+                Model::Dipoles(m) => bodies.advance(m, h, steps),
             })
         });
         result.map_err(|e| py_error(py, &e, ""))
