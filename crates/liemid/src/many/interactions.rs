@@ -1489,7 +1489,7 @@ mod tests {
                 .map(|_| Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * side)
                 .collect();
             let dipoles: Vec<Vec3> = (0..n).map(|_| rng.unit_vector()).collect();
-            let mut taken = 0;
+            let (mut taken, mut repelled) = (0, 0);
             for trial in 0..400 {
                 let i = trial % n;
                 let len = trial % 13;
@@ -1497,6 +1497,12 @@ mod tests {
                     .map(|_| (rng.next_u64() % n as u64) as u32)
                     .filter(|&j| j as usize != i)
                     .collect();
+                // Pairs inside the WCA core (r < 2^{1/6} σ), which the lanes evaluate only
+                // in groups that hold one.
+                repelled += list
+                    .iter()
+                    .filter(|&&j| Dipoles::separation(&k, position[i], position[j as usize]).norm() < 1.1225)
+                    .count();
                 let scalar = model.gather_pairs(&k, position[i], dipoles[i], &position, &dipoles, &list);
                 if let Some(simd) = crate::many::lanes::gather_pairs_x4(
                     true,
@@ -1518,6 +1524,7 @@ mod tests {
                 }
             }
             assert_eq!(taken, 400, "the lanes handed over a group");
+            assert!(repelled >= 5, "only {repelled} pairs in the WCA core");
         }
     }
 }

@@ -579,9 +579,16 @@ fn pair_group(
     let force = force * sw + r * ds;
     let (field, field_j) = (field * sw, field_j * sw);
     let s2w = F::splat(k.sigma2) * inv2;
-    let s6 = s2w * s2w * s2w;
-    let wca = r * (F::splat(24.0 * k.epsilon) * (F::splat(2.0) * s6 * s6 - s6) * inv2);
-    let total = force.replace(s2w.gt(F::splat(k.wca)), force + wca);
+    let repelled = s2w.gt(F::splat(k.wca));
+    // The WCA core only where some lane is inside it (few pairs: r < 2^{1/6} σ), the same
+    // lanes either way.
+    let total = if repelled.any() {
+        let s6 = s2w * s2w * s2w;
+        let wca = r * (F::splat(24.0 * k.epsilon) * (F::splat(2.0) * s6 * s6 - s6) * inv2);
+        force.replace(repelled, force + wca)
+    } else {
+        force
+    };
     Some((inside, total, field, field_j))
 }
 
