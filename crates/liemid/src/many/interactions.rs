@@ -912,6 +912,19 @@ impl Dipoles {
     }
 }
 
+/// `Σ f(k)` over `k < items`, each term computed in parallel and the terms added in order:
+/// the same bits for any number of threads.
+fn sum_in_order(items: usize, f: impl Fn(usize) -> f64 + Sync + Send) -> f64 {
+    #[cfg(feature = "parallel")]
+    let terms: Vec<f64> = {
+        use rayon::prelude::*;
+        (0..items).into_par_iter().map(f).collect()
+    };
+    #[cfg(not(feature = "parallel"))]
+    let terms: Vec<f64> = (0..items).map(f).collect();
+    terms.iter().sum()
+}
+
 /// This step's positions and dipoles in place order (`order[place]` is a body; the
 /// identity without the spatial sort), in parallel over chunks of places.
 fn gather_places(s: &mut Scratch, position: &[Vec3], dipoles: &[Vec3]) {
@@ -1366,6 +1379,11 @@ impl Interaction for Dipoles {
         let mut guard = self.scratch.lock().expect("not poisoned");
         let constants = self.constants();
         let n = c.position.len();
+        let pair_energy = |i: usize, j: usize| {
+            let r = Self::separation(&constants, c.position[i], c.position[j]);
+            self.pair(&constants, r, dipoles[i], dipoles[j])
+                .map_or(0.0, |(_, _, e)| e)
+        };
         if self.cutoff.is_some() && n > 0 && self.list_is_fresh(&c, &guard) && guard.half.is_built_for(n) {
             // The half list holds every pair within the cutoff: each pair once, partition
             // by partition in parallel, the partitions' sums added in order (the same bits
@@ -1374,28 +1392,16 @@ impl Interaction for Dipoles {
             let s = &*guard;
             let place = |q: usize| if s.order.is_empty() { q } else { s.order[q] as usize };
             let half = &s.half;
-            let partition_energy = |p: usize| {
+            return sum_in_order(half.partitions(), |p| {
                 let mut energy = 0.0;
                 for o in half.owners(p, n) {
                     let i = place(o);
                     for &j in &half.partner[half.start[o]..half.start[o + 1]] {
-                        let j = place(j as usize);
-                        let r = Self::separation(&constants, c.position[i], c.position[j]);
-                        if let Some((_, _, e)) = self.pair(&constants, r, dipoles[i], dipoles[j]) {
-                            energy += e;
-                        }
+                        energy += pair_energy(i, place(j as usize));
                     }
                 }
                 energy
-            };
-            #[cfg(feature = "parallel")]
-            let sums: Vec<f64> = {
-                use rayon::prelude::*;
-                (0..half.partitions()).into_par_iter().map(partition_energy).collect()
-            };
-            #[cfg(not(feature = "parallel"))]
-            let sums: Vec<f64> = (0..half.partitions()).map(partition_energy).collect();
-            return sums.iter().sum();
+            });
         }
         let cells = self.build_cells(&c, &mut guard);
         // Each pair once (j > i), summed body by body within fixed chunks of bodies, in
@@ -1403,28 +1409,17 @@ impl Interaction for Dipoles {
         // of threads.
         let chunk = crate::many::CHUNK;
         let cells = cells.as_ref();
-        let chunk_energy = |k: usize| {
+        sum_in_order(n.div_ceil(chunk), |k| {
             let mut energy = 0.0;
             for i in k * chunk..((k + 1) * chunk).min(n) {
                 self.for_neighbours(i, &c, cells, |j| {
                     if j > i {
-                        let r = Self::separation(&constants, c.position[i], c.position[j]);
-                        if let Some((_, _, e)) = self.pair(&constants, r, dipoles[i], dipoles[j]) {
-                            energy += e;
-                        }
+                        energy += pair_energy(i, j);
                     }
                 });
             }
             energy
-        };
-        #[cfg(feature = "parallel")]
-        let sums: Vec<f64> = {
-            use rayon::prelude::*;
-            (0..n.div_ceil(chunk)).into_par_iter().map(chunk_energy).collect()
-        };
-        #[cfg(not(feature = "parallel"))]
-        let sums: Vec<f64> = (0..n.div_ceil(chunk)).map(chunk_energy).collect();
-        sums.iter().sum()
+        })
     }
 }
 
