@@ -1,0 +1,328 @@
+//! The half list's pair pass ([`HalfPass`]) and its evaluation by a team of threads
+//! ([`DipoleTeam`], the [`TeamForces`] of [`Dipoles`]).
+
+use super::{Dipoles, PairConstants, Scratch};
+use crate::linalg::{Mat3, Vec3};
+use crate::many::half_list::HalfList;
+use crate::many::{Configuration, TeamForces};
+
+/// `Σ f(k)` over `k < items`, each term computed in parallel and the terms added in order:
+/// the same bits for any number of threads.
+pub(super) fn sum_in_order(items: usize, f: impl Fn(usize) -> f64 + Sync + Send) -> f64 {
+    #[cfg(feature = "parallel")]
+    let terms: Vec<f64> = {
+        use rayon::prelude::*;
+        (0..items).into_par_iter().map(f).collect()
+    };
+    #[cfg(not(feature = "parallel"))]
+    let terms: Vec<f64> = (0..items).map(f).collect();
+    terms.iter().sum()
+}
+
+/// This step's positions and dipoles in place order (`order[place]` is a body; the
+/// identity without the spatial sort), in parallel over chunks of places.
+pub(super) fn gather_places(s: &mut Scratch, position: &[Vec3], dipoles: &[Vec3]) {
+    let n = position.len();
+    let order = &s.order;
+    s.sorted_position.resize(n, Vec3::ZERO);
+    s.sorted_dipole.resize(n, Vec3::ZERO);
+    let place = |first: usize, x: &mut [Vec3], m: &mut [Vec3]| {
+        for (q, (x, m)) in x.iter_mut().zip(m.iter_mut()).enumerate() {
+            let i = if order.is_empty() {
+                first + q
+            } else {
+                order[first + q] as usize
+            };
+            (*x, *m) = (position[i], dipoles[i]);
+        }
+    };
+    #[cfg(feature = "parallel")]
+    {
+        use rayon::prelude::*;
+        let chunk = crate::many::CHUNK;
+        crate::many::contiguous_per_thread(
+            s.sorted_position
+                .par_chunks_mut(chunk)
+                .zip(s.sorted_dipole.par_chunks_mut(chunk))
+                .enumerate(),
+        )
+        .for_each(|(k, (x, m))| place(k * chunk, x, m));
+    }
+    #[cfg(not(feature = "parallel"))]
+    place(0, &mut s.sorted_position, &mut s.sorted_dipole);
+}
+
+/// The pair pass of the half list over partitions of owners: what it reads.
+pub(super) struct HalfPass<'a> {
+    model: &'a Dipoles,
+    constants: &'a PairConstants,
+    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+    lanes: (bool, crate::many::lanes::PairKernel),
+    position: &'a [Vec3],
+    dipoles: &'a [Vec3],
+    half: &'a HalfList,
+}
+
+impl<'a> HalfPass<'a> {
+    pub(super) fn new(
+        model: &'a Dipoles,
+        constants: &'a PairConstants,
+        position: &'a [Vec3],
+        dipoles: &'a [Vec3],
+        half: &'a HalfList,
+    ) -> Self {
+        HalfPass {
+            model,
+            constants,
+            #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+            lanes: (crate::many::lanes::use_avx(), model.lane_kernel(constants)),
+            position,
+            dipoles,
+            half,
+        }
+    }
+
+    /// Partition `p` of owners: each owner's force and field from the partners it owns
+    /// into `own` (the partition's places), the partners' shares added into `window` in
+    /// pair order (`share` holds one owner's shares on the way).
+    #[cfg_attr(
+        not(all(feature = "simd", target_arch = "x86_64")),
+        allow(clippy::unnecessary_literal_unwrap)
+    )]
+    pub(super) fn partition(
+        &self,
+        p: usize,
+        own: &mut [[Vec3; 2]],
+        window: &mut Vec<[Vec3; 2]>,
+        share: &mut Vec<[Vec3; 2]>,
+    ) {
+        let half = self.half;
+        let (position, dipoles) = (self.position, self.dipoles);
+        let first = half.owners(p, position.len()).start;
+        window.clear();
+        window.resize(half.window_len(p), [Vec3::ZERO; 2]);
+        for (q, o) in own.iter_mut().enumerate() {
+            let i = first + q;
+            let range = half.start[i]..half.start[i + 1];
+            let partners = &half.partner[range.clone()];
+            share.clear();
+            share.resize(partners.len(), [Vec3::ZERO; 2]);
+            #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+            let lanes = crate::many::lanes::half_pairs_x4(
+                self.lanes.0,
+                &self.lanes.1,
+                position[i],
+                dipoles[i],
+                position,
+                dipoles,
+                partners,
+                share,
+            );
+            #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
+            let lanes: Option<(Vec3, Vec3)> = None;
+            let (fi, bi) = lanes.unwrap_or_else(|| {
+                self.model.half_pairs(
+                    self.constants,
+                    position[i],
+                    dipoles[i],
+                    position,
+                    dipoles,
+                    partners,
+                    share,
+                )
+            });
+            for (s, &slot) in share.iter().zip(&half.partner_slot[range]) {
+                let w = &mut window[slot as usize];
+                w[0] += s[0];
+                w[1] += s[1];
+            }
+            *o = [fi, bi];
+        }
+    }
+}
+
+/// A body's force and torque from its force and field `[f, b]`: the torque is
+/// `Rᵀ (m × B)` in the body frame.
+#[inline]
+pub(super) fn force_and_torque([f, b]: [Vec3; 2], rotation: &Mat3, dipole: Vec3) -> (Vec3, Vec3) {
+    (f, rotation.tr_mul_vec(dipole.cross(b)))
+}
+
+/// The half-list evaluation of [`Dipoles`] by a team of threads ([`TeamForces`]), on the
+/// list of the last build: `prepare` puts each body's position and dipole at its place and
+/// checks its displacement against the skin, `pairs` is [`HalfPass::partition`] over the
+/// part's partitions, `forces` is [`HalfList::total`] at each body's place: the operations
+/// of [`Dipoles::compute`]'s half-list path, so the same bits. The buffers the phases
+/// share are taken from the scratch for the team's life.
+pub(super) struct DipoleTeam<'a> {
+    model: &'a Dipoles,
+    scratch: std::sync::MutexGuard<'a, Scratch>,
+    constants: PairConstants,
+    limit: f64,
+    n: usize,
+    /// Taken from the scratch (given back on drop), written by the phases through the
+    /// pointers below: positions and dipoles by place, each place's own sums, each
+    /// partition's window and share buffer.
+    place_position: Vec<Vec3>,
+    place_dipole: Vec<Vec3>,
+    own: Vec<[Vec3; 2]>,
+    windows: Vec<Vec<[Vec3; 2]>>,
+    shares: Vec<Vec<[Vec3; 2]>>,
+    position_ptr: *mut Vec3,
+    dipole_ptr: *mut Vec3,
+    own_ptr: *mut [Vec3; 2],
+    windows_ptr: *mut Vec<[Vec3; 2]>,
+    shares_ptr: *mut Vec<[Vec3; 2]>,
+}
+
+// SAFETY: the phases write disjoint entries of the buffers (a part writes its bodies'
+// places, and its partitions' sums, windows and shares) and read others' only in a later
+// phase, after a barrier (the calling order of `TeamForces`).
+unsafe impl Sync for DipoleTeam<'_> {}
+
+impl<'a> DipoleTeam<'a> {
+    /// The team on the current list, if the last evaluation used the half list for `n`
+    /// bodies (otherwise `None`: the list is missing, or the full list is in use).
+    pub(super) fn new(model: &'a Dipoles, n: usize) -> Option<Self> {
+        model.cutoff?;
+        let mut scratch = model.scratch.lock().expect("not poisoned");
+        let s = &mut *scratch;
+        let parts = s.half.partitions();
+        let ready = n > 0
+            && n <= model.half_list_max_bodies
+            && s.reference.len() == n
+            && s.half.is_built_for(n)
+            && s.sort_requested == model.spatial_sort
+            && (s.rank.is_empty() || s.rank.len() == n)
+            && s.sorted_position.len() == n
+            && s.sorted_dipole.len() == n
+            && s.own.len() == n
+            && s.windows.len() == parts
+            && s.shares.len() == parts;
+        if !ready {
+            return None;
+        }
+        let (mut place_position, mut place_dipole, mut own, mut windows, mut shares) = (
+            std::mem::take(&mut s.sorted_position),
+            std::mem::take(&mut s.sorted_dipole),
+            std::mem::take(&mut s.own),
+            std::mem::take(&mut s.windows),
+            std::mem::take(&mut s.shares),
+        );
+        let (position_ptr, dipole_ptr, own_ptr, windows_ptr, shares_ptr) = (
+            place_position.as_mut_ptr(),
+            place_dipole.as_mut_ptr(),
+            own.as_mut_ptr(),
+            windows.as_mut_ptr(),
+            shares.as_mut_ptr(),
+        );
+        Some(DipoleTeam {
+            model,
+            scratch,
+            constants: model.constants(),
+            limit: (0.5 * model.skin) * (0.5 * model.skin),
+            n,
+            place_position,
+            place_dipole,
+            own,
+            windows,
+            shares,
+            position_ptr,
+            dipole_ptr,
+            own_ptr,
+            windows_ptr,
+            shares_ptr,
+        })
+    }
+
+    /// The place of body `i`.
+    #[inline]
+    fn place(&self, i: usize) -> usize {
+        let rank = &self.scratch.rank;
+        if rank.is_empty() {
+            i
+        } else {
+            rank[i] as usize
+        }
+    }
+}
+
+impl Drop for DipoleTeam<'_> {
+    fn drop(&mut self) {
+        let s = &mut *self.scratch;
+        s.sorted_position = std::mem::take(&mut self.place_position);
+        s.sorted_dipole = std::mem::take(&mut self.place_dipole);
+        s.own = std::mem::take(&mut self.own);
+        s.windows = std::mem::take(&mut self.windows);
+        s.shares = std::mem::take(&mut self.shares);
+    }
+}
+
+impl TeamForces for DipoleTeam<'_> {
+    unsafe fn prepare(&self, first: usize, run: Configuration<'_>) -> bool {
+        let len = run.position.len();
+        assert!(first + len <= self.n);
+        let reference = &self.scratch.reference[first..first + len];
+        let mut fresh = true;
+        for (q, x0) in reference.iter().enumerate() {
+            let p = self.place(first + q);
+            assert!(p < self.n);
+            // SAFETY: the places of this part's bodies are written by it alone, and read by
+            // nobody, in this phase.
+            unsafe {
+                *self.position_ptr.add(p) = run.position[q];
+                *self.dipole_ptr.add(p) = run.rotation[q] * self.model.moment;
+            }
+            fresh &= (run.position[q] - *x0).norm_squared() <= self.limit;
+        }
+        fresh
+    }
+
+    fn pair_items(&self) -> usize {
+        self.scratch.half.partitions()
+    }
+
+    unsafe fn pairs(&self, items: std::ops::Range<usize>, config: Configuration<'_>) {
+        let half = &self.scratch.half;
+        assert!(config.position.len() == self.n && items.end <= half.partitions());
+        // SAFETY: no position or dipole is written in this phase.
+        let (position, dipoles) = unsafe {
+            (
+                std::slice::from_raw_parts(self.position_ptr, self.n),
+                std::slice::from_raw_parts(self.dipole_ptr, self.n),
+            )
+        };
+        let pass = HalfPass::new(self.model, &self.constants, position, dipoles, half);
+        for p in items {
+            let owners = half.owners(p, self.n);
+            // SAFETY: partition `p`'s sums, window and shares are this part's alone in this
+            // phase.
+            let (own, window, share) = unsafe {
+                (
+                    std::slice::from_raw_parts_mut(self.own_ptr.add(owners.start), owners.len()),
+                    &mut *self.windows_ptr.add(p),
+                    &mut *self.shares_ptr.add(p),
+                )
+            };
+            pass.partition(p, own, window, share);
+        }
+    }
+
+    unsafe fn forces(&self, first: usize, run: Configuration<'_>, force: &mut [Vec3], torque: &mut [Vec3]) {
+        let len = run.position.len();
+        assert!(first + len <= self.n && force.len() == len && torque.len() == len);
+        let half = &self.scratch.half;
+        let window = |p: usize| -> &[[Vec3; 2]] {
+            assert!(p < half.partitions());
+            // SAFETY: windows are not written in this phase.
+            unsafe { (*self.windows_ptr.add(p)).as_slice() }
+        };
+        for q in 0..len {
+            let p = self.place(first + q);
+            assert!(p < self.n);
+            // SAFETY: sums and dipoles are not written in this phase.
+            let (own, dipole) = unsafe { (*self.own_ptr.add(p), *self.dipole_ptr.add(p)) };
+            (force[q], torque[q]) = force_and_torque(half.total(p, own, window), &run.rotation[q], dipole);
+        }
+    }
+}
