@@ -21,10 +21,11 @@ use team::{force_and_torque, gather_places, sum_in_order, DipoleTeam, HalfPass};
 /// U_wca = 4ε[(σ/r)¹² − (σ/r)⁶] + ε   for r < 2^{1/6} σ
 /// ```
 ///
-/// (Gaussian units). Forces are gathered per body from its neighbours within the cutoff
-/// (all pairs without one), found with a cell list, optionally in a periodic cubic box
-/// (minimum image). The pair force is written symmetrically, so `F_ji = −F_ij` bit for bit
-/// and the total momentum is kept to round-off.
+/// (Gaussian units). With a cutoff, the pairs within it come from a Verlet list with a
+/// skin built from a cell list, each pair evaluated once (Newton's third law) by default;
+/// without one, all pairs; optionally in a periodic cubic box (minimum image). The pair
+/// force is written symmetrically, so `F_ji = −F_ij` bit for bit and the total momentum is
+/// kept to round-off.
 ///
 /// With a cutoff `r_c`, the dipole-dipole energy is switched off smoothly over
 /// `[r_s, r_c]` (by default `r_s = 0.8 r_c`, see [`Dipoles::with_switch_start`]):
@@ -61,9 +62,10 @@ pub struct Dipoles {
     pub skin: f64,
     /// Bodies up to which the half list is used ([`HALF_LIST_MAX_BODIES`] by default).
     pub half_list_max_bodies: usize,
-    /// With the full list: keep the bodies' positions and dipoles in cell order (re-sorted
-    /// at each list build), so that a body's neighbours are near it in memory; the
-    /// results are the same bits either way (default `true`).
+    /// Keep the bodies' positions and dipoles in cell order (re-sorted at each list build),
+    /// so that a body's neighbours are near it in memory (default `true`). With the full
+    /// list the results are the same bits either way; the half list then owns and sums its
+    /// pairs in places, so the bits differ (not the accuracy).
     pub spatial_sort: bool,
     scratch: Mutex<Scratch>,
 }
@@ -434,7 +436,7 @@ impl Dipoles {
     }
 
     /// Whether the current Verlet list keeps the bodies in cell order
-    /// ([`Dipoles::spatial_sort`] with the full list and a cell list).
+    /// ([`Dipoles::spatial_sort`] and a cell list).
     #[must_use]
     pub fn spatially_sorted(&self) -> bool {
         let s = self.scratch.lock().expect("not poisoned");
