@@ -152,7 +152,7 @@ pub(super) fn force_and_torque([f, b]: [Vec3; 2], rotation: &Mat3, dipole: Vec3)
 /// list of the last build: `prepare` puts each body's position and dipole at its place and
 /// checks its displacement against the skin, `pairs` is [`HalfPass::partition`] over the
 /// part's partitions, `forces` is [`HalfList::total`] at each body's place: the operations
-/// of [`Dipoles::compute`]'s half-list path, so the same bits. The buffers the phases
+/// of `Dipoles::compute`'s half-list path, so the same bits. The buffers the phases
 /// share are taken from the scratch for the team's life.
 pub(super) struct DipoleTeam<'a> {
     model: &'a Dipoles,
