@@ -823,3 +823,59 @@ fn many_with_a_thermostat_is_the_same_on_any_thread_count() {
     let o = run_in(&dir, &["many", "--friction", "1"]);
     assert_eq!(o.status.code(), Some(2));
 }
+
+#[test]
+fn many_observes_at_every_multiple_of_either_interval_while_it_advances_in_blocks() {
+    // `liemid many` takes its steps in blocks that end where something is observed: the
+    // totals every 7 steps and the trajectory every 5 land on their steps, and the last
+    // step is observed once by both, on 1 and 2 threads alike.
+    let dir = scratch("many-blocks");
+    let mut outputs = Vec::new();
+    for threads in ["1", "2"] {
+        let (totals, frames) = (format!("totals{threads}.csv"), format!("fluid{threads}.xyz"));
+        let o = run_in(
+            &dir,
+            &[
+                "many",
+                "--model",
+                "dipoles",
+                "--bodies",
+                "300",
+                "--t-end",
+                "0.05",
+                "--every",
+                "7",
+                "--out",
+                &totals,
+                "--trajectory",
+                &frames,
+                "--trajectory-every",
+                "5",
+                "--threads",
+                threads,
+                "--json",
+                "-",
+            ],
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+        let s = json(&stdout(&o));
+        assert_eq!(s["steps"], 50);
+        assert_eq!(s["trajectory_frames"], 11, "steps 0, 5, ..., 50");
+        let rows = std::fs::read_to_string(dir.join(&totals)).unwrap();
+        let t: Vec<f64> = rows
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').next().unwrap().parse().unwrap())
+            .collect();
+        let expected: Vec<f64> = [0, 7, 14, 21, 28, 35, 42, 49, 50]
+            .iter()
+            .map(|&k| k as f64 * 1e-3)
+            .collect();
+        assert_eq!(t.len(), expected.len(), "{t:?}");
+        for (a, b) in t.iter().zip(&expected) {
+            assert!((a - b).abs() < 1e-12, "{t:?}");
+        }
+        outputs.push((rows, std::fs::read_to_string(dir.join(&frames)).unwrap()));
+    }
+    assert!(outputs[0] == outputs[1], "1 and 2 threads wrote different files");
+}
