@@ -451,6 +451,26 @@ impl Dipoles {
     }
 }
 
+/// The body at place `p` (`order` empty: places are the bodies' own indices).
+#[inline]
+fn body_at(order: &[u32], p: usize) -> usize {
+    if order.is_empty() {
+        p
+    } else {
+        order[p] as usize
+    }
+}
+
+/// The place of body `i` (`rank` empty: places are the bodies' own indices).
+#[inline]
+fn place_of(rank: &[u32], i: usize) -> usize {
+    if rank.is_empty() {
+        i
+    } else {
+        rank[i] as usize
+    }
+}
+
 impl Interaction for Dipoles {
     fn compute(&self, c: Configuration<'_>, force: &mut [Vec3], torque: &mut [Vec3]) {
         let mut guard = self.scratch.lock().expect("not poisoned");
@@ -459,7 +479,10 @@ impl Interaction for Dipoles {
         s.dipoles.extend(c.rotation.iter().map(|r: &Mat3| *r * self.moment));
         let dipoles = std::mem::take(&mut s.dipoles);
         let constants = self.constants();
-        if self.update_list(&c, s) && c.position.len() > self.half_list_max_bodies {
+        // With a cutoff there is a list for this configuration (fresh or just built); without
+        // one, all pairs below.
+        let listed = self.update_list(&c, s);
+        if listed && c.position.len() > self.half_list_max_bodies {
             // Above `half_list_max_bodies` (not by default): every body gathers its own
             // neighbours (each pair twice).
             // With the spatial sort, the list names places in cell order: gather this step's
@@ -508,23 +531,19 @@ impl Interaction for Dipoles {
                 place_sums(0, &mut sums);
                 let rank = &s.rank;
                 for_chunks(force, torque, |i, f, t| {
-                    let [fi, bi] = sums[rank[i] as usize];
-                    *f = fi;
-                    *t = c.rotation[i].tr_mul_vec(dipoles[i].cross(bi));
+                    (*f, *t) = force_and_torque(sums[rank[i] as usize], &c.rotation[i], dipoles[i]);
                 });
                 s.sorted_sums = sums;
             } else {
                 for_chunks(force, torque, |i, f, t| {
-                    let mi = dipoles[i];
-                    let (fi, bi) = body(i, c.position[i], mi, c.position, &dipoles);
-                    *f = fi;
-                    *t = c.rotation[i].tr_mul_vec(mi.cross(bi));
+                    let (fi, bi) = body(i, c.position[i], dipoles[i], c.position, &dipoles);
+                    (*f, *t) = force_and_torque([fi, bi], &c.rotation[i], dipoles[i]);
                 });
             }
             s.dipoles = dipoles;
             return;
         }
-        if !s.reference.is_empty() && s.reference.len() == c.position.len() && self.cutoff.is_some() {
+        if listed {
             // Each pair once (Newton's third law), partition by partition of owners, each
             // owner over its partners in lanes (the force and field on the owner summed as
             // the gather sums them), the partners' shares into the partition's window; then
@@ -564,7 +583,7 @@ impl Interaction for Dipoles {
             }
             let (half, own, windows, rank) = (&s.half, &s.own, &s.windows, &s.rank);
             for_chunks(force, torque, |i, f, t| {
-                let p = if rank.is_empty() { i } else { rank[i] as usize };
+                let p = place_of(rank, i);
                 let total = half.total(p, own[p], |k| windows[k].as_slice());
                 (*f, *t) = force_and_torque(total, &c.rotation[i], dipoles[i]);
             });
@@ -582,8 +601,7 @@ impl Interaction for Dipoles {
                     bi += field;
                 }
             });
-            *f = fi;
-            *t = c.rotation[i].tr_mul_vec(mi.cross(bi));
+            (*f, *t) = force_and_torque([fi, bi], &c.rotation[i], mi);
         });
         s.dipoles = dipoles;
     }
@@ -614,7 +632,7 @@ impl Interaction for Dipoles {
             // for any number of threads; the cell sum below adds the same terms in another
             // order, equal to round-off). Five times fewer candidates than the cells.
             let s = &*guard;
-            let place = |q: usize| if s.order.is_empty() { q } else { s.order[q] as usize };
+            let place = |q: usize| body_at(&s.order, q);
             let half = &s.half;
             return sum_in_order(half.partitions(), |p| {
                 let mut energy = 0.0;

@@ -2,7 +2,7 @@
 //! visited as contiguous runs per row, candidates against their images in the stencil
 //! cells, the half list found in the build itself.
 
-use super::{Dipoles, Scratch};
+use super::{body_at, Dipoles, Scratch};
 use crate::linalg::Vec3;
 use crate::many::half_list;
 use crate::many::Configuration;
@@ -28,20 +28,23 @@ pub(super) struct Cells<'a> {
 }
 
 impl Dipoles {
-    /// Whether the Verlet list of the last build holds for `c`: the list to be used (half or
-    /// full, sorted or not) was built for this many bodies, and no body has moved more than
-    /// half the skin since.
-    pub(super) fn list_is_fresh(&self, c: &Configuration<'_>, s: &Scratch) -> bool {
-        let n = c.position.len();
-        let limit = (0.5 * self.skin) * (0.5 * self.skin);
+    /// Whether the list of the last build is the one to use for `n` bodies: built for this
+    /// many, half or full as the limit asks (it may have changed), sorted as asked.
+    pub(super) fn list_matches(&self, n: usize, s: &Scratch) -> bool {
         s.reference.len() == n
-            // The list built is the one to be used (the limit may have changed).
             && if n <= self.half_list_max_bodies {
                 s.half.is_built_for(n) && s.list_start.is_empty()
             } else {
                 s.list_start.len() == n + 1 && !s.half.is_built_for(n)
             }
             && s.sort_requested == self.spatial_sort
+    }
+
+    /// Whether the Verlet list of the last build holds for `c`: it is the one to use
+    /// ([`Dipoles::list_matches`]) and no body has moved more than half the skin since.
+    pub(super) fn list_is_fresh(&self, c: &Configuration<'_>, s: &Scratch) -> bool {
+        let limit = (0.5 * self.skin) * (0.5 * self.skin);
+        self.list_matches(c.position.len(), s)
             && c.position
                 .iter()
                 .zip(&s.reference)
@@ -98,7 +101,7 @@ impl Dipoles {
                 entries.clear();
                 counts.clear();
                 for place in k * chunk..((k + 1) * chunk).min(n) {
-                    let i = if order.is_empty() { place } else { order[place] as usize };
+                    let i = body_at(order, place);
                     let before = entries.len();
                     let xi = c.position[i];
                     // Body i's wrapped position (its entry in cell order).

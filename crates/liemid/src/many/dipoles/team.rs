@@ -1,7 +1,7 @@
 //! The half list's pair pass ([`HalfPass`]) and its evaluation by a team of threads
 //! ([`DipoleTeam`], the [`TeamForces`] of [`Dipoles`]).
 
-use super::{Dipoles, PairConstants, Scratch};
+use super::{body_at, place_of, Dipoles, PairConstants, Scratch};
 use crate::linalg::{Mat3, Vec3};
 use crate::many::half_list::HalfList;
 use crate::many::{Configuration, TeamForces};
@@ -28,11 +28,7 @@ pub(super) fn gather_places(s: &mut Scratch, position: &[Vec3], dipoles: &[Vec3]
     s.sorted_dipole.resize(n, Vec3::ZERO);
     let place = |first: usize, x: &mut [Vec3], m: &mut [Vec3]| {
         for (q, (x, m)) in x.iter_mut().zip(m.iter_mut()).enumerate() {
-            let i = if order.is_empty() {
-                first + q
-            } else {
-                order[first + q] as usize
-            };
+            let i = body_at(order, first + q);
             (*x, *m) = (position[i], dipoles[i]);
         }
     };
@@ -190,9 +186,7 @@ impl<'a> DipoleTeam<'a> {
         let parts = s.half.partitions();
         let ready = n > 0
             && n <= model.half_list_max_bodies
-            && s.reference.len() == n
-            && s.half.is_built_for(n)
-            && s.sort_requested == model.spatial_sort
+            && model.list_matches(n, s)
             && (s.rank.is_empty() || s.rank.len() == n)
             && s.sorted_position.len() == n
             && s.sorted_dipole.len() == n
@@ -238,12 +232,7 @@ impl<'a> DipoleTeam<'a> {
     /// The place of body `i`.
     #[inline]
     fn place(&self, i: usize) -> usize {
-        let rank = &self.scratch.rank;
-        if rank.is_empty() {
-            i
-        } else {
-            rank[i] as usize
-        }
+        place_of(&self.scratch.rank, i)
     }
 }
 
