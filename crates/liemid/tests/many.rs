@@ -635,10 +635,11 @@ fn the_verlet_list_is_rebuilt_on_displacement_and_gives_the_forces_of_any_skin()
     println!("Verlet list: {builds_a} builds in 201 evaluations with skin 0.3, {builds_b} with skin 0");
     assert!((2..40).contains(&builds_a), "{builds_a} builds");
     assert!(builds_b >= 200);
-    // The half list (each pair once, Newton's third law) gives the same forces as the full
-    // list (each pair twice, the default, in SIMD lanes) to rounding.
+    // The half list (each pair once from the half stencil, Newton's third law, the default)
+    // gives the same forces as the full list (each pair twice, from the full stencil) to
+    // rounding.
     let (mut c, mut model_c) = problems::dipolar_fluid(1000, 0.3, 4).unwrap();
-    model_c.half_list_max_bodies = usize::MAX;
+    model_c.half_list_max_bodies = 0;
     for _ in 0..200 {
         c.step(&model_c, 2e-3).unwrap();
     }
@@ -651,6 +652,26 @@ fn the_verlet_list_is_rebuilt_on_displacement_and_gives_the_forces_of_any_skin()
     assert!(
         df < 1e-10 * scale,
         "half and full lists differ by {df:e} (scale {scale:e})"
+    );
+    // In a box too small for cells (27 bodies, side 4.5 < 2.5 × reach) the half list takes
+    // each later body of the list order instead of the half stencil: the same forces too.
+    let (mut d, model_d) = problems::dipolar_fluid(27, 0.3, 4).unwrap();
+    let (mut e, mut model_e) = problems::dipolar_fluid(27, 0.3, 4).unwrap();
+    model_e.half_list_max_bodies = 0;
+    for _ in 0..50 {
+        d.step(&model_d, 2e-3).unwrap();
+        e.step(&model_e, 2e-3).unwrap();
+    }
+    let scale = d.force.iter().map(|f| f.norm()).fold(0.0, f64::max);
+    let df = d
+        .force
+        .iter()
+        .zip(&e.force)
+        .map(|(x, y)| (*x - *y).norm())
+        .fold(0.0, f64::max);
+    assert!(
+        scale > 0.0 && df < 1e-10 * scale,
+        "small box: half and full lists differ by {df:e}"
     );
 }
 

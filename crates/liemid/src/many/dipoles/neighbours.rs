@@ -4,7 +4,6 @@
 
 use super::{body_at, Dipoles, Scratch};
 use crate::linalg::Vec3;
-use crate::many::half_list;
 use crate::many::Configuration;
 
 /// A cell list over the bodies' bounding box (or the periodic box).
@@ -109,7 +108,7 @@ impl Dipoles {
                     // Branch-free: every candidate of a run is written, and kept when within
                     // reach (a branch taken by a quarter of the candidates at random was
                     // mispredicted often).
-                    self.for_neighbour_runs(i, c, cells, |run, first, offset| {
+                    self.for_neighbour_runs(i, c, cells, half, |run, first, offset| {
                         // Written into the spare capacity, every candidate, the count of
                         // kept ones advancing only past those within reach (no resize, which
                         // was a call per run).
@@ -122,10 +121,8 @@ impl Dipoles {
                             // order is that index itself.
                             let entry = if sorted { first + k } else { j };
                             spare[kept].write(entry as u32);
-                            // The half list keeps the pairs this place owns.
                             // (`&`, not `&&`: no branch on the random `within`.)
-                            let owned = !half | half_list::owns_pair(place, entry);
-                            kept += usize::from(within & (j != i) & owned);
+                            kept += usize::from(within & (j != i));
                         };
                         match images {
                             // The candidate's image in this stencil cell, read in cell order:
@@ -302,7 +299,7 @@ impl Dipoles {
         cells: Option<&Cells<'_>>,
         mut f: impl FnMut(usize),
     ) {
-        self.for_neighbour_runs(i, c, cells, |run, _, _| {
+        self.for_neighbour_runs(i, c, cells, false, |run, _, _| {
             for &j in run {
                 if j != i {
                     f(j);
@@ -312,21 +309,32 @@ impl Dipoles {
     }
 
     /// Visit the candidate neighbours of `i` as runs of bodies, in a fixed order: the bodies
-    /// of the stencil's cells (all bodies without a cell list), `i` among them, each run
-    /// with where it starts in cell order (in [`Cells::sorted`] and [`Cells::wrapped`]; the
-    /// first body's index without a cell list) and the offset of its image (zero without a
-    /// cell list).
+    /// of the stencil's cells (all bodies without a cell list), `i` among them unless
+    /// `half`, each run with where it starts in cell order (in [`Cells::sorted`] and
+    /// [`Cells::wrapped`]; the first body's index without a cell list) and the offset of its
+    /// image (zero without a cell list).
+    ///
+    /// With `half`, the half stencil, which finds each pair once: the cells ahead of `i`'s
+    /// cell in (z, y, x) order among the stencil's offsets (`dz > 0`; `dz = 0, dy > 0`;
+    /// `dz = dy = 0, dx > 0`) and, in its own cell, the bodies after it in cell order
+    /// (without a cell list, the bodies after it). A pair is then kept by one of its bodies,
+    /// the one the other lies ahead of, and each body keeps about half its pairs (LAMMPS's
+    /// half list with Newton's third law, `newton on`). Every offset of the stencil is a
+    /// different cell (at least `2w + 1` cells a side in a periodic box), so each pair is
+    /// seen from exactly one side.
     #[inline(always)]
     fn for_neighbour_runs(
         &self,
         i: usize,
         c: &Configuration<'_>,
         cells: Option<&Cells<'_>>,
+        half: bool,
         mut f: impl FnMut(&[usize], usize, Vec3),
     ) {
         let Some(cells) = cells else {
             let mut run = [0usize; 64];
-            for first in (0..c.position.len()).step_by(run.len()) {
+            let from = if half { i + 1 } else { 0 };
+            for first in (from..c.position.len()).step_by(run.len()) {
                 let len = run.len().min(c.position.len() - first);
                 for (k, r) in run[..len].iter_mut().enumerate() {
                     *r = first + k;
@@ -353,8 +361,8 @@ impl Dipoles {
         let w = cells.reach;
         let axis = |c: isize, k: usize| {
             let k = k as isize;
-            // (cell, image offset in boxes) for each stencil cell along the axis.
-            let mut out = [(0usize, 0.0f64); 5];
+            // (cell, image offset in boxes, offset in cells) for each stencil cell.
+            let mut out = [(0usize, 0.0f64, 0isize); 5];
             let mut len = 0;
             for d in -w..=w {
                 let v = c + d;
@@ -371,7 +379,7 @@ impl Dipoles {
                 } else {
                     (v, 0.0)
                 };
-                out[len] = (v as usize, image);
+                out[len] = (v as usize, image, d);
                 len += 1;
             }
             (out, len)
@@ -379,24 +387,47 @@ impl Dipoles {
         let ((xs, nx), (ys, ny), (zs, nz)) = (axis(cx, n[0]), axis(cy, n[1]), axis(cz, n[2]));
         // Cells of a row that follow each other in x are contiguous in `sorted`: visit the
         // stencil's x cells of a row as at most two runs (two where the box wraps), in the
-        // same order as cell by cell, without a loop exit per cell.
-        let mut runs = [(0usize, 0usize, 0.0f64); 2];
-        let mut n_runs = 0;
-        for &(x, image) in &xs[..nx] {
-            if n_runs > 0 && runs[n_runs - 1].1 == x {
-                runs[n_runs - 1].1 = x + 1;
-            } else {
-                runs[n_runs] = (x, x + 1, image);
-                n_runs += 1;
+        // same order as cell by cell, without a loop exit per cell. `ahead` are the runs of
+        // the cells from `i`'s own on (`dx ≥ 0`), for the half stencil's own row.
+        let merge = |from: isize| {
+            let mut runs = [(0usize, 0usize, 0.0f64); 2];
+            let mut n_runs = 0;
+            for &(x, image, d) in &xs[..nx] {
+                if d < from {
+                    continue;
+                }
+                if n_runs > 0 && runs[n_runs - 1].1 == x {
+                    runs[n_runs - 1].1 = x + 1;
+                } else {
+                    runs[n_runs] = (x, x + 1, image);
+                    n_runs += 1;
+                }
             }
-        }
+            (runs, n_runs)
+        };
+        let (all, n_all) = merge(-w);
+        let (ahead, n_ahead) = merge(0);
+        // `i`'s entry in cell order: its own row's first run starts after it.
+        let own = cells.cell_rank[i] as usize;
         let span = cells.span;
-        for &(z, oz) in &zs[..nz] {
-            for &(y, oy) in &ys[..ny] {
+        for &(z, oz, dz) in &zs[..nz] {
+            if half && dz < 0 {
+                continue;
+            }
+            for &(y, oy, dy) in &ys[..ny] {
+                if half && dz == 0 && dy < 0 {
+                    continue;
+                }
+                let own_row = half && dz == 0 && dy == 0;
                 let row = (z * n[1] + y) * n[0];
-                for &(lo, hi, ox) in &runs[..n_runs] {
+                let runs = if own_row { &ahead[..n_ahead] } else { &all[..n_all] };
+                for (r, &(lo, hi, ox)) in runs.iter().enumerate() {
                     let offset = Vec3::new(ox * span, oy * span, oz * span);
-                    let (a, b) = (cells.start[row + lo], cells.start[row + hi]);
+                    let (mut a, b) = (cells.start[row + lo], cells.start[row + hi]);
+                    if own_row && r == 0 {
+                        // The run starts at `i`'s own cell: the bodies after `i` in it.
+                        a = own + 1;
+                    }
                     f(&cells.sorted[a..b], a, offset);
                 }
             }
