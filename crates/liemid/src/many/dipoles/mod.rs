@@ -12,7 +12,7 @@ use crate::many::half_list::HalfList;
 use crate::many::interactions::for_chunks;
 use crate::many::{Configuration, Interaction, TeamForces};
 
-use team::{force_and_torque, gather_places, sum_in_order, DipoleTeam, HalfPass};
+use team::{force_and_torque, gather_places, sum_in_order, DipoleTeam, HalfPass, PartitionScratch};
 
 /// Point dipoles fixed in the body frames, with the Weeks-Chandler-Andersen repulsion:
 ///
@@ -93,8 +93,7 @@ struct Scratch {
     /// The half list's sums: per place, the force and field from the partners it owns; per
     /// partition, its window of the partners' shares and the shares of one owner.
     own: Vec<[Vec3; 2]>,
-    windows: Vec<Vec<[Vec3; 2]>>,
-    shares: Vec<Vec<[Vec3; 2]>>,
+    partitions: Vec<PartitionScratch>,
     /// Per chunk of bodies, while the list is built in parallel: the neighbours found and
     /// each body's count (kept to reuse their memory).
     chunk_lists: Vec<(Vec<u32>, Vec<u32>)>,
@@ -555,36 +554,25 @@ impl Interaction for Dipoles {
             gather_places(s, c.position, &dipoles);
             s.own.resize(n, [Vec3::ZERO; 2]);
             let parts = s.half.partitions();
-            s.windows.resize_with(parts, Vec::new);
-            s.shares.resize_with(parts, Vec::new);
+            s.partitions.resize_with(parts, PartitionScratch::default);
             let pass = HalfPass::new(self, &constants, &s.sorted_position, &s.sorted_dipole, &s.half);
             let per = s.half.partition_places;
             #[cfg(feature = "parallel")]
             {
                 use rayon::prelude::*;
                 crate::many::contiguous_per_thread(
-                    s.own
-                        .par_chunks_mut(per)
-                        .zip(s.windows.par_iter_mut())
-                        .zip(s.shares.par_iter_mut())
-                        .enumerate(),
+                    s.own.par_chunks_mut(per).zip(s.partitions.par_iter_mut()).enumerate(),
                 )
-                .for_each(|(p, ((own, window), share))| pass.partition(p, own, window, share));
+                .for_each(|(p, (own, scratch))| pass.partition(p, own, scratch));
             }
             #[cfg(not(feature = "parallel"))]
-            for (p, ((own, window), share)) in s
-                .own
-                .chunks_mut(per)
-                .zip(s.windows.iter_mut())
-                .zip(s.shares.iter_mut())
-                .enumerate()
-            {
-                pass.partition(p, own, window, share);
+            for (p, (own, scratch)) in s.own.chunks_mut(per).zip(s.partitions.iter_mut()).enumerate() {
+                pass.partition(p, own, scratch);
             }
-            let (half, own, windows, rank) = (&s.half, &s.own, &s.windows, &s.rank);
+            let (half, own, partitions, rank) = (&s.half, &s.own, &s.partitions, &s.rank);
             for_chunks(force, torque, |i, f, t| {
                 let p = place_of(rank, i);
-                let total = half.total(p, own[p], |k| windows[k].as_slice());
+                let total = half.total(p, own[p], |k| partitions[k].window.as_slice());
                 (*f, *t) = force_and_torque(total, &c.rotation[i], dipoles[i]);
             });
             s.dipoles = dipoles;

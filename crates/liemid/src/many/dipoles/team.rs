@@ -48,6 +48,18 @@ pub(super) fn gather_places(s: &mut Scratch, position: &[Vec3], dipoles: &[Vec3]
     place(0, &mut s.sorted_position, &mut s.sorted_dipole);
 }
 
+/// A partition's scratch in the half list's pair pass: its window of the partners' shares
+/// and one owner's shares on the way, on cache lines of its own (aligned to 128 bytes, the
+/// pair of lines Intel's adjacent-line prefetcher fetches together). Adjacent in one
+/// vector, the two `Vec` headers of neighbouring partitions shared a line, and two threads
+/// writing a share buffer's length for every owner made it bounce between the cores.
+#[repr(align(128))]
+#[derive(Debug, Default)]
+pub(super) struct PartitionScratch {
+    pub(super) window: Vec<[Vec3; 2]>,
+    share: Vec<[Vec3; 2]>,
+}
+
 /// The pair pass of the half list over partitions of owners: what it reads.
 pub(super) struct HalfPass<'a> {
     model: &'a Dipoles,
@@ -79,19 +91,14 @@ impl<'a> HalfPass<'a> {
     }
 
     /// Partition `p` of owners: each owner's force and field from the partners it owns
-    /// into `own` (the partition's places), the partners' shares added into `window` in
-    /// pair order (`share` holds one owner's shares on the way).
+    /// into `own` (the partition's places), the partners' shares added into its window in
+    /// pair order.
     #[cfg_attr(
         not(all(feature = "simd", target_arch = "x86_64")),
         allow(clippy::unnecessary_literal_unwrap)
     )]
-    pub(super) fn partition(
-        &self,
-        p: usize,
-        own: &mut [[Vec3; 2]],
-        window: &mut Vec<[Vec3; 2]>,
-        share: &mut Vec<[Vec3; 2]>,
-    ) {
+    pub(super) fn partition(&self, p: usize, own: &mut [[Vec3; 2]], scratch: &mut PartitionScratch) {
+        let PartitionScratch { window, share } = scratch;
         let half = self.half;
         let (position, dipoles) = (self.position, self.dipoles);
         let first = half.owners(p, position.len()).start;
@@ -162,13 +169,11 @@ pub(super) struct DipoleTeam<'a> {
     place_position: Vec<Vec3>,
     place_dipole: Vec<Vec3>,
     own: Vec<[Vec3; 2]>,
-    windows: Vec<Vec<[Vec3; 2]>>,
-    shares: Vec<Vec<[Vec3; 2]>>,
+    partitions: Vec<PartitionScratch>,
     position_ptr: *mut Vec3,
     dipole_ptr: *mut Vec3,
     own_ptr: *mut [Vec3; 2],
-    windows_ptr: *mut Vec<[Vec3; 2]>,
-    shares_ptr: *mut Vec<[Vec3; 2]>,
+    partitions_ptr: *mut PartitionScratch,
 }
 
 // SAFETY: the phases write disjoint entries of the buffers (a part writes its bodies'
@@ -191,24 +196,21 @@ impl<'a> DipoleTeam<'a> {
             && s.sorted_position.len() == n
             && s.sorted_dipole.len() == n
             && s.own.len() == n
-            && s.windows.len() == parts
-            && s.shares.len() == parts;
+            && s.partitions.len() == parts;
         if !ready {
             return None;
         }
-        let (mut place_position, mut place_dipole, mut own, mut windows, mut shares) = (
+        let (mut place_position, mut place_dipole, mut own, mut partitions) = (
             std::mem::take(&mut s.sorted_position),
             std::mem::take(&mut s.sorted_dipole),
             std::mem::take(&mut s.own),
-            std::mem::take(&mut s.windows),
-            std::mem::take(&mut s.shares),
+            std::mem::take(&mut s.partitions),
         );
-        let (position_ptr, dipole_ptr, own_ptr, windows_ptr, shares_ptr) = (
+        let (position_ptr, dipole_ptr, own_ptr, partitions_ptr) = (
             place_position.as_mut_ptr(),
             place_dipole.as_mut_ptr(),
             own.as_mut_ptr(),
-            windows.as_mut_ptr(),
-            shares.as_mut_ptr(),
+            partitions.as_mut_ptr(),
         );
         Some(DipoleTeam {
             model,
@@ -219,13 +221,11 @@ impl<'a> DipoleTeam<'a> {
             place_position,
             place_dipole,
             own,
-            windows,
-            shares,
+            partitions,
             position_ptr,
             dipole_ptr,
             own_ptr,
-            windows_ptr,
-            shares_ptr,
+            partitions_ptr,
         })
     }
 
@@ -242,8 +242,7 @@ impl Drop for DipoleTeam<'_> {
         s.sorted_position = std::mem::take(&mut self.place_position);
         s.sorted_dipole = std::mem::take(&mut self.place_dipole);
         s.own = std::mem::take(&mut self.own);
-        s.windows = std::mem::take(&mut self.windows);
-        s.shares = std::mem::take(&mut self.shares);
+        s.partitions = std::mem::take(&mut self.partitions);
     }
 }
 
@@ -286,14 +285,13 @@ impl TeamForces for DipoleTeam<'_> {
             let owners = half.owners(p, self.n);
             // SAFETY: partition `p`'s sums, window and shares are this part's alone in this
             // phase.
-            let (own, window, share) = unsafe {
+            let (own, scratch) = unsafe {
                 (
                     std::slice::from_raw_parts_mut(self.own_ptr.add(owners.start), owners.len()),
-                    &mut *self.windows_ptr.add(p),
-                    &mut *self.shares_ptr.add(p),
+                    &mut *self.partitions_ptr.add(p),
                 )
             };
-            pass.partition(p, own, window, share);
+            pass.partition(p, own, scratch);
         }
     }
 
@@ -304,7 +302,7 @@ impl TeamForces for DipoleTeam<'_> {
         let window = |p: usize| -> &[[Vec3; 2]] {
             assert!(p < half.partitions());
             // SAFETY: windows are not written in this phase.
-            unsafe { (*self.windows_ptr.add(p)).as_slice() }
+            unsafe { (*self.partitions_ptr.add(p)).window.as_slice() }
         };
         for q in 0..len {
             let p = self.place(first + q);
