@@ -48,6 +48,17 @@ impl SpinBarrier {
 
     /// Wait until every thread has arrived; what each wrote before is visible to all after.
     pub(crate) fn wait(&self) {
+        self.wait_and(false);
+    }
+
+    /// [`SpinBarrier::wait`], taking the pool's pending parallel work while waiting: for a
+    /// phase in which one thread runs parallel iterators of the pool that the others would
+    /// otherwise leave to it alone.
+    pub(crate) fn wait_helping(&self) {
+        self.wait_and(true);
+    }
+
+    fn wait_and(&self, help: bool) {
         use std::sync::atomic::Ordering;
         if self.threads == 1 {
             return;
@@ -59,6 +70,12 @@ impl SpinBarrier {
         } else {
             let mut spins = 0u32;
             while self.generation.load(Ordering::Acquire) == generation {
+                #[cfg(feature = "parallel")]
+                if help && rayon::yield_now() == Some(rayon::Yield::Executed) {
+                    continue;
+                }
+                #[cfg(not(feature = "parallel"))]
+                let _ = help;
                 if spins < 4096 {
                     std::hint::spin_loop();
                     spins += 1;

@@ -95,9 +95,10 @@ impl Bodies {
     /// ([`Interaction::team_forces`]), the threads of the pool stay together for all the
     /// steps as a team, each moving and evaluating its own chunks, with two spin barriers per
     /// step (after the motion, after the pair pass) instead of four hand-offs through the
-    /// pool; a step whose evaluation went stale (a neighbour list to rebuild) is completed by
-    /// [`Interaction::compute`], and the team formed again. Otherwise it takes ordinary
-    /// steps.
+    /// pool. A step whose evaluation went stale (a neighbour list to rebuild) is brought up to
+    /// date within the team ([`TeamForces::refresh`], by one thread while the others take
+    /// the parallel work it hands out); if the interaction cannot, [`Interaction::compute`]
+    /// completes the step and the team is formed again. Otherwise it takes ordinary steps.
     ///
     /// # Errors
     /// As [`Bodies::step`]; the system is then left mid-step.
@@ -146,6 +147,7 @@ impl Bodies {
         let chunks = n.div_ceil(CHUNK);
         let failure: Mutex<Option<(usize, Error)>> = Mutex::new(None);
         let (stale, failed, completed) = (AtomicBool::new(false), AtomicBool::new(false), AtomicU64::new(0));
+        let refreshed = AtomicBool::new(false);
         let (motion, all) = self.split(h);
         let (free, mass) = (motion.free, motion.mass);
         let shared = SharedBodies::new(all);
@@ -177,7 +179,9 @@ impl Bodies {
                     stale.store(true, Ordering::Relaxed);
                 }
                 barrier.wait();
-                if stale.load(Ordering::Relaxed) || failed.load(Ordering::Relaxed) {
+                // Read by every part before the one that refreshes resets it.
+                let was_stale = stale.load(Ordering::Relaxed);
+                if failed.load(Ordering::Relaxed) {
                     if part.index() == 0 {
                         completed.store(step, Ordering::Relaxed);
                     }
@@ -185,6 +189,25 @@ impl Bodies {
                 }
                 // SAFETY: nobody writes positions or attitudes until the next barrier.
                 let config = unsafe { shared.configuration(t_end, mass, free) };
+                if was_stale {
+                    // Brought up to date by one part (the others help with the pool's
+                    // parallel work while they wait), or the team stops.
+                    if part.index() == 0 {
+                        // SAFETY: the calling order of `TeamForces`.
+                        refreshed.store(unsafe { team.refresh(config) }, Ordering::Relaxed);
+                    }
+                    barrier.wait_helping();
+                    if !refreshed.load(Ordering::Relaxed) {
+                        if part.index() == 0 {
+                            completed.store(step, Ordering::Relaxed);
+                        }
+                        return;
+                    }
+                    if part.index() == 0 {
+                        // Every part has read it; none sets it again before the next barrier.
+                        stale.store(false, Ordering::Relaxed);
+                    }
+                }
                 // SAFETY: the calling order of `TeamForces`.
                 unsafe { team.pairs(part.range(items), config) };
                 barrier.wait();

@@ -179,8 +179,10 @@ pub trait Interaction: Sync {
 /// each of its chunks of bodies, the parts meet at a barrier, each calls `pairs` with its
 /// range of the pair pass's work items, the parts meet again, each calls `forces` for each
 /// of its chunks; a part's chunks and items are the same for the whole team and no two
-/// parts share one; the next step's `prepare` of a chunk follows its `forces`. Nothing else
-/// is called while the team lives.
+/// parts share one; the next step's `prepare` of a chunk follows its `forces`. When a
+/// `prepare` returned `false`, one part calls `refresh` after the first barrier while the
+/// others wait, and the parts meet again before `pairs`. Nothing else is called while the
+/// team lives.
 pub trait TeamForces: Sync {
     /// After the motion of the run of bodies `run` (chunk `first / CHUNK`), starting at
     /// body `first`: prepare their per-body data. `false` when what the evaluation was
@@ -190,6 +192,18 @@ pub trait TeamForces: Sync {
     /// # Safety
     /// See the trait.
     unsafe fn prepare(&self, first: usize, run: Configuration<'_>) -> bool;
+    /// After a `prepare` found the evaluation stale: bring it up to date for `config`
+    /// (every body, moved), e.g. rebuild the neighbour list, so that the step goes on with
+    /// `pairs`. Called by one part while the others wait and help with the pool's parallel
+    /// work; `false` when it cannot (the team then stops and [`Interaction::compute`]
+    /// completes the step). The default is `false`.
+    ///
+    /// # Safety
+    /// See the trait; nothing else is called while it runs.
+    unsafe fn refresh(&self, config: Configuration<'_>) -> bool {
+        let _ = config;
+        false
+    }
     /// The number of work items of the pair pass (fixed while the team lives); each part
     /// takes a contiguous range of them.
     fn pair_items(&self) -> usize;

@@ -159,7 +159,11 @@ pub(super) fn force_and_torque([f, b]: [Vec3; 2], rotation: &Mat3, dipole: Vec3)
 /// share are taken from the scratch for the team's life.
 pub(super) struct DipoleTeam<'a> {
     model: &'a Dipoles,
-    scratch: std::sync::MutexGuard<'a, Scratch>,
+    /// The lock on the scratch, held for the team's life.
+    _guard: std::sync::MutexGuard<'a, Scratch>,
+    /// The scratch the guard holds, read (and by `refresh` written) through this pointer
+    /// only while the team lives.
+    scratch_ptr: *mut Scratch,
     constants: PairConstants,
     limit: f64,
     n: usize,
@@ -187,7 +191,9 @@ impl<'a> DipoleTeam<'a> {
     pub(super) fn new(model: &'a Dipoles, n: usize) -> Option<Self> {
         model.cutoff?;
         let mut scratch = model.scratch.lock().expect("not poisoned");
-        let s = &mut *scratch;
+        let scratch_ptr: *mut Scratch = &mut *scratch;
+        // SAFETY: the guard is held for the team's life.
+        let s = unsafe { &mut *scratch_ptr };
         let parts = s.half.partitions();
         let ready = n > 0
             && n <= model.half_list_max_bodies
@@ -214,7 +220,8 @@ impl<'a> DipoleTeam<'a> {
         );
         Some(DipoleTeam {
             model,
-            scratch,
+            _guard: scratch,
+            scratch_ptr,
             constants: model.constants(),
             limit: (0.5 * model.skin) * (0.5 * model.skin),
             n,
@@ -229,16 +236,24 @@ impl<'a> DipoleTeam<'a> {
         })
     }
 
+    /// The scratch (list, order, reference positions).
+    #[inline]
+    fn s(&self) -> &Scratch {
+        // SAFETY: written only by `refresh`, while no other phase runs.
+        unsafe { &*self.scratch_ptr }
+    }
+
     /// The place of body `i`.
     #[inline]
     fn place(&self, i: usize) -> usize {
-        place_of(&self.scratch.rank, i)
+        place_of(&self.s().rank, i)
     }
 }
 
 impl Drop for DipoleTeam<'_> {
     fn drop(&mut self) {
-        let s = &mut *self.scratch;
+        // SAFETY: the team is over; the guard is still held.
+        let s = unsafe { &mut *self.scratch_ptr };
         s.sorted_position = std::mem::take(&mut self.place_position);
         s.sorted_dipole = std::mem::take(&mut self.place_dipole);
         s.own = std::mem::take(&mut self.own);
@@ -250,7 +265,7 @@ impl TeamForces for DipoleTeam<'_> {
     unsafe fn prepare(&self, first: usize, run: Configuration<'_>) -> bool {
         let len = run.position.len();
         assert!(first + len <= self.n);
-        let reference = &self.scratch.reference[first..first + len];
+        let reference = &self.s().reference[first..first + len];
         let mut fresh = true;
         for (q, x0) in reference.iter().enumerate() {
             let p = self.place(first + q);
@@ -266,12 +281,44 @@ impl TeamForces for DipoleTeam<'_> {
         fresh
     }
 
+    unsafe fn refresh(&self, config: Configuration<'_>) -> bool {
+        // SAFETY: the other parts wait at a barrier; nothing else reads the scratch now.
+        let s = unsafe { &mut *self.scratch_ptr };
+        if !self.model.update_list(&config, s)
+            || !self.model.list_matches(self.n, s)
+            || s.half.partitions() != self.partitions.len()
+        {
+            return false;
+        }
+        // This step's positions and dipoles at the new places, in parallel over chunks.
+        let order = &s.order;
+        let chunk = crate::many::CHUNK;
+        let place = |k: usize| {
+            for p in k * chunk..((k + 1) * chunk).min(self.n) {
+                let i = body_at(order, p);
+                // SAFETY: each place is written by one chunk's call, and read by nobody now.
+                unsafe {
+                    *self.position_ptr.add(p) = config.position[i];
+                    *self.dipole_ptr.add(p) = config.rotation[i] * self.model.moment;
+                }
+            }
+        };
+        #[cfg(feature = "parallel")]
+        {
+            use rayon::prelude::*;
+            (0..self.n.div_ceil(chunk)).into_par_iter().for_each(place);
+        }
+        #[cfg(not(feature = "parallel"))]
+        (0..self.n.div_ceil(chunk)).for_each(place);
+        true
+    }
+
     fn pair_items(&self) -> usize {
-        self.scratch.half.partitions()
+        self.s().half.partitions()
     }
 
     unsafe fn pairs(&self, items: std::ops::Range<usize>, config: Configuration<'_>) {
-        let half = &self.scratch.half;
+        let half = &self.s().half;
         assert!(config.position.len() == self.n && items.end <= half.partitions());
         // SAFETY: no position or dipole is written in this phase.
         let (position, dipoles) = unsafe {
@@ -298,7 +345,7 @@ impl TeamForces for DipoleTeam<'_> {
     unsafe fn forces(&self, first: usize, run: Configuration<'_>, force: &mut [Vec3], torque: &mut [Vec3]) {
         let len = run.position.len();
         assert!(first + len <= self.n && force.len() == len && torque.len() == len);
-        let half = &self.scratch.half;
+        let half = &self.s().half;
         let window = |p: usize| -> &[[Vec3; 2]] {
             assert!(p < half.partitions());
             // SAFETY: windows are not written in this phase.
