@@ -179,35 +179,40 @@ def main() -> None:
     repeats = 1 if quick else 3
     if "--repeats" in sys.argv:
         repeats = int(sys.argv[sys.argv.index("--repeats") + 1])
-    sizes = [(1000, 200), (10000, 50)] if quick else [(1000, 1000), (10000, 200), (100000, 50)]
+    # About a second of liemid's one-thread stepping per run (10³: 3000 steps; shorter runs
+    # were at the mercy of the machine's bursts).
+    sizes = [(1000, 200), (10000, 50)] if quick else [(1000, 3000), (10000, 300), (100000, 50)]
     if "--energy-only" in sys.argv:
         sizes = []
     if sizes:
-        print(f"body-steps per second, medians of {repeats} runs taken in turn (liemid, LAMMPS, liemid, ...); "
-              "the ratio is the median of the pairs' ratios")
+        print(f"body-steps per second, medians of {repeats} rounds; a round runs, one after the other, liemid "
+              "and LAMMPS on 1 thread, on 2, and two one-thread liemid runs side by side; every ratio is the "
+              "median of the rounds' ratios (the machine's speed drifts between rounds)")
         print(f"{'N':>7} {'threads':>7} {'liemid':>12} {'LAMMPS':>12} {'liemid/LAMMPS':>14}")
     scaling = []
     for n, steps in sizes:
-        medians = {}
-        for threads in (1, 2):
-            ours, theirs = [], []
-            for _ in range(repeats):
+        # Per round: (liemid, LAMMPS) on 1 and on 2 threads, and the side-by-side pair's sum.
+        rounds: list[tuple[float, float, float, float, float]] = []
+        for _ in range(repeats):
+            one = []
+            for threads in (1, 2):
                 # The totals at the start and the end only, as LAMMPS's thermo output in its
                 # timed run (`thermo` = the run's steps): the same work on both sides.
-                ours.append(liemid_run(n, steps, threads, form="shifted-force", every=steps)["body_steps_per_second"])
-                theirs.append(lammps_run(n, steps, threads)[0])
+                one.append(liemid_run(n, steps, threads, form="shifted-force", every=steps)["body_steps_per_second"])
+                one.append(lammps_run(n, steps, threads)[0])
+            # The machine's ceiling: two independent one-thread runs side by side.
+            one.append(sum(liemid_side_by_side(n, steps)))
+            rounds.append((one[0], one[1], one[2], one[3], one[4]))
+        for threads, (ours_k, theirs_k) in ((1, (0, 1)), (2, (2, 3))):
+            ours, theirs = [r[ours_k] for r in rounds], [r[theirs_k] for r in rounds]
             ratio = median([a / b for a, b in zip(ours, theirs)])
-            medians[threads] = (median(ours), median(theirs))
             print(f"{n:>7} {threads:>7} {median(ours) / 1e6:>10.3f} M {median(theirs) / 1e6:>10.3f} M {ratio:>13.2f}x",
                   flush=True)
-        # The machine's ceiling: two independent one-thread runs side by side, against the
-        # one-thread median above.
-        pairs = [sum(liemid_side_by_side(n, steps)) for _ in range(repeats)]
-        scaling.append((n, medians[2][0] / medians[1][0], medians[2][1] / medians[1][1],
-                        median(pairs) / medians[1][0]))
+        scaling.append((n, median([r[2] / r[0] for r in rounds]), median([r[3] / r[1] for r in rounds]),
+                        median([r[4] / r[0] for r in rounds])))
     for n, ours_2_1, theirs_2_1, ceiling in scaling:
-        print(f"two threads against one (medians), N = {n}: liemid {ours_2_1:.2f}x, LAMMPS {theirs_2_1:.2f}x; "
-              f"two independent one-thread liemid runs side by side {ceiling:.2f}x one alone")
+        print(f"two threads against one (median of the rounds), N = {n}: liemid {ours_2_1:.2f}x, "
+              f"LAMMPS {theirs_2_1:.2f}x; two independent one-thread liemid runs side by side {ceiling:.2f}x one alone")
     if "--energy" in sys.argv or "--energy-only" in sys.argv:
         for dt in (1e-3, 2e-3):
             steps = round(10.0 / dt)
