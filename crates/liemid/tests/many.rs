@@ -610,6 +610,15 @@ fn langevin_results_are_identical_for_one_two_and_three_threads() {
     assert!(b.momentum != runs[0].momentum);
 }
 
+/// The largest difference between two systems' forces, body by body.
+fn largest_force_difference(a: &Bodies, b: &Bodies) -> f64 {
+    a.force
+        .iter()
+        .zip(&b.force)
+        .map(|(x, y)| (*x - *y).norm())
+        .fold(0.0, f64::max)
+}
+
 #[test]
 fn the_verlet_list_is_rebuilt_on_displacement_and_gives_the_forces_of_any_skin() {
     // The same fluid with the default skin (0.3) and with skin 0 (a new list at every
@@ -624,12 +633,7 @@ fn the_verlet_list_is_rebuilt_on_displacement_and_gives_the_forces_of_any_skin()
         b.step(&model_b, 2e-3).unwrap();
     }
     let scale = a.force.iter().map(|f| f.norm()).fold(0.0, f64::max);
-    let df = a
-        .force
-        .iter()
-        .zip(&b.force)
-        .map(|(x, y)| (*x - *y).norm())
-        .fold(0.0, f64::max);
+    let df = largest_force_difference(&a, &b);
     assert!(df < 1e-10 * scale, "forces differ by {df:e} (scale {scale:e})");
     let (builds_a, builds_b) = (model_a.list_builds(), model_b.list_builds());
     println!("Verlet list: {builds_a} builds in 201 evaluations with skin 0.3, {builds_b} with skin 0");
@@ -643,12 +647,7 @@ fn the_verlet_list_is_rebuilt_on_displacement_and_gives_the_forces_of_any_skin()
     for _ in 0..200 {
         c.step(&model_c, 2e-3).unwrap();
     }
-    let df = a
-        .force
-        .iter()
-        .zip(&c.force)
-        .map(|(x, y)| (*x - *y).norm())
-        .fold(0.0, f64::max);
+    let df = largest_force_difference(&a, &c);
     assert!(
         df < 1e-10 * scale,
         "half and full lists differ by {df:e} (scale {scale:e})"
@@ -663,12 +662,7 @@ fn the_verlet_list_is_rebuilt_on_displacement_and_gives_the_forces_of_any_skin()
         e.step(&model_e, 2e-3).unwrap();
     }
     let scale = d.force.iter().map(|f| f.norm()).fold(0.0, f64::max);
-    let df = d
-        .force
-        .iter()
-        .zip(&e.force)
-        .map(|(x, y)| (*x - *y).norm())
-        .fold(0.0, f64::max);
+    let df = largest_force_difference(&d, &e);
     assert!(
         scale > 0.0 && df < 1e-10 * scale,
         "small box: half and full lists differ by {df:e}"
