@@ -406,7 +406,8 @@ impl Dipoles {
             (runs, n_runs)
         };
         let (all, n_all) = merge(-w);
-        let (ahead, n_ahead) = merge(0);
+        // (Only the half stencil visits them.)
+        let (ahead, n_ahead) = if half { merge(0) } else { (all, 0) };
         // `i`'s entry in cell order: its own row's first run starts after it.
         let own = cells.cell_rank[i] as usize;
         let span = cells.span;

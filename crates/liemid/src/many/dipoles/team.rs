@@ -23,29 +23,31 @@ pub(super) fn sum_in_order(items: usize, f: impl Fn(usize) -> f64 + Sync + Send)
 /// identity without the spatial sort), in parallel over chunks of places.
 pub(super) fn gather_places(s: &mut Scratch, position: &[Vec3], dipoles: &[Vec3]) {
     let n = position.len();
-    let order = &s.order;
     s.sorted_position.resize(n, Vec3::ZERO);
     s.sorted_dipole.resize(n, Vec3::ZERO);
+    place_into(&s.order, &mut s.sorted_position, &mut s.sorted_dipole, position, |i| {
+        dipoles[i]
+    });
+}
+
+/// `x[place] = position[body]` and `m[place] = dipole(body)` for the body at each place
+/// (`order[place]`), in parallel over chunks of places.
+fn place_into(order: &[u32], x: &mut [Vec3], m: &mut [Vec3], position: &[Vec3], dipole: impl Fn(usize) -> Vec3 + Sync) {
     let place = |first: usize, x: &mut [Vec3], m: &mut [Vec3]| {
         for (q, (x, m)) in x.iter_mut().zip(m.iter_mut()).enumerate() {
             let i = body_at(order, first + q);
-            (*x, *m) = (position[i], dipoles[i]);
+            (*x, *m) = (position[i], dipole(i));
         }
     };
     #[cfg(feature = "parallel")]
     {
         use rayon::prelude::*;
         let chunk = crate::many::CHUNK;
-        crate::many::contiguous_per_thread(
-            s.sorted_position
-                .par_chunks_mut(chunk)
-                .zip(s.sorted_dipole.par_chunks_mut(chunk))
-                .enumerate(),
-        )
-        .for_each(|(k, (x, m))| place(k * chunk, x, m));
+        crate::many::contiguous_per_thread(x.par_chunks_mut(chunk).zip(m.par_chunks_mut(chunk)).enumerate())
+            .for_each(|(k, (x, m))| place(k * chunk, x, m));
     }
     #[cfg(not(feature = "parallel"))]
-    place(0, &mut s.sorted_position, &mut s.sorted_dipole);
+    place(0, x, m);
 }
 
 /// A partition's scratch in the half list's pair pass: its window of the partners' shares
@@ -290,26 +292,17 @@ impl TeamForces for DipoleTeam<'_> {
         {
             return false;
         }
-        // This step's positions and dipoles at the new places, in parallel over chunks.
-        let order = &s.order;
-        let chunk = crate::many::CHUNK;
-        let place = |k: usize| {
-            for p in k * chunk..((k + 1) * chunk).min(self.n) {
-                let i = body_at(order, p);
-                // SAFETY: each place is written by one chunk's call, and read by nobody now.
-                unsafe {
-                    *self.position_ptr.add(p) = config.position[i];
-                    *self.dipole_ptr.add(p) = config.rotation[i] * self.model.moment;
-                }
-            }
+        // This step's positions and dipoles at the new places.
+        // SAFETY: the places are read by nobody in this phase.
+        let (x, m) = unsafe {
+            (
+                std::slice::from_raw_parts_mut(self.position_ptr, self.n),
+                std::slice::from_raw_parts_mut(self.dipole_ptr, self.n),
+            )
         };
-        #[cfg(feature = "parallel")]
-        {
-            use rayon::prelude::*;
-            (0..self.n.div_ceil(chunk)).into_par_iter().for_each(place);
-        }
-        #[cfg(not(feature = "parallel"))]
-        (0..self.n.div_ceil(chunk)).for_each(place);
+        place_into(&s.order, x, m, config.position, |i| {
+            config.rotation[i] * self.model.moment
+        });
         true
     }
 
