@@ -186,33 +186,44 @@ def main() -> None:
         sizes = []
     if sizes:
         print(f"body-steps per second, medians of {repeats} rounds; a round runs, one after the other, liemid "
-              "and LAMMPS on 1 thread, on 2, and two one-thread liemid runs side by side; every ratio is the "
-              "median of the rounds' ratios (the machine's speed drifts between rounds)")
+              "and LAMMPS on 1 thread, on 2, and two one-thread liemid runs side by side (every other round in "
+              "the reverse order); every ratio is the median of the rounds' ratios, with their range (the "
+              "machine's speed drifts between rounds)")
         print(f"{'N':>7} {'threads':>7} {'liemid':>12} {'LAMMPS':>12} {'liemid/LAMMPS':>14}")
     scaling = []
     for n, steps in sizes:
         # Per round: (liemid, LAMMPS) on 1 and on 2 threads, and the side-by-side pair's sum.
         rounds: list[tuple[float, float, float, float, float]] = []
-        for _ in range(repeats):
-            one = []
-            for threads in (1, 2):
-                # The totals at the start and the end only, as LAMMPS's thermo output in its
-                # timed run (`thermo` = the run's steps): the same work on both sides.
-                one.append(liemid_run(n, steps, threads, form="shifted-force", every=steps)["body_steps_per_second"])
-                one.append(lammps_run(n, steps, threads)[0])
-            # The machine's ceiling: two independent one-thread runs side by side.
-            one.append(sum(liemid_side_by_side(n, steps)))
-            rounds.append((one[0], one[1], one[2], one[3], one[4]))
+        for r in range(repeats):
+            # The totals at the start and the end only, as LAMMPS's thermo output in its
+            # timed run (`thermo` = the run's steps): the same work on both sides.
+            runs = {
+                "ours 1": lambda: liemid_run(n, steps, 1, form="shifted-force", every=steps)["body_steps_per_second"],
+                "theirs 1": lambda: lammps_run(n, steps, 1)[0],
+                "ours 2": lambda: liemid_run(n, steps, 2, form="shifted-force", every=steps)["body_steps_per_second"],
+                "theirs 2": lambda: lammps_run(n, steps, 2)[0],
+                # The machine's ceiling: two independent one-thread runs side by side.
+                "side by side": lambda: sum(liemid_side_by_side(n, steps)),
+            }
+            # Every other round in the reverse order, so that a steady drift of the machine's
+            # speed favours neither side of a ratio.
+            order = list(runs) if r % 2 == 0 else list(runs)[::-1]
+            got = {key: runs[key]() for key in order}
+            rounds.append((got["ours 1"], got["theirs 1"], got["ours 2"], got["theirs 2"], got["side by side"]))
+
+        def spread(ratios: list[float]) -> str:
+            return f"{median(ratios):.2f}x (rounds {min(ratios):.2f}-{max(ratios):.2f})"
+
         for threads, (ours_k, theirs_k) in ((1, (0, 1)), (2, (2, 3))):
             ours, theirs = [r[ours_k] for r in rounds], [r[theirs_k] for r in rounds]
-            ratio = median([a / b for a, b in zip(ours, theirs)])
-            print(f"{n:>7} {threads:>7} {median(ours) / 1e6:>10.3f} M {median(theirs) / 1e6:>10.3f} M {ratio:>13.2f}x",
-                  flush=True)
-        scaling.append((n, median([r[2] / r[0] for r in rounds]), median([r[3] / r[1] for r in rounds]),
-                        median([r[4] / r[0] for r in rounds])))
+            ratios = [a / b for a, b in zip(ours, theirs)]
+            print(f"{n:>7} {threads:>7} {median(ours) / 1e6:>10.3f} M {median(theirs) / 1e6:>10.3f} M "
+                  f"{median(ratios):>13.2f}x  (rounds {min(ratios):.2f}-{max(ratios):.2f})", flush=True)
+        scaling.append((n, spread([r[2] / r[0] for r in rounds]), spread([r[3] / r[1] for r in rounds]),
+                        spread([r[4] / r[0] for r in rounds])))
     for n, ours_2_1, theirs_2_1, ceiling in scaling:
-        print(f"two threads against one (median of the rounds), N = {n}: liemid {ours_2_1:.2f}x, "
-              f"LAMMPS {theirs_2_1:.2f}x; two independent one-thread liemid runs side by side {ceiling:.2f}x one alone")
+        print(f"two threads against one (median of the rounds), N = {n}: liemid {ours_2_1}, "
+              f"LAMMPS {theirs_2_1}; two independent one-thread liemid runs side by side {ceiling} one alone")
     if "--energy" in sys.argv or "--energy-only" in sys.argv:
         for dt in (1e-3, 2e-3):
             steps = round(10.0 / dt)
