@@ -32,6 +32,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 ROOT = Path(__file__).resolve().parents[2]
 LIEMID = os.environ.get("LIEMID") or str(ROOT / "target" / "release" / "liemid")
@@ -146,7 +147,7 @@ def lammps_run(n: int, steps: int, threads: int, dt: float = 1e-3, thermo: int =
 
 
 def liemid_run(n: int, steps: int, threads: int, dt: float = 1e-3, form: str = "switched",
-               every: int = 10) -> dict[str, float]:
+               every: int = 10) -> dict[str, Any]:
     """liemid's summary of one run, with the totals (energy, momenta) every `every` steps."""
     out = subprocess.run(
         [LIEMID, "many", "--model", "dipoles", "--bodies", str(n), "--step", repr(dt), "--t-end", repr(steps * dt),
@@ -174,6 +175,11 @@ def median(x: list[float]) -> float:
     return y[len(y) // 2] if len(y) % 2 else 0.5 * (y[len(y) // 2 - 1] + y[len(y) // 2])
 
 
+def spread(ratios: list[float]) -> str:
+    """A ratio's median over the rounds and its range."""
+    return f"{median(ratios):.2f}x (rounds {min(ratios):.2f}-{max(ratios):.2f})"
+
+
 def main() -> None:
     quick = "--quick" in sys.argv
     repeats = 1 if quick else 3
@@ -194,31 +200,31 @@ def main() -> None:
     for n, steps in sizes:
         # Per round: (liemid, LAMMPS) on 1 and on 2 threads, and the side-by-side pair's sum.
         rounds: list[tuple[float, float, float, float, float]] = []
-        for r in range(repeats):
+
+        def liemid_throughput(threads: int) -> float:
             # The totals at the start and the end only, as LAMMPS's thermo output in its
             # timed run (`thermo` = the run's steps): the same work on both sides.
-            runs = {
-                "ours 1": lambda: liemid_run(n, steps, 1, form="shifted-force", every=steps)["body_steps_per_second"],
-                "theirs 1": lambda: lammps_run(n, steps, 1)[0],
-                "ours 2": lambda: liemid_run(n, steps, 2, form="shifted-force", every=steps)["body_steps_per_second"],
-                "theirs 2": lambda: lammps_run(n, steps, 2)[0],
-                # The machine's ceiling: two independent one-thread runs side by side.
-                "side by side": lambda: sum(liemid_side_by_side(n, steps)),
-            }
+            return float(liemid_run(n, steps, threads, form="shifted-force", every=steps)["body_steps_per_second"])
+
+        runs = {
+            "ours 1": lambda: liemid_throughput(1),
+            "theirs 1": lambda: lammps_run(n, steps, 1)[0],
+            "ours 2": lambda: liemid_throughput(2),
+            "theirs 2": lambda: lammps_run(n, steps, 2)[0],
+            # The machine's ceiling: two independent one-thread runs side by side.
+            "side by side": lambda: sum(liemid_side_by_side(n, steps)),
+        }
+        for r in range(repeats):
             # Every other round in the reverse order, so that a steady drift of the machine's
             # speed favours neither side of a ratio.
             order = list(runs) if r % 2 == 0 else list(runs)[::-1]
             got = {key: runs[key]() for key in order}
             rounds.append((got["ours 1"], got["theirs 1"], got["ours 2"], got["theirs 2"], got["side by side"]))
-
-        def spread(ratios: list[float]) -> str:
-            return f"{median(ratios):.2f}x (rounds {min(ratios):.2f}-{max(ratios):.2f})"
-
         for threads, (ours_k, theirs_k) in ((1, (0, 1)), (2, (2, 3))):
-            ours, theirs = [r[ours_k] for r in rounds], [r[theirs_k] for r in rounds]
-            ratios = [a / b for a, b in zip(ours, theirs)]
-            print(f"{n:>7} {threads:>7} {median(ours) / 1e6:>10.3f} M {median(theirs) / 1e6:>10.3f} M "
-                  f"{median(ratios):>13.2f}x  (rounds {min(ratios):.2f}-{max(ratios):.2f})", flush=True)
+            mine, theirs = [r[ours_k] for r in rounds], [r[theirs_k] for r in rounds]
+            ratios = [a / b for a, b in zip(mine, theirs)]
+            print(f"{n:>7} {threads:>7} {median(mine) / 1e6:>10.3f} M {median(theirs) / 1e6:>10.3f} M   "
+                  f"{spread(ratios)}", flush=True)
         # Also the fastest two-thread run against the fastest one-thread run: each code's
         # speed where the machine disturbed it least (as `timeit` takes the minimum time).
         best = [max(r[k] for r in rounds) for k in range(4)]
