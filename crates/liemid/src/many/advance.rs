@@ -3,9 +3,10 @@
 
 use std::sync::Mutex;
 
-use super::{kick_chunk, Bodies, Chunk, Configuration, Interaction, TeamForces, CHUNK};
+use super::{kick_chunk, Bodies, Chunk, Configuration, Interaction, Motion, TeamForces, CHUNK};
 use crate::error::{Error, Result};
 use crate::linalg::{Mat3, Vec3};
+use crate::team::WorkShares;
 
 /// The mutable state of all bodies as raw parts, for a team whose threads each take their
 /// own chunks ([`Bodies::advance`]).
@@ -19,8 +20,9 @@ struct SharedBodies {
     torque: *mut Vec3,
 }
 
-// SAFETY: the threads of a team take disjoint chunks, and read other chunks only between
-// barriers that separate those reads from the writes (see `Bodies::team_steps`).
+// SAFETY: the threads of a team take disjoint chunks (each chunk of a phase is taken once,
+// `WorkShares`), and read other chunks only between barriers that separate those reads
+// from the writes (see `Bodies::team_steps`).
 unsafe impl Send for SharedBodies {}
 unsafe impl Sync for SharedBodies {}
 
@@ -93,9 +95,10 @@ impl Bodies {
     /// `steps` steps of [`Bodies::step`] with step `h`: the same bits, with less
     /// synchronisation. When the interaction offers [`TeamForces`]
     /// ([`Interaction::team_forces`]), the threads of the pool stay together for all the
-    /// steps as a team, each moving and evaluating its own chunks, with two spin barriers per
-    /// step (after the motion, after the pair pass) instead of four hand-offs through the
-    /// pool. A step whose evaluation went stale (a neighbour list to rebuild) is brought up to
+    /// steps as a team, moving and evaluating chunks of bodies and partitions of pairs (each
+    /// thread its own share first, then what is left of the others': a thread the machine
+    /// holds up does not hold up the step), with two spin barriers per step (after the
+    /// motion, after the pair pass) instead of four hand-offs through the pool. A step whose evaluation went stale (a neighbour list to rebuild) is brought up to
     /// date within the team ([`TeamForces::refresh`], by one thread while the others take
     /// the parallel work it hands out); if the interaction cannot, [`Interaction::compute`]
     /// completes the step and the team is formed again. Otherwise it takes ordinary steps.
@@ -152,29 +155,41 @@ impl Bodies {
         let (free, mass) = (motion.free, motion.mass);
         let shared = SharedBodies::new(all);
         let items = team.pair_items();
-        crate::team::run(chunks >= 2, |part, barrier| {
-            let mine = part.range(chunks);
+        let parallel = chunks >= 2;
+        let parts = crate::team::parts(parallel);
+        // Chunks of bodies (the end of one step and the motion of the next, chunk by chunk)
+        // and partitions of pairs, taken at run time (`WorkShares`); each share is given
+        // again in the phase before the one that takes from it, which no part takes from.
+        let (chunk_shares, pair_shares) = (WorkShares::full(parts, chunks), WorkShares::full(parts, items));
+        // The motion of chunk `k` from `motion.t` (its start impulse, drift and rotation) and
+        // its bodies' places for the evaluation at the step's end; whether they are within
+        // the list's skin.
+        let move_and_prepare = |motion: &Motion<'_>, k: usize| -> bool {
+            // SAFETY: chunk `k` is taken by one part per phase; no other part touches it.
+            let (first, mut c) = unsafe { shared.chunk(k) };
+            if !motion.move_chunk(first, &mut c, &failure) {
+                failed.store(true, Ordering::Relaxed);
+            }
+            let len = c.momentum.len();
+            let run = Configuration {
+                t: motion.t + h,
+                mass: &mass[first..first + len],
+                free: &free[first..first + len],
+                position: c.position,
+                rotation: c.rotation,
+            };
+            // SAFETY: the calling order of `TeamForces`.
+            unsafe { team.prepare(first, run) }
+        };
+        crate::team::run(parallel, |part, barrier| {
             let mut motion = motion;
+            // The first step's motion.
+            let mut fresh = true;
+            while let Some(k) = chunk_shares.next(part) {
+                fresh &= move_and_prepare(&motion, k);
+            }
             for step in 0..steps {
                 let t_end = motion.t + h;
-                let mut fresh = true;
-                for k in mine.clone() {
-                    // SAFETY: chunk `k` is this part's; no other part touches it in this phase.
-                    let (first, mut c) = unsafe { shared.chunk(k) };
-                    if !motion.move_chunk(first, &mut c, &failure) {
-                        failed.store(true, Ordering::Relaxed);
-                    }
-                    let len = c.momentum.len();
-                    let run = Configuration {
-                        t: t_end,
-                        mass: &mass[first..first + len],
-                        free: &free[first..first + len],
-                        position: c.position,
-                        rotation: c.rotation,
-                    };
-                    // SAFETY: the calling order of `TeamForces`.
-                    fresh &= unsafe { team.prepare(first, run) };
-                }
                 if !fresh {
                     stale.store(true, Ordering::Relaxed);
                 }
@@ -208,26 +223,41 @@ impl Bodies {
                         stale.store(false, Ordering::Relaxed);
                     }
                 }
-                // SAFETY: the calling order of `TeamForces`.
-                unsafe { team.pairs(part.range(items), config) };
-                barrier.wait();
-                for k in mine.clone() {
-                    // SAFETY: chunk `k` is this part's; other parts read none of it now.
-                    let (first, c) = unsafe { shared.chunk(k) };
-                    let len = c.momentum.len();
-                    let (free, mass) = (&free[first..first + len], &mass[first..first + len]);
-                    let run = Configuration {
-                        t: t_end,
-                        mass,
-                        free,
-                        position: c.position,
-                        rotation: c.rotation,
-                    };
-                    // SAFETY: the calling order of `TeamForces`.
-                    unsafe { team.forces(first, run, c.force, c.torque) };
-                    kick_chunk(free, c.momentum, c.pi, c.force, c.torque, 0.5 * h);
+                chunk_shares.reset(part, chunks);
+                while let Some(p) = pair_shares.next(part) {
+                    // SAFETY: the calling order of `TeamForces`; partition `p` is this part's.
+                    unsafe { team.pairs(p..p + 1, config) };
                 }
+                barrier.wait();
+                pair_shares.reset(part, items);
+                // The step's end impulse, chunk by chunk, and the next step's motion of the
+                // chunk (whose forces no other part reads: they read their own bodies'
+                // sums and places).
+                let next = step + 1 < steps;
                 motion.t = t_end;
+                fresh = true;
+                while let Some(k) = chunk_shares.next(part) {
+                    {
+                        // SAFETY: chunk `k` is this part's in this phase; other parts read
+                        // none of it now.
+                        let (first, c) = unsafe { shared.chunk(k) };
+                        let len = c.momentum.len();
+                        let (free, mass) = (&free[first..first + len], &mass[first..first + len]);
+                        let run = Configuration {
+                            t: t_end,
+                            mass,
+                            free,
+                            position: c.position,
+                            rotation: c.rotation,
+                        };
+                        // SAFETY: the calling order of `TeamForces`.
+                        unsafe { team.forces(first, run, c.force, c.torque) };
+                        kick_chunk(free, c.momentum, c.pi, c.force, c.torque, 0.5 * h);
+                    }
+                    if next {
+                        fresh &= move_and_prepare(&motion, k);
+                    }
+                }
             }
             if part.index() == 0 {
                 completed.store(steps, Ordering::Relaxed);

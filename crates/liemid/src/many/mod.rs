@@ -175,14 +175,15 @@ pub trait Interaction: Sync {
 ///
 /// # Safety (of the calls)
 /// [`Bodies::advance`] makes the calls in this order, which implementations may rely on
-/// for the buffers they share between threads: every step, each part calls `prepare` for
-/// each of its chunks of bodies, the parts meet at a barrier, each calls `pairs` with its
-/// range of the pair pass's work items, the parts meet again, each calls `forces` for each
-/// of its chunks; a part's chunks and items are the same for the whole team and no two
-/// parts share one; the next step's `prepare` of a chunk follows its `forces`. When a
-/// `prepare` returned `false`, one part calls `refresh` after the first barrier while the
-/// others wait, and the parts meet again before `pairs`. Nothing else is called while the
-/// team lives.
+/// for the buffers they share between threads: every step, the parts call `prepare` for
+/// every chunk of bodies, each chunk by one part, meet at a barrier, call `pairs` for every
+/// work item, each item by one part, meet again, and call `forces` for every chunk, each
+/// chunk by one part, which then calls the next step's `prepare` of that chunk, while other
+/// parts may still be in `forces` of other chunks (so `forces` of a chunk reads nothing that
+/// `prepare` of another chunk writes). Which part takes which chunk or item is decided at
+/// run time. When a `prepare` returned `false`, one part calls `refresh` after the first
+/// barrier while the others wait, and the parts meet again before `pairs`. Nothing else is
+/// called while the team lives.
 pub trait TeamForces: Sync {
     /// After the motion of the run of bodies `run` (chunk `first / CHUNK`), starting at
     /// body `first`: prepare their per-body data. `false` when what the evaluation was
@@ -204,8 +205,7 @@ pub trait TeamForces: Sync {
         let _ = config;
         false
     }
-    /// The number of work items of the pair pass (fixed while the team lives); each part
-    /// takes a contiguous range of them.
+    /// The number of work items of the pair pass (fixed while the team lives).
     fn pair_items(&self) -> usize;
     /// The pair pass of the work items `items`; `config` is every body.
     ///

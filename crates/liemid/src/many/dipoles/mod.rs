@@ -12,7 +12,7 @@ use crate::many::half_list::HalfList;
 use crate::many::interactions::for_chunks;
 use crate::many::{Configuration, Interaction, TeamForces};
 
-use team::{force_and_torque, gather_places, sum_in_order, DipoleTeam, HalfPass, PartitionScratch};
+use team::{each_partition, force_and_torque, gather_places, sum_in_order, DipoleTeam, HalfPass, PartitionScratch};
 
 /// Point dipoles fixed in the body frames, with the Weeks-Chandler-Andersen repulsion:
 ///
@@ -556,19 +556,9 @@ impl Interaction for Dipoles {
             let parts = s.half.partitions();
             s.partitions.resize_with(parts, PartitionScratch::default);
             let pass = HalfPass::new(self, &constants, &s.sorted_position, &s.sorted_dipole, &s.half);
-            let per = s.half.partition_places;
-            #[cfg(feature = "parallel")]
-            {
-                use rayon::prelude::*;
-                crate::many::contiguous_per_thread(
-                    s.own.par_chunks_mut(per).zip(s.partitions.par_iter_mut()).enumerate(),
-                )
-                .for_each(|(p, (own, scratch))| pass.partition(p, own, scratch));
-            }
-            #[cfg(not(feature = "parallel"))]
-            for (p, (own, scratch)) in s.own.chunks_mut(per).zip(s.partitions.iter_mut()).enumerate() {
-                pass.partition(p, own, scratch);
-            }
+            each_partition(&s.half, 0, &mut s.own, &mut s.partitions, &|p, own, scratch| {
+                pass.partition(p, own, scratch)
+            });
             let (half, own, partitions, rank) = (&s.half, &s.own, &s.partitions, &s.rank);
             for_chunks(force, torque, |i, f, t| {
                 let p = place_of(rank, i);
@@ -624,7 +614,7 @@ impl Interaction for Dipoles {
             let half = &s.half;
             return sum_in_order(half.partitions(), |p| {
                 let mut energy = 0.0;
-                for o in half.owners(p, n) {
+                for o in half.owners(p) {
                     let i = place(o);
                     for &j in &half.partner[half.start[o]..half.start[o + 1]] {
                         energy += pair_energy(i, place(j as usize));

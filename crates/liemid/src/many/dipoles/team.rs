@@ -50,6 +50,39 @@ fn place_into(order: &[u32], x: &mut [Vec3], m: &mut [Vec3], position: &[Vec3], 
     place(0, x, m);
 }
 
+/// `f(p, own, scratch)` for each partition `p` of `half` from `first` on, with its owners'
+/// sums (`own` starts at partition `first`'s first owner) and its scratch, in parallel:
+/// halves of the partitions by `rayon::join` (contiguous runs of partitions per thread,
+/// nothing allocated).
+pub(super) fn each_partition(
+    half: &HalfList,
+    first: usize,
+    own: &mut [[Vec3; 2]],
+    scratch: &mut [PartitionScratch],
+    f: &(impl Fn(usize, &mut [[Vec3; 2]], &mut PartitionScratch) + Sync),
+) {
+    match scratch {
+        [] => {}
+        [one] => f(first, own, one),
+        _ => {
+            let mid = scratch.len() / 2;
+            let cut = half.owners(first + mid).start - half.owners(first).start;
+            let (own_a, own_b) = own.split_at_mut(cut);
+            let (scratch_a, scratch_b) = scratch.split_at_mut(mid);
+            #[cfg(feature = "parallel")]
+            rayon::join(
+                || each_partition(half, first, own_a, scratch_a, f),
+                || each_partition(half, first + mid, own_b, scratch_b, f),
+            );
+            #[cfg(not(feature = "parallel"))]
+            {
+                each_partition(half, first, own_a, scratch_a, f);
+                each_partition(half, first + mid, own_b, scratch_b, f);
+            }
+        }
+    }
+}
+
 /// A partition's scratch in the half list's pair pass: its window of the partners' shares
 /// and one owner's shares on the way, on cache lines of its own (aligned to 128 bytes, the
 /// pair of lines Intel's adjacent-line prefetcher fetches together). Adjacent in one
@@ -103,7 +136,7 @@ impl<'a> HalfPass<'a> {
         let PartitionScratch { window, share } = scratch;
         let half = self.half;
         let (position, dipoles) = (self.position, self.dipoles);
-        let first = half.owners(p, position.len()).start;
+        let first = half.owners(p).start;
         window.clear();
         window.resize(half.window_len(p), [Vec3::ZERO; 2]);
         for (q, o) in own.iter_mut().enumerate() {
@@ -182,9 +215,11 @@ pub(super) struct DipoleTeam<'a> {
     partitions_ptr: *mut PartitionScratch,
 }
 
-// SAFETY: the phases write disjoint entries of the buffers (a part writes its bodies'
-// places, and its partitions' sums, windows and shares) and read others' only in a later
-// phase, after a barrier (the calling order of `TeamForces`).
+// SAFETY: the phases write disjoint entries of the buffers (a part writes the places of
+// the bodies of the chunks it takes, and the sums, windows and shares of the partitions it
+// takes) and read others' only in a later phase, after a barrier, except that `forces` of
+// a chunk reads the places of that chunk's bodies alone, which `prepare` of other chunks
+// does not write (the calling order of `TeamForces`).
 unsafe impl Sync for DipoleTeam<'_> {}
 
 impl<'a> DipoleTeam<'a> {
@@ -322,7 +357,7 @@ impl TeamForces for DipoleTeam<'_> {
         };
         let pass = HalfPass::new(self.model, &self.constants, position, dipoles, half);
         for p in items {
-            let owners = half.owners(p, self.n);
+            let owners = half.owners(p);
             // SAFETY: partition `p`'s sums, window and shares are this part's alone in this
             // phase.
             let (own, scratch) = unsafe {
