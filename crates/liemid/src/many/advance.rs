@@ -98,8 +98,9 @@ impl Bodies {
     /// steps as a team, moving and evaluating chunks of bodies and partitions of pairs (each
     /// thread its own share first, then what is left of the others': a thread the machine
     /// holds up does not hold up the step), with two spin barriers per step (after the
-    /// motion, after the pair pass) instead of four hand-offs through the pool. A step whose evaluation went stale (a neighbour list to rebuild) is brought up to
-    /// date within the team ([`TeamForces::refresh`], by one thread while the others take
+    /// motion, after the pair pass) instead of four hand-offs through the pool. A step
+    /// whose evaluation went stale (a neighbour list to rebuild) is brought up to date
+    /// within the team ([`TeamForces::refresh`], by one thread while the others take
     /// the parallel work it hands out); if the interaction cannot, [`Interaction::compute`]
     /// completes the step and the team is formed again. Otherwise it takes ordinary steps.
     ///
