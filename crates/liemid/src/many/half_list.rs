@@ -34,9 +34,9 @@ pub(crate) const PARTITIONS: usize = 16;
 /// An owner's cost in the pair pass over its own pairs, in pairs: the partitions are cut at
 /// equal `pairs + OWNER_COST · owners`. Measured on the fluid at 10⁵ bodies (one thread,
 /// partitions of 6250 owners): 146.6 k pairs took 345 µs, the last partition's 106.4 k
-/// (the lattice's partly filled top plane) 268 µs, about 1.9 ns a pair and 10 ns an owner.
-/// With equal places that partition gave the second of two threads 3.5 % fewer pairs, and
-/// it waited 7 % of the step.
+/// (the start's lattice of 47³ sites leaves its top two planes nearly empty) 268 µs, about
+/// 1.9 ns a pair and 10 ns an owner. With equal places that partition gave the second of
+/// two threads 3.5 % fewer pairs, and it waited 7 % of the step.
 const OWNER_COST: usize = 5;
 
 /// The half list over places and its partitions' windows.
