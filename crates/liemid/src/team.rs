@@ -50,16 +50,11 @@ pub(crate) struct WorkShares {
 struct PaddedShare(std::sync::atomic::AtomicU64);
 
 impl WorkShares {
-    /// Shares for the parts of a team of `parts` (every share empty).
-    pub(crate) fn new(parts: usize) -> Self {
-        WorkShares {
-            shares: (0..parts.max(1)).map(|_| PaddedShare::default()).collect(),
-        }
-    }
-
     /// Shares for the parts of a team of `parts`, each part's share of `len` items given.
     pub(crate) fn full(parts: usize, len: usize) -> Self {
-        let shares = WorkShares::new(parts);
+        let shares = WorkShares {
+            shares: (0..parts.max(1)).map(|_| PaddedShare::default()).collect(),
+        };
         let count = shares.shares.len();
         for index in 0..count {
             shares.reset(Part { index, count }, len);

@@ -182,6 +182,24 @@ impl Bodies {
             // SAFETY: the calling order of `TeamForces`.
             unsafe { team.prepare(first, run) }
         };
+        // The forces of chunk `k` at `t_end` and its end impulse.
+        let finish = |t_end: f64, k: usize| {
+            // SAFETY: chunk `k` is taken by one part in this phase; other parts read none
+            // of it now.
+            let (first, c) = unsafe { shared.chunk(k) };
+            let len = c.momentum.len();
+            let (free, mass) = (&free[first..first + len], &mass[first..first + len]);
+            let run = Configuration {
+                t: t_end,
+                mass,
+                free,
+                position: c.position,
+                rotation: c.rotation,
+            };
+            // SAFETY: the calling order of `TeamForces`.
+            unsafe { team.forces(first, run, c.force, c.torque) };
+            kick_chunk(free, c.momentum, c.pi, c.force, c.torque, 0.5 * h);
+        };
         crate::team::run(parallel, |part, barrier| {
             let mut motion = motion;
             // The first step's motion.
@@ -238,23 +256,7 @@ impl Bodies {
                 motion.t = t_end;
                 fresh = true;
                 while let Some(k) = chunk_shares.next(part) {
-                    {
-                        // SAFETY: chunk `k` is this part's in this phase; other parts read
-                        // none of it now.
-                        let (first, c) = unsafe { shared.chunk(k) };
-                        let len = c.momentum.len();
-                        let (free, mass) = (&free[first..first + len], &mass[first..first + len]);
-                        let run = Configuration {
-                            t: t_end,
-                            mass,
-                            free,
-                            position: c.position,
-                            rotation: c.rotation,
-                        };
-                        // SAFETY: the calling order of `TeamForces`.
-                        unsafe { team.forces(first, run, c.force, c.torque) };
-                        kick_chunk(free, c.momentum, c.pi, c.force, c.torque, 0.5 * h);
-                    }
+                    finish(t_end, k);
                     if next {
                         fresh &= move_and_prepare(&motion, k);
                     }
