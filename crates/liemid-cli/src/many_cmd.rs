@@ -5,8 +5,8 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use liemid::error::Num;
+use liemid::many::problems;
 use liemid::many::{Bodies, FreeRotation, Interaction, Totals};
-use liemid::problems;
 use serde_json::json;
 
 use crate::{CmdResult, Failure};

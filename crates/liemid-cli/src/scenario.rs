@@ -7,7 +7,8 @@
 use std::path::Path;
 
 use liemid::{
-    problems, so3, ConstantTorque, FreeBody, HeavyTop, Inertia, Mat3, RigidBodySystem, RigidState, RotationMethod, Vec3,
+    rigid::problems, so3, ConstantTorque, FreeBody, HeavyTop, Inertia, Mat3, RigidBodySystem, RigidState,
+    RotationMethod, Vec3,
 };
 use toml::{Table, Value};
 

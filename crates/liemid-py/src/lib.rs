@@ -713,7 +713,7 @@ impl ManyBodies {
     #[staticmethod]
     #[pyo3(signature = (n, density, seed, cutoff))]
     fn dipolar_fluid(n: usize, density: f64, seed: u64, cutoff: f64) -> PyResult<Self> {
-        let (mut bodies, d) = liemid::problems::dipolar_fluid_with_cutoff(n, density, seed, cutoff)
+        let (mut bodies, d) = liemid::many::problems::dipolar_fluid_with_cutoff(n, density, seed, cutoff)
             .map_err(|e| PyValueError::new_err(e.to_string()))?;
         bodies.evaluate(&d);
         Ok(ManyBodies {

@@ -7,8 +7,8 @@
 use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use liemid::many::problems;
 use liemid::many::{Bodies, FreeRotation, CHUNK};
-use liemid::problems;
 use rayon::prelude::*;
 
 /// Copy every state array of `b` into `into`: the least any step must move through memory.

@@ -19,7 +19,8 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use liemid::{
-    midpoint, problems, so3, HeavyTop, RigidBodySystem, RigidState, RotationIntegrator, RotationMethod, Vec3,
+    rigid::midpoint, rigid::problems, so3, HeavyTop, RigidBodySystem, RigidState, RotationIntegrator, RotationMethod,
+    Vec3,
 };
 
 /// Steps per timed run.

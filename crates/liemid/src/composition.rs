@@ -12,11 +12,6 @@
 //! of unconventional schemes for ordinary differential equations*, Math. Comp. 66 (1997);
 //! M. Suzuki, Phys. Lett. A 146 (1990); H. Yoshida, Phys. Lett. A 150 (1990).
 
-use crate::error::Result;
-use crate::rigid::{RigidBodySystem, RigidState};
-use crate::rotation::RotationIntegrator;
-use crate::vector::{MechanicalSystem, PhaseState, VectorIntegrator};
-
 /// A palindromic set of composition coefficients.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Scheme {
@@ -27,7 +22,7 @@ pub struct Scheme {
     /// The first half of the coefficients, including the middle one when `s` is odd.
     half: &'static [f64],
     /// Number of stages `s`.
-    stages: usize,
+    pub(crate) stages: usize,
 }
 
 // The constants are written with the digits the papers publish.
@@ -103,13 +98,14 @@ impl Scheme {
 
 /// The composition `Φ_{γ_s h} ∘ … ∘ Φ_{γ_1 h}` of a symmetric base method `Φ` by `scheme`.
 ///
-/// Implements [`RotationIntegrator`] when the base does (then a failing stage leaves the
-/// state as it was before the step) and [`VectorIntegrator`] when the base does.
+/// Implements [`RotationIntegrator`](crate::RotationIntegrator) when the base does (then a
+/// failing stage leaves the state as it was before the step) and
+/// [`VectorIntegrator`](crate::vector::VectorIntegrator) when the base does.
 #[derive(Clone, Debug)]
 pub struct Composition<M> {
-    base: M,
-    scheme: Scheme,
-    name: &'static str,
+    pub(crate) base: M,
+    pub(crate) scheme: Scheme,
+    pub(crate) name: &'static str,
 }
 
 impl<M> Composition<M> {
@@ -133,44 +129,6 @@ impl<M> Composition<M> {
     /// The base method, mutably (to restore its cache).
     pub fn base_mut(&mut self) -> &mut M {
         &mut self.base
-    }
-}
-
-impl<M: RotationIntegrator> RotationIntegrator for Composition<M> {
-    fn name(&self) -> &'static str {
-        self.name
-    }
-    fn order(&self) -> u32 {
-        self.scheme.order
-    }
-    fn step<S: RigidBodySystem + ?Sized>(&mut self, system: &S, state: &mut RigidState, h: f64) -> Result<()> {
-        let start = *state;
-        for i in 0..self.scheme.stages {
-            if let Err(e) = self.base.step(system, state, self.scheme.gamma(i) * h) {
-                *state = start;
-                return Err(e);
-            }
-        }
-        Ok(())
-    }
-    fn reset(&mut self) {
-        self.base.reset();
-    }
-}
-
-impl<M: VectorIntegrator> VectorIntegrator for Composition<M> {
-    fn name(&self) -> &'static str {
-        self.name
-    }
-    fn order(&self) -> u32 {
-        self.scheme.order
-    }
-    fn step<S: MechanicalSystem + ?Sized>(&mut self, system: &S, state: &mut PhaseState, h: f64) -> Result<()> {
-        // The vector methods fail only on a bad step or dimension, before any stage moves.
-        for i in 0..self.scheme.stages {
-            self.base.step(system, state, self.scheme.gamma(i) * h)?;
-        }
-        Ok(())
     }
 }
 

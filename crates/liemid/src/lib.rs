@@ -4,26 +4,24 @@
 //! midpoint Lie integrators for rigid-body rotation (LIEMID\[E1\], LIEMID\[E2\] and their
 //! alternating, second-order, symplectic, momentum-conserving composition LIEMID\[EA\]).
 //!
-//! - [`so3`]: hat/vee, `exp`, `log`, Jacobians, Cayley, quaternions.
-//! - [`rigid`]: the rigid-body state, the [`RigidBodySystem`] trait, models
-//!   ([`HeavyTop`], [`FreeBody`], [`ConstantTorque`], [`TorqueFn`]) and [`Diagnostics`].
-//! - [`rotation`]: one type per method ([`LieMidpointAlternating`], …) behind
-//!   [`RotationIntegrator`], and [`RotationMethod`] for selection by name.
-//! - [`free_flow`]: the exact torque-free flow ([`FreeFlow`]: closed form for symmetric
-//!   bodies, Jacobi elliptic functions for asymmetric ones).
-//! - [`midpoint`]: the midpoint equation `(1/h) I Ψ = exp(−Ψ/2) P` and its Newton solver.
-//! - [`composition`]: symmetric compositions (Suzuki, Yoshida, Kahan-Li) of EA or Verlet
-//!   up to eighth order.
-//! - [`vector`]: symplectic Euler, its adjoint, Verlet and explicit Newmark on `ℝⁿ`.
-//! - [`many`] (with [`many::interactions`], also at [`interactions`]): N interacting rigid bodies (independent heavy tops,
-//!   dipoles), stepped in parallel by the splitting integrator, identical for any thread
-//!   count.
-//! - [`driver`]: [`integrate`] from `t0` to `t_end` with an observer and diagnostics.
-//! - [`problems`]: the fast and slow Lagrangian tops, a torque-dominated top, a free body,
-//!   and vector-space test problems with exact solutions.
+//! One folder per domain, each with its model, interaction, methods and problems:
+//! - [`rigid`]: a rigid body about a fixed point (the paper's core): state, models,
+//!   [`Diagnostics`], the midpoint solver, one type per method in [`rigid::rotation`]
+//!   behind [`RotationIntegrator`], the exact free flow [`FreeFlow`], the driver
+//!   ([`integrate`]) and [`rigid::problems`].
+//! - [`many`]: N interacting rigid bodies (independent heavy tops, dipoles), stepped in
+//!   parallel by the splitting integrator, identical for any thread count.
+//! - [`spin`]: atomistic spin lattices (the LLG equation) by an exact-flow splitting.
+//! - [`beam`]: flexible 3-D beam frames, nodes as rigid bodies.
+//! - [`vector`]: symplectic Euler, its adjoint, Verlet and explicit Newmark on `ℝⁿ`, with
+//!   test problems in [`vector::problems`].
+//!
+//! Shared foundations at the root: [`linalg`], [`so3`] (hat/vee, `exp`, `log`, Jacobians,
+//! Cayley, quaternions), [`composition`] (symmetric compositions up to eighth order of any
+//! symmetric method), [`random`] and [`error`].
 //!
 //! ```
-//! use liemid::{problems, LieMidpointAlternating, RotationIntegrator};
+//! use liemid::{rigid::problems, LieMidpointAlternating, RotationIntegrator};
 //! let top = problems::fast_top();
 //! let mut ea = LieMidpointAlternating::new();
 //! let mut state = top.initial;
@@ -39,34 +37,28 @@
 
 pub mod beam;
 pub mod composition;
-pub mod driver;
 pub mod error;
-pub mod free_flow;
-pub mod inertia;
 pub mod linalg;
 pub mod many;
 pub use many::interactions;
-pub mod midpoint;
-pub mod problems;
 pub mod random;
 pub mod rigid;
-pub mod rotation;
 pub mod so3;
 pub mod spin;
 mod team;
 pub mod vector;
 
 pub use composition::{Composition, Scheme};
-pub use driver::{advance, integrate, integrate_to, observed_order, step_count, Run, RunSummary, MAX_STEPS};
 pub use error::{Error, Result};
-pub use free_flow::FreeFlow;
-pub use inertia::{Inertia, InertiaOperator, PrincipalInertia};
 pub use linalg::{Mat3, Vec3};
-pub use rigid::{
-    ConstantTorque, CountingTorque, Diagnostics, FreeBody, HeavyTop, RigidBodySystem, RigidState, TorqueFn,
-};
-pub use rotation::{
+pub use rigid::driver::{advance, integrate, integrate_to, observed_order, step_count, Run, RunSummary, MAX_STEPS};
+pub use rigid::free_flow::FreeFlow;
+pub use rigid::inertia::{Inertia, InertiaOperator, PrincipalInertia};
+pub use rigid::rotation::{
     AnyRotationIntegrator, AustinKrishnaprasadWang, KryslEndresNewmark, LieMidpointAlternating, LieMidpointE1,
     LieMidpointE2, LieMidpointExact, LieMidpointImplicit, MethodCache, RotationIntegrator, RotationMethod,
     RungeKutta4Quaternion, RungeKuttaMuntheKaas4, SimoWong,
+};
+pub use rigid::{
+    ConstantTorque, CountingTorque, Diagnostics, FreeBody, HeavyTop, RigidBodySystem, RigidState, TorqueFn,
 };

@@ -4,7 +4,7 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
 use liemid::vector::{PhaseState, VectorIntegrator, Verlet};
-use liemid::{integrate_to, problems, Composition, RotationIntegrator, RotationMethod, Scheme};
+use liemid::{integrate_to, rigid::problems, Composition, RotationIntegrator, RotationMethod, Scheme};
 
 struct Counting;
 
@@ -61,8 +61,8 @@ fn rotation_steps_and_the_driver_allocate_nothing() {
 
 #[test]
 fn vector_steps_allocate_nothing_after_the_first() {
-    let kepler = problems::Kepler::default();
-    let mut state: PhaseState = problems::Kepler::initial(0.5);
+    let kepler = liemid::vector::problems::Kepler::default();
+    let mut state: PhaseState = liemid::vector::problems::Kepler::initial(0.5);
     let mut verlet = Verlet::default();
     let mut composed = Composition::new(Verlet::default(), Scheme::KAHAN_LI8, "Verlet8");
     verlet.step(&kepler, &mut state, 1e-3).unwrap(); // sizes the scratch space

@@ -2,12 +2,12 @@
 //! of an isolated dipolar cluster, thread-count independence, and the dipole forces and
 //! torques against finite differences of the energy.
 
-use liemid::free_flow::FreeFlow;
-use liemid::inertia::Inertia;
 use liemid::interactions::{CutoffForm, Dipoles, Independent};
 use liemid::many::{Bodies, FreeRotation, Interaction};
 use liemid::random::Rng;
-use liemid::{problems, so3, LieMidpointAlternating, LieMidpointExact, Mat3, RotationIntegrator, Vec3};
+use liemid::rigid::free_flow::FreeFlow;
+use liemid::rigid::inertia::Inertia;
+use liemid::{rigid::problems, so3, LieMidpointAlternating, LieMidpointExact, Mat3, RotationIntegrator, Vec3};
 
 /// `n` free dipolar spheres on a jittered cubic lattice of spacing `a`, random attitudes,
 /// random momenta and spins.
@@ -378,7 +378,7 @@ fn local_interactions_in_one_pass_equal_the_separate_pass() {
 /// Largest relative energy error of the periodic dipolar fluid (216 bodies, ρ = 0.3,
 /// cutoff 3) over `t ∈ [0, 0.5]` with step `h`.
 fn fluid_energy_error(h: f64, switch_start: Option<f64>) -> f64 {
-    let (mut b, mut dipoles) = problems::dipolar_fluid(216, 0.3, 5).unwrap();
+    let (mut b, mut dipoles) = liemid::many::problems::dipolar_fluid(216, 0.3, 5).unwrap();
     assert_eq!(dipoles.cutoff, Some(3.0));
     assert!(
         (dipoles.switch_start - 2.4).abs() < 1e-15,
@@ -540,7 +540,7 @@ fn the_langevin_thermostat_brings_both_kinetic_temperatures_to_the_target() {
     // friction 2: after 8 time units of equilibration (the starting lattice melts and
     // releases heat for several), then 20 blocks of 0.8 time units (longer than the
     // momenta's correlation time 1/friction, so the blocks are nearly independent).
-    let (mut b, dipoles) = problems::dipolar_fluid(216, 0.3, 3).unwrap();
+    let (mut b, dipoles) = liemid::many::problems::dipolar_fluid(216, 0.3, 3).unwrap();
     for p in b.momentum.iter_mut().chain(b.pi.iter_mut()) {
         *p = *p * 0.1;
     }
@@ -582,7 +582,7 @@ fn langevin_results_are_identical_for_one_two_and_three_threads() {
         .iter()
         .map(|&threads| {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            let (mut b, dipoles) = problems::dipolar_fluid(729, 0.3, 5).unwrap();
+            let (mut b, dipoles) = liemid::many::problems::dipolar_fluid(729, 0.3, 5).unwrap();
             pool.install(|| {
                 for _ in 0..20 {
                     b.step_langevin(&dipoles, 2e-3, &thermostat).unwrap();
@@ -602,7 +602,7 @@ fn langevin_results_are_identical_for_one_two_and_three_threads() {
         );
     }
     // The noise is really there: another seed gives another state.
-    let (mut b, dipoles) = problems::dipolar_fluid(729, 0.3, 5).unwrap();
+    let (mut b, dipoles) = liemid::many::problems::dipolar_fluid(729, 0.3, 5).unwrap();
     let other = Langevin { seed: 8, ..thermostat };
     for _ in 0..20 {
         b.step_langevin(&dipoles, 2e-3, &other).unwrap();
@@ -624,8 +624,8 @@ fn the_verlet_list_is_rebuilt_on_displacement_and_gives_the_forces_of_any_skin()
     // The same fluid with the default skin (0.3) and with skin 0 (a new list at every
     // evaluation): the same pairs within the cutoff, summed in another order, so forces
     // agree to rounding; the skinned list is rebuilt only every few dozen steps.
-    let (mut a, mut model_a) = problems::dipolar_fluid(1000, 0.3, 4).unwrap();
-    let (mut b, mut model_b) = problems::dipolar_fluid(1000, 0.3, 4).unwrap();
+    let (mut a, mut model_a) = liemid::many::problems::dipolar_fluid(1000, 0.3, 4).unwrap();
+    let (mut b, mut model_b) = liemid::many::problems::dipolar_fluid(1000, 0.3, 4).unwrap();
     model_a.skin = 0.3;
     model_b.skin = 0.0;
     for _ in 0..200 {
@@ -642,7 +642,7 @@ fn the_verlet_list_is_rebuilt_on_displacement_and_gives_the_forces_of_any_skin()
     // The half list (each pair once from the half stencil, Newton's third law, the default)
     // gives the same forces as the full list (each pair twice, from the full stencil) to
     // rounding.
-    let (mut c, mut model_c) = problems::dipolar_fluid(1000, 0.3, 4).unwrap();
+    let (mut c, mut model_c) = liemid::many::problems::dipolar_fluid(1000, 0.3, 4).unwrap();
     model_c.half_list_max_bodies = 0;
     for _ in 0..200 {
         c.step(&model_c, 2e-3).unwrap();
@@ -654,8 +654,8 @@ fn the_verlet_list_is_rebuilt_on_displacement_and_gives_the_forces_of_any_skin()
     );
     // In a box too small for cells (27 bodies, side 4.5 < 2.5 × reach) the half list takes
     // each later body of the list order instead of the half stencil: the same forces too.
-    let (mut d, model_d) = problems::dipolar_fluid(27, 0.3, 4).unwrap();
-    let (mut e, mut model_e) = problems::dipolar_fluid(27, 0.3, 4).unwrap();
+    let (mut d, model_d) = liemid::many::problems::dipolar_fluid(27, 0.3, 4).unwrap();
+    let (mut e, mut model_e) = liemid::many::problems::dipolar_fluid(27, 0.3, 4).unwrap();
     model_e.half_list_max_bodies = 0;
     for _ in 0..50 {
         d.step(&model_d, 2e-3).unwrap();
@@ -674,14 +674,14 @@ fn the_spatial_sort_changes_no_bit_and_the_threads_none_either() {
     // The full list with and without the cell-order copy of positions and dipoles, on a
     // fluid whose bodies are pushed in a shuffled order (so that index order has no
     // locality): the same pairs in the same order, hence the same bits.
-    let (lattice, _) = problems::dipolar_fluid(1000, 0.3, 6).unwrap();
+    let (lattice, _) = liemid::many::problems::dipolar_fluid(1000, 0.3, 6).unwrap();
     let mut rng = Rng::new(9);
     let mut perm: Vec<usize> = (0..lattice.len()).collect();
     for k in (1..perm.len()).rev() {
         perm.swap(k, (rng.next_u64() % (k as u64 + 1)) as usize);
     }
     let run = |sort: bool, threads: usize| {
-        let (_, mut model) = problems::dipolar_fluid(1000, 0.3, 6).unwrap();
+        let (_, mut model) = liemid::many::problems::dipolar_fluid(1000, 0.3, 6).unwrap();
         model.half_list_max_bodies = 0;
         model.spatial_sort = sort;
         let mut b = Bodies::new();
@@ -724,7 +724,7 @@ fn advance_is_step_bit_for_bit_with_list_rebuilds_on_any_team() {
     // for 1, 2 and 3 threads, across several list rebuilds, in blocks of any length.
     let steps = 150;
     let reference = {
-        let (mut b, model) = problems::dipolar_fluid(1000, 0.3, 4).unwrap();
+        let (mut b, model) = liemid::many::problems::dipolar_fluid(1000, 0.3, 4).unwrap();
         let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
         pool.install(|| {
             for _ in 0..steps {
@@ -740,7 +740,7 @@ fn advance_is_step_bit_for_bit_with_list_rebuilds_on_any_team() {
     };
     for threads in [1, 2, 3] {
         for block in [1u64, 7, 150] {
-            let (mut b, model) = problems::dipolar_fluid(1000, 0.3, 4).unwrap();
+            let (mut b, model) = liemid::many::problems::dipolar_fluid(1000, 0.3, 4).unwrap();
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             pool.install(|| {
                 let mut done = 0;
@@ -769,7 +769,7 @@ fn advance_reports_a_failing_body_as_step_does() {
     // A step too large for the spins: `advance` fails with the same error as `step`, on
     // one and two threads.
     let make = || {
-        let (mut b, model) = problems::dipolar_fluid(1000, 0.3, 4).unwrap();
+        let (mut b, model) = liemid::many::problems::dipolar_fluid(1000, 0.3, 4).unwrap();
         b.pi[700] = Vec3::new(0.0, 0.0, 1e6);
         (b, model)
     };
@@ -788,7 +788,7 @@ fn the_potential_energy_over_the_half_list_is_the_cell_sum_on_any_thread_count()
     // With a fresh list the potential energy sums each listed pair once, partition by
     // partition; without one, over the cells. The same terms in another order: equal to
     // round-off; and the same bits for 1, 2 and 3 threads.
-    let (mut b, model) = problems::dipolar_fluid(2000, 0.3, 5).unwrap();
+    let (mut b, model) = liemid::many::problems::dipolar_fluid(2000, 0.3, 5).unwrap();
     for _ in 0..30 {
         b.step(&model, 2e-3).unwrap();
     }
@@ -800,7 +800,7 @@ fn the_potential_energy_over_the_half_list_is_the_cell_sum_on_any_thread_count()
     for threads in [2, 3] {
         assert_eq!(energy_with(threads).to_bits(), listed.to_bits(), "{threads} threads");
     }
-    let (_, no_list) = problems::dipolar_fluid(2000, 0.3, 5).unwrap();
+    let (_, no_list) = liemid::many::problems::dipolar_fluid(2000, 0.3, 5).unwrap();
     let cells = no_list.potential_energy(b.configuration());
     assert!(
         listed != 0.0 && ((listed - cells) / cells).abs() < 1e-12,

@@ -2,7 +2,7 @@
 //! threads) watches steps of a dipolar fluid with its cell list and of torque-free rotors
 //! (midpoint and exact free rotation).
 
-use liemid::problems;
+use liemid::many::problems;
 
 #[path = "common/counting.rs"]
 mod counting;

@@ -4,7 +4,7 @@
 mod common;
 
 use liemid::{
-    integrate, integrate_to, problems, CountingTorque, Error, Inertia, LieMidpointAlternating, LieMidpointE1,
+    integrate, integrate_to, rigid::problems, CountingTorque, Error, Inertia, LieMidpointAlternating, LieMidpointE1,
     LieMidpointE2, RigidState, RotationIntegrator, RotationMethod, Vec3,
 };
 
@@ -79,7 +79,7 @@ fn the_papers_printed_e1_is_not_the_adjoint() {
     // check above would fail for it.
     let top = problems::torque_dominated_top();
     let (s0, h) = (top.initial, 1e-2);
-    let (psi, _) = liemid::midpoint::solve(&top.system.inertia, s0.pi, h).unwrap();
+    let (psi, _) = liemid::rigid::midpoint::solve(&top.system.inertia, s0.pi, h).unwrap();
     let q = liemid::so3::exp(psi);
     let r1 = s0.rotation * q;
     let printed_pi = q.tr_mul_vec(s0.pi + liemid::RigidBodySystem::torque(&top.system, &r1, h) * h);

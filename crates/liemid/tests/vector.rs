@@ -4,7 +4,7 @@
 mod common;
 
 use common::{halvings, observed_order};
-use liemid::problems::{HarmonicOscillator, Kepler, Pendulum};
+use liemid::vector::problems::{HarmonicOscillator, Kepler, Pendulum};
 use liemid::vector::{
     ExplicitNewmark, MassMatrix, MechanicalSystem, PhaseState, SymplecticEuler, SymplecticEulerAdjoint,
     VectorIntegrator, Verlet,

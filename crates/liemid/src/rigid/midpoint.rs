@@ -12,8 +12,8 @@
 //! quadratically in 2 to 4 iterations; the iteration stops when the Newton correction is
 //! a few ulps of `|Ψ|`.
 
-use crate::inertia::{Inertia, InertiaOperator};
 use crate::linalg::{Mat3, Vec3};
+use crate::rigid::inertia::{Inertia, InertiaOperator};
 use crate::so3;
 
 /// Iteration cap of the Newton solvers.

@@ -2,8 +2,8 @@
 
 use super::{check_step, commit, RotationIntegrator, TorqueCache};
 use crate::error::Result;
-use crate::free_flow::FreeFlow;
 use crate::linalg::{Mat3, Vec3};
+use crate::rigid::free_flow::FreeFlow;
 use crate::rigid::{RigidBodySystem, RigidState};
 
 /// LIEMID\[EX\]: the paper's concentrated impulses with the torque-free motion between

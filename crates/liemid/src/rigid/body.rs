@@ -1,5 +1,5 @@
-//! Rigid bodies with a fixed point: state, the system trait (inertia and torque model),
-//! the built-in models and the diagnostics.
+//! The model of a rigid body with a fixed point: state, the system trait (inertia and
+//! torque model), the built-in models and the diagnostics.
 //!
 //! Equations of motion in the body (convected) frame:
 //! `Π' = Π × Ω + T(R, t)`, `Ω = I⁻¹ Π`, `R' = R hat(Ω)`, where `R` maps body to space,
@@ -7,8 +7,8 @@
 //! `π = R Π` obeys `π' = R T`.
 
 use crate::error::{Error, Result};
-use crate::inertia::Inertia;
 use crate::linalg::{Mat3, Vec3};
+use crate::rigid::inertia::Inertia;
 use crate::so3;
 
 /// The state of a rotating rigid body: time, body angular momentum and attitude.

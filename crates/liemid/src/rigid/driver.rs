@@ -3,8 +3,8 @@
 
 use crate::error::{Error, Result};
 use crate::linalg::Vec3;
+use crate::rigid::rotation::RotationIntegrator;
 use crate::rigid::{Diagnostics, RigidBodySystem, RigidState};
-use crate::rotation::RotationIntegrator;
 
 /// The most steps a run may take: step `k` ends at `t0 + k h` with `k` converted to `f64`,
 /// which is exact up to `2^53`.
@@ -333,7 +333,7 @@ mod tests {
     #[test]
     fn refuses_an_attitude_that_is_not_a_rotation() {
         // Issue 14, item 7: diag(2, 1, 1) used to run and only report a defect of 3.
-        let top = crate::problems::fast_top();
+        let top = crate::rigid::problems::fast_top();
         let mut ea = crate::LieMidpointAlternating::new();
         let bad = RigidState::new(
             0.0,
@@ -362,7 +362,7 @@ mod tests {
 
     #[test]
     fn a_run_rebuilt_from_its_fields_continues_bit_for_bit() {
-        let top = crate::problems::fast_top();
+        let top = crate::rigid::problems::fast_top();
         let method = crate::RotationMethod::RungeKutta4;
         let whole = integrate_to(&mut method.integrator(), &top.system, top.initial, 0.05, 3e-4).unwrap();
         let mut first = method.integrator();

@@ -13,7 +13,10 @@
 //! next: one force evaluation per step. Scratch buffers live in the integrator and are
 //! sized on the first step, so stepping allocates nothing afterwards.
 
+use crate::composition::Composition;
 use crate::error::{Error, Result};
+
+pub mod problems;
 
 /// A constant symmetric positive definite mass matrix.
 #[derive(Clone, Debug, PartialEq)]
@@ -393,5 +396,21 @@ impl VectorIntegrator for Verlet {
     }
     fn step<S: MechanicalSystem + ?Sized>(&mut self, system: &S, state: &mut PhaseState, h: f64) -> Result<()> {
         self.inner.step(system, state, h)
+    }
+}
+
+impl<M: VectorIntegrator> VectorIntegrator for Composition<M> {
+    fn name(&self) -> &'static str {
+        self.name
+    }
+    fn order(&self) -> u32 {
+        self.scheme.order
+    }
+    fn step<S: MechanicalSystem + ?Sized>(&mut self, system: &S, state: &mut PhaseState, h: f64) -> Result<()> {
+        // The vector methods fail only on a bad step or dimension, before any stage moves.
+        for i in 0..self.scheme.stages {
+            self.base.step(system, state, self.scheme.gamma(i) * h)?;
+        }
+        Ok(())
     }
 }

@@ -28,8 +28,8 @@
 //! Algorithms 10 (1995); M. Abramowitz, I. Stegun, *Handbook*, 16.4 (the AGM scheme).
 
 use crate::error::{Error, Result};
-use crate::inertia::Inertia;
 use crate::linalg::{Mat3, Vec3};
+use crate::rigid::inertia::Inertia;
 use crate::so3;
 
 /// The exact torque-free flow of one rigid body (its principal axes and moments).

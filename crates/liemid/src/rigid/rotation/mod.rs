@@ -21,7 +21,7 @@ pub use simo_wong::SimoWong;
 use crate::composition::{Composition, Scheme};
 use crate::error::{Error, Result};
 use crate::linalg::{Mat3, Vec3};
-use crate::midpoint::NotConverged;
+use crate::rigid::midpoint::NotConverged;
 use crate::rigid::{RigidBodySystem, RigidState};
 
 /// A one-step method for [`RigidBodySystem`]s.
@@ -558,5 +558,27 @@ impl AnyRotationIntegrator {
             },
         }
         Ok(())
+    }
+}
+
+impl<M: RotationIntegrator> RotationIntegrator for Composition<M> {
+    fn name(&self) -> &'static str {
+        self.name
+    }
+    fn order(&self) -> u32 {
+        self.scheme.order
+    }
+    fn step<S: RigidBodySystem + ?Sized>(&mut self, system: &S, state: &mut RigidState, h: f64) -> Result<()> {
+        let start = *state;
+        for i in 0..self.scheme.stages {
+            if let Err(e) = self.base.step(system, state, self.scheme.gamma(i) * h) {
+                *state = start;
+                return Err(e);
+            }
+        }
+        Ok(())
+    }
+    fn reset(&mut self) {
+        self.base.reset();
     }
 }

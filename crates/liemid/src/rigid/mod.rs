@@ -1,0 +1,32 @@
+//! A rigid body about a fixed point: the paper's core domain.
+//!
+//! **Model** ([`body`], re-exported here): the state `(t, Π, R)` ([`RigidState`]), the
+//! [`RigidBodySystem`] trait (inertia and torque model: [`HeavyTop`], [`FreeBody`],
+//! [`ConstantTorque`], [`TorqueFn`]) and the [`Diagnostics`] of a state; [`inertia`] holds
+//! the validated body tensor. Equations of motion in the body frame:
+//! `Π' = Π × Ω + T(R, t)`, `Ω = I⁻¹ Π`, `R' = R hat(Ω)`.
+//!
+//! **Methods**: [`midpoint`] solves the midpoint equation `(1/h) I Ψ = exp(−Ψ/2) P` that
+//! every LIEMID step is built on; [`rotation`] holds one type per method (LIEMID\[E1\],
+//! \[E2\], \[EA\], \[I\], AKW, Simo-Wong, NMB, RK4, RKMK4, and LIEMID\[EX\]/\[FS\] on
+//! [`free_flow`], the exact torque-free flow), selected by name through
+//! [`rotation::RotationMethod`]; [`driver`] runs any of them from `t0` to `t_end` with an
+//! observer and the extremes of the diagnostics.
+//!
+//! **Problems** ([`problems`]): the fast and slow Lagrangian tops, the torque-dominated
+//! symmetric and asymmetric tops and the free asymmetric body, each with its initial state
+//! and end time.
+//!
+//! ## Reference
+//! P. Krysl, *Explicit momentum-conserving integrator for dynamics of rigid bodies
+//! approximating the midpoint Lie algorithm*, Int. J. Numer. Meth. Engng 63 (2005).
+
+pub mod body;
+pub mod driver;
+pub mod free_flow;
+pub mod inertia;
+pub mod midpoint;
+pub mod problems;
+pub mod rotation;
+
+pub use body::*;
