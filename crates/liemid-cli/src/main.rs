@@ -1,22 +1,13 @@
-//! `liemid`: run rigid-body scenarios, write trajectories, and reproduce the convergence
-//! study of the explicit midpoint Lie paper.
+//! `liemid`: the command line, wired to the domains (`rigid`, `many`, `spin`, `beam` of
+//! the `liemid_cli` library, each with its `command`, `scenario` and `study`); this file
+//! only parses the arguments and maps failures to exit codes (2 input, 1 run, 130/143
+//! signal).
 
-mod beam_cmd;
-mod many_cmd;
-mod run_cmd;
-mod spins_cmd;
-
-use liemid_cli::{converge, output, plot, scenario, work_precision};
-
-use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use clap::{Args, Parser, Subcommand};
-use liemid::error::Num;
-use liemid::RotationMethod;
-
-use output::OutputPlan;
-use scenario::Scenario;
+use clap::{Parser, Subcommand};
+use liemid_cli::shared::command::Failure;
+use liemid_cli::{beam, many, rigid, spin};
 
 const EXAMPLES: &str = "\
 Examples:
@@ -51,30 +42,30 @@ enum Command {
         after_help = "Examples:\n  liemid run\n  liemid run examples/fast_top.toml --every 10\n  \
         liemid run --problem free-body --out flip.npy --json"
     )]
-    Run(run_cmd::RunArgs),
+    Run(rigid::command::RunArgs),
     /// Errors of every method against a reference for a sequence of steps, with plots.
     #[command(
         after_help = "Examples:\n  liemid converge\n  liemid converge --problem slow-top --plot slow\n  \
         liemid converge --scenario examples/fast_top.toml --methods liemid-ea,rk4 --json study.json"
     )]
-    Converge(ConvergeArgs),
+    Converge(rigid::command::ConvergeArgs),
     /// CPU time against accuracy for every method and the DOP853 and RK4 baselines.
     #[command(
         after_help = "Examples:\n  liemid work-precision\n  liemid work-precision --t-end 100 --plot long\n  \
         liemid work-precision --methods liemid-ea,liemid-ea8,rk4,dop853 --json wp.json"
     )]
-    WorkPrecision(WorkPrecisionArgs),
+    WorkPrecision(rigid::command::WorkPrecisionArgs),
     /// Step N interacting rigid bodies in parallel; throughput and conservation.
     #[command(
         after_help = "Examples:\n  liemid many --model torque-free --bodies 1000000 --t-end 0.01\n  \
         liemid many --model dipoles --bodies 4000 --t-end 1 --threads 2 --json -"
     )]
-    Many(many_cmd::ManyArgs),
+    Many(many::command::ManyArgs),
     /// Atomistic spin dynamics on a lattice: run a scenario, or `spins work-precision`.
     #[command(after_help = "Examples:\n  liemid spins --problem square-64 --json -\n  \
         liemid spins examples/spins_square.toml --final final.npy --snapshot spins.png\n  \
         liemid spins work-precision --threads 1 --json spin-wp.json")]
-    Spins(spins_cmd::SpinsArgs),
+    Spins(spin::command::SpinsArgs),
     /// Flexible 3-D beams (corotational elements, nodes as rigid bodies): a benchmark or a
     /// structure file, or `beam work-precision` against implicit Newmark.
     #[command(
@@ -82,98 +73,12 @@ enum Command {
         liemid beam examples/right_angle_cantilever.toml --elements-per-member 16 --json run.json\n  \
         liemid beam --method newmark --step 0.05 --out newmark.csv\n  liemid beam work-precision"
     )]
-    Beam(beam_cmd::BeamArgs),
+    Beam(beam::command::BeamArgs),
     /// List the integrators: name, order, torque evaluations, what they conserve.
-    Methods(MethodsArgs),
+    Methods(rigid::command::MethodsArgs),
     /// List the built-in problems.
     Problems,
 }
-
-#[derive(Args, Debug)]
-struct MethodsArgs {
-    /// The spin-dynamics methods of `liemid spins` instead of the rigid-body ones.
-    #[arg(long)]
-    spins: bool,
-    /// As JSON (with `--spins`).
-    #[arg(long, requires = "spins")]
-    json: bool,
-}
-
-#[derive(Args, Debug)]
-struct ConvergeArgs {
-    /// Built-in problem.
-    #[arg(long, default_value = "fast-top")]
-    problem: String,
-    /// Scenario file (TOML) instead of a built-in problem.
-    #[arg(long, conflicts_with = "problem")]
-    scenario: Option<PathBuf>,
-    /// Comma-separated methods [default: all eight].
-    #[arg(long, value_delimiter = ',')]
-    methods: Option<Vec<String>>,
-    /// Comma-separated step sizes [default: 2e-3 halved five times].
-    #[arg(long, allow_negative_numbers = true, value_delimiter = ',')]
-    steps: Option<Vec<f64>>,
-    /// End time [default: the problem's].
-    #[arg(long, allow_negative_numbers = true)]
-    t_end: Option<f64>,
-    /// Plot file: NAME writes NAME.svg and NAME.png; NAME.svg or NAME.png writes one.
-    #[arg(long, default_value = "convergence")]
-    plot: PathBuf,
-    /// Write no plot.
-    #[arg(long)]
-    no_plot: bool,
-    /// Write the study as JSON to FILE, or to standard output with `-` (the table then
-    /// goes to standard error).
-    #[arg(long)]
-    json: Option<String>,
-}
-
-#[derive(Args, Debug)]
-struct WorkPrecisionArgs {
-    /// Built-in problem.
-    #[arg(long, default_value = "fast-top")]
-    problem: String,
-    /// Scenario file (TOML) instead of a built-in problem.
-    #[arg(long, conflicts_with = "problem")]
-    scenario: Option<PathBuf>,
-    /// End time [default: the problem's].
-    #[arg(long, allow_negative_numbers = true)]
-    t_end: Option<f64>,
-    /// Comma-separated methods, `dop853` for the adaptive baseline [default: all].
-    #[arg(long, value_delimiter = ',')]
-    methods: Option<Vec<String>>,
-    /// Timed repetitions per point; the median is reported (at least 5).
-    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(5..))]
-    repetitions: u64,
-    /// Stop a method's sequence once one run takes longer than this many seconds.
-    #[arg(long, allow_negative_numbers = true, default_value_t = 0.5)]
-    budget: f64,
-    /// Stop a method's sequence once its attitude error is below this.
-    #[arg(long, allow_negative_numbers = true, default_value_t = 1e-11)]
-    min_error: f64,
-    /// At most this many points per method.
-    #[arg(long, default_value_t = 16)]
-    max_points: usize,
-    /// Plot file: NAME writes NAME.svg and NAME.png; NAME.svg or NAME.png writes one.
-    #[arg(long, default_value = "work-precision")]
-    plot: PathBuf,
-    /// Write no plot.
-    #[arg(long)]
-    no_plot: bool,
-    /// Write the study as JSON to FILE, or to standard output with `-`.
-    #[arg(long)]
-    json: Option<String>,
-}
-
-/// How a command failed: bad input (exit 2), a failed run (exit 1), or a stop asked for by
-/// a signal (exit 130 for SIGINT, 143 for SIGTERM).
-pub(crate) enum Failure {
-    Input(String),
-    Run(String),
-    Signal(u8, String),
-}
-
-pub(crate) type CmdResult = Result<(), Failure>;
 
 fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
@@ -193,23 +98,23 @@ fn main() -> ExitCode {
         }
     };
     let result = match cli.command {
-        Command::Run(args) => run_cmd::run(args),
-        Command::Converge(args) => converge_cmd(args),
-        Command::WorkPrecision(args) => work_precision_cmd(args),
-        Command::Many(args) => many_cmd::many(&args),
-        Command::Spins(args) => spins_cmd::spins(args),
-        Command::Beam(args) => beam_cmd::beam(args),
+        Command::Run(args) => rigid::command::run(args),
+        Command::Converge(args) => rigid::command::converge_cmd(args),
+        Command::WorkPrecision(args) => rigid::command::work_precision_cmd(args),
+        Command::Many(args) => many::command::many(&args),
+        Command::Spins(args) => spin::command::spins(args),
+        Command::Beam(args) => beam::command::beam(args),
         Command::Methods(args) => {
             if args.spins {
-                spins_cmd::methods(args.json);
+                spin::command::methods(args.json);
             } else {
-                methods();
+                rigid::command::methods();
             }
             Ok(())
         }
         Command::Problems => {
-            for name in scenario::PROBLEMS {
-                println!("{name:<11} {}", scenario::describe(name));
+            for name in rigid::scenario::PROBLEMS {
+                println!("{name:<11} {}", rigid::scenario::describe(name));
             }
             Ok(())
         }
@@ -251,183 +156,4 @@ fn usage_error(rendered: &str) -> String {
 
 fn one_line(m: &str) -> String {
     m.split_whitespace().collect::<Vec<_>>().join(" ")
-}
-
-fn methods() {
-    println!(
-        "{:<11} {:<12} {:>5}  {:<22} conserves",
-        "name", "method", "order", "torque evals/step"
-    );
-    for m in RotationMethod::ALL {
-        println!(
-            "{:<11} {:<12} {:>5}  {:<22} {}",
-            m.key(),
-            m.name(),
-            m.order(),
-            m.torque_evaluations_per_step(),
-            m.description()
-        );
-    }
-}
-
-pub(crate) fn parse_method(name: &str) -> Result<RotationMethod, Failure> {
-    RotationMethod::from_key(name).ok_or_else(|| {
-        let known: Vec<&str> = RotationMethod::ALL.iter().map(|m| m.key()).collect();
-        Failure::Input(format!("unknown method `{name}` (known: {})", known.join(", ")))
-    })
-}
-
-pub(crate) fn check_positive(name: &str, v: f64) -> Result<f64, Failure> {
-    if v.is_finite() && v > 0.0 {
-        Ok(v)
-    } else {
-        Err(Failure::Input(format!("--{name} must be a positive number, found {v}")))
-    }
-}
-
-fn load_scenario(file: Option<&Path>, problem: &str) -> Result<Scenario, Failure> {
-    match file {
-        Some(path) => scenario::load(path).map_err(Failure::Input),
-        None => scenario::builtin(problem).map_err(Failure::Input),
-    }
-}
-
-use plot::plot_paths;
-
-fn converge_cmd(args: ConvergeArgs) -> CmdResult {
-    let sc = load_scenario(args.scenario.as_deref(), &args.problem)?;
-    let methods: Vec<RotationMethod> = match &args.methods {
-        None => RotationMethod::PAPER.to_vec(),
-        Some(list) => list.iter().map(|m| parse_method(m.trim())).collect::<Result<_, _>>()?,
-    };
-    let steps: Vec<f64> = match &args.steps {
-        None => (0..6).map(|k| 2e-3 / f64::from(1u32 << k)).collect(),
-        Some(list) => list
-            .iter()
-            .map(|&h| check_positive("steps", h))
-            .collect::<Result<_, _>>()?,
-    };
-    if steps.is_empty() || methods.is_empty() {
-        return Err(Failure::Input("--steps and --methods must not be empty".into()));
-    }
-    let t_end = study_end(&sc, args.t_end)?;
-    check_study_outputs(args.scenario.as_deref(), &args.plot, args.no_plot, args.json.as_deref())?;
-    let study = converge::study(&sc, &methods, &steps, t_end).map_err(|e| Failure::Run(format!("reference: {e}")))?;
-    report(
-        &converge::table(&study),
-        &study,
-        plot::Figure::Convergence(&study),
-        &args.plot,
-        args.no_plot,
-        args.json.as_deref(),
-    )
-}
-
-/// The end time of a study: `--t-end` if given (after the start), else the scenario's.
-fn study_end(sc: &Scenario, t_end: Option<f64>) -> Result<f64, Failure> {
-    match t_end {
-        Some(t) if !t.is_finite() => Err(Failure::Input(format!("--t-end must be a finite number, found {t}"))),
-        Some(t) if t > sc.initial.t => Ok(t),
-        Some(t) => Err(Failure::Input(format!(
-            "--t-end {} must be after the start time {}",
-            Num(t),
-            Num(sc.initial.t)
-        ))),
-        None => Ok(sc.t_end),
-    }
-}
-
-/// Check a study's plot and JSON paths before it runs (a study takes seconds to minutes).
-fn check_study_outputs(scenario: Option<&Path>, plot: &Path, no_plot: bool, json: Option<&str>) -> CmdResult {
-    let inputs: Vec<&Path> = scenario.into_iter().collect();
-    let mut plan = OutputPlan::new(&inputs);
-    if !no_plot {
-        for p in plot_paths(plot) {
-            plan.add("--plot", &p).map_err(Failure::Input)?;
-        }
-    }
-    if let Some(j) = json.filter(|j| *j != "-") {
-        plan.add("--json", Path::new(j)).map_err(Failure::Input)?;
-    }
-    Ok(())
-}
-
-/// Print a study's table, write its plots and its JSON. With JSON on standard output
-/// (`-`), the table and the messages go to standard error.
-fn report<T: serde::Serialize>(
-    table: &str,
-    study: &T,
-    figure: plot::Figure,
-    plot_base: &Path,
-    no_plot: bool,
-    json: Option<&str>,
-) -> CmdResult {
-    let to_stdout = json == Some("-");
-    let say = |m: &str| {
-        if to_stdout {
-            eprint!("{m}");
-        } else {
-            print!("{m}");
-        }
-    };
-    say(table);
-    if !no_plot {
-        for p in plot_paths(plot_base) {
-            plot::write(&p, &figure).map_err(Failure::Run)?;
-            say(&format!("wrote {}\n", p.display()));
-        }
-    }
-    if let Some(target) = json {
-        write_json(target, study)?;
-    }
-    Ok(())
-}
-
-/// Write `value` as JSON to `target` (`-` for standard output), atomically for files.
-fn write_json<T: serde::Serialize>(target: &str, value: &T) -> CmdResult {
-    let text = serde_json::to_string_pretty(value).map_err(|e| Failure::Run(e.to_string()))?;
-    if target == "-" {
-        println!("{text}");
-    } else {
-        output::write_atomically(Path::new(target), (text + "\n").as_bytes())
-            .map_err(|e| Failure::Run(format!("{target}: cannot write: {e}")))?;
-        println!("wrote {target}");
-    }
-    Ok(())
-}
-
-fn work_precision_cmd(args: WorkPrecisionArgs) -> CmdResult {
-    let sc = load_scenario(args.scenario.as_deref(), &args.problem)?;
-    let entries: Vec<work_precision::Entry> = match &args.methods {
-        None => work_precision::Entry::all(),
-        Some(list) => list
-            .iter()
-            .map(|m| {
-                work_precision::Entry::from_key(m.trim()).ok_or_else(|| {
-                    Failure::Input(format!(
-                        "unknown method `{}` (see `liemid methods`, or dop853)",
-                        m.trim()
-                    ))
-                })
-            })
-            .collect::<Result<_, _>>()?,
-    };
-    let t_end = study_end(&sc, args.t_end)?;
-    let options = work_precision::Options {
-        entries,
-        repetitions: args.repetitions as usize,
-        budget: check_positive("budget", args.budget)?,
-        min_error: check_positive("min-error", args.min_error)?,
-        max_points: args.max_points.max(1),
-    };
-    check_study_outputs(args.scenario.as_deref(), &args.plot, args.no_plot, args.json.as_deref())?;
-    let study = work_precision::study(&sc, t_end, &options).map_err(Failure::Run)?;
-    report(
-        &work_precision::table(&study),
-        &study,
-        plot::Figure::WorkPrecision(&study),
-        &args.plot,
-        args.no_plot,
-        args.json.as_deref(),
-    )
 }

@@ -605,7 +605,11 @@ fn spins_runs_the_contract_scenario_and_writes_its_outputs() {
             [a, 0.05 * (i as f64).cos(), 1.0]
         })
         .collect();
-    std::fs::write(dir.join("start.npy"), liemid_cli::npy::matrix_bytes(256, 3, &start)).unwrap();
+    std::fs::write(
+        dir.join("start.npy"),
+        liemid_cli::shared::npy::matrix_bytes(256, 3, &start),
+    )
+    .unwrap();
     let scenario = write(
         &dir,
         "spins.toml",
@@ -643,7 +647,7 @@ fn spins_runs_the_contract_scenario_and_writes_its_outputs() {
     }
     assert!(s["max_norm_error"].as_f64().unwrap() < 1e-14);
     assert!(s["sz_total_change"].as_f64().unwrap() < 1e-12);
-    let last = liemid_cli::npy::read_matrix(&dir.join("final.npy"), 3).unwrap();
+    let last = liemid_cli::shared::npy::read_matrix(&dir.join("final.npy"), 3).unwrap();
     assert_eq!(last.len(), 256);
     assert!(last
         .iter()

@@ -4,7 +4,7 @@
 //! parametrisation: after 100 periods `Π` is back at its start.
 
 use liemid::{so3, FreeBody, FreeFlow, Inertia, Mat3, RigidState, Vec3};
-use liemid_cli::baseline::dop853;
+use liemid_cli::rigid::baseline::dop853;
 
 /// `K(m) = π / (2 AGM(1, √(1 − m)))`.
 fn complete_k(m: f64) -> f64 {

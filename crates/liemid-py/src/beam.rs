@@ -5,8 +5,8 @@
 use std::collections::HashMap;
 
 use liemid::beam::problems;
-use liemid_cli::beam_scenario::{self, BeamIntegrator};
-use liemid_cli::beam_study::{self, RunFailure};
+use liemid_cli::beam::scenario::{self, BeamIntegrator};
+use liemid_cli::beam::study::{self, RunFailure};
 use numpy::{IntoPyArray, PyArray1};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -28,8 +28,8 @@ fn beam_run<'py>(
     force_step: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let mut sc = match (problem, text) {
-        (Some(p), None) => beam_scenario::builtin(p, elements_per_member),
-        (None, Some(t)) => beam_scenario::parse(t, "text", elements_per_member),
+        (Some(p), None) => scenario::builtin(p, elements_per_member),
+        (None, Some(t)) => scenario::parse(t, "text", elements_per_member),
         _ => Err("give a problem name or a structure file's text, not both".into()),
     }
     .map_err(PyValueError::new_err)?;
@@ -42,7 +42,7 @@ fn beam_run<'py>(
     let t_end = t_end.unwrap_or(sc.problem.t_end);
     let sample = sample.or(sc.sample).unwrap_or(t_end / 600.0);
     let run = py
-        .detach(|| beam_study::run(&sc, t_end, sc.step, sample, force_step, &mut |_| None))
+        .detach(|| study::run(&sc, t_end, sc.step, sample, force_step, &mut |_| None))
         .map_err(|e| match e {
             RunFailure::Input(m) => PyValueError::new_err(m),
             RunFailure::Numerical(m) => {

@@ -8,19 +8,12 @@ use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
-use crate::py_error;
-
-type Triple = (f64, f64, f64);
-type Array<'py> = Bound<'py, PyArray1<f64>>;
+use crate::convert::{py_error, v3, Array, Triple};
 
 /// A spin system: lattice and Hamiltonian.
 #[pyclass(module = "liemid._liemid")]
 pub struct Spins {
     system: SpinSystem,
-}
-
-fn v3((x, y, z): Triple) -> Vec3 {
-    Vec3::new(x, y, z)
 }
 
 #[pymethods]

@@ -28,7 +28,7 @@ use std::path::{Path, PathBuf};
 use liemid::spin::{self, problems, Lattice, LatticeKind, SpinMethod, SpinSystem};
 use liemid::Vec3;
 
-use crate::scenario::{parse_table, Section};
+use crate::rigid::scenario::{parse_table, Section};
 
 /// A spin scenario: the system, its initial spins, the method and the run's settings.
 #[derive(Clone, Debug)]
@@ -173,7 +173,7 @@ pub fn parse(text: &str, name: &str, dir: &Path) -> Result<SpinScenario, String>
                     return Err("[initial] gives both `file` and `kind`; use only one".into());
                 }
                 let path = dir.join(f);
-                let rows = crate::npy::read_matrix(&path, 3).map_err(|e| init.err("file", e))?;
+                let rows = crate::shared::npy::read_matrix(&path, 3).map_err(|e| init.err("file", e))?;
                 if rows.len() != n {
                     return Err(init.err(
                         "file",

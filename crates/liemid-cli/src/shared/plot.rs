@@ -9,10 +9,10 @@ use std::sync::Once;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use crate::converge::Study;
-use crate::work_precision::Study as WorkStudy;
+use crate::rigid::converge::Study;
+use crate::rigid::study::Study as WorkStudy;
 
-static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
 static REGISTER: Once = Once::new();
 
 /// Register the embedded DejaVu Sans as "sans-serif" (the bitmap backend has no system fonts).
@@ -316,7 +316,7 @@ fn work_series<'a, P: 'a>(
 fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, study: &Study) -> Result<(), String> {
     let title = format!("{}: error at t = {} s against the step", study.problem, study.t_end);
     let labels: Vec<String> = study.methods.iter().map(|m| m.label.clone()).collect();
-    let collect = |f: &dyn Fn(&crate::converge::MethodErrors, usize) -> Option<f64>| -> Vec<Series> {
+    let collect = |f: &dyn Fn(&crate::rigid::converge::MethodErrors, usize) -> Option<f64>| -> Vec<Series> {
         study
             .methods
             .iter()
@@ -382,7 +382,7 @@ fn draw_work<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, study: &WorkStudy
 
 fn draw_spin_work<DB: DrawingBackend>(
     root: DrawingArea<DB, Shift>,
-    study: &crate::spin_study::SpinStudy,
+    study: &crate::spin::study::SpinStudy,
 ) -> Result<(), String> {
     let title = format!(
         "{}: {} spins, work-precision to t = {} ps",
@@ -512,7 +512,7 @@ pub enum Figure<'a> {
     /// The work-precision study.
     WorkPrecision(&'a WorkStudy),
     /// The spin work-precision study.
-    SpinWorkPrecision(&'a crate::spin_study::SpinStudy),
+    SpinWorkPrecision(&'a crate::spin::study::SpinStudy),
 }
 
 fn render<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, figure: &Figure) -> Result<(), String> {

@@ -8,14 +8,14 @@ use std::sync::Mutex;
 
 use serde_json::json;
 
-use crate::spins_cmd::pool;
-use crate::{CmdResult, Failure};
-use liemid_cli::beam_scenario::{self, BeamIntegrator, BeamScenario};
-use liemid_cli::beam_study::{self, RunFailure};
-use liemid_cli::interrupt::Interrupt;
-use liemid_cli::output::{write_atomically, OutputPlan, TrajectoryWriter};
-use liemid_cli::plot::{self, Histories};
-use liemid_cli::scenario::Format;
+use crate::beam::scenario::{self, BeamIntegrator, BeamScenario};
+use crate::beam::study::{self, RunFailure};
+use crate::rigid::scenario::Format;
+use crate::shared::command::pool;
+use crate::shared::command::{CmdResult, Failure};
+use crate::shared::interrupt::Interrupt;
+use crate::shared::output::{write_atomically, OutputPlan, TrajectoryWriter};
+use crate::shared::plot::{self, Histories};
 
 /// Arguments of `liemid beam`.
 #[derive(clap::Args, Debug)]
@@ -97,8 +97,8 @@ fn load(args: &BeamArgs) -> Result<BeamScenario, Failure> {
     let elements = args.elements_per_member.map(|n| n as usize);
     let mut sc = match (&args.file, &args.problem) {
         (Some(_), Some(_)) => return Err(Failure::Input("give a structure file or --problem, not both".into())),
-        (Some(f), None) => beam_scenario::load(f, elements),
-        (None, p) => beam_scenario::builtin(p.as_deref().unwrap_or("right-angle-cantilever"), elements),
+        (Some(f), None) => scenario::load(f, elements),
+        (None, p) => scenario::builtin(p.as_deref().unwrap_or("right-angle-cantilever"), elements),
     }
     .map_err(Failure::Input)?;
     if let Some(m) = &args.method {
@@ -161,7 +161,7 @@ pub fn beam(args: BeamArgs) -> CmdResult {
     let interrupt = Interrupt::install();
     let signal: Mutex<Option<u8>> = Mutex::new(None);
     let result = pool.install(|| {
-        beam_study::run(&sc, t_end, sc.step, sample, args.force_step, &mut |t| {
+        study::run(&sc, t_end, sc.step, sample, args.force_step, &mut |t| {
             interrupt.requested().map(|(name, code)| {
                 *signal.lock().expect("not poisoned") = Some(code);
                 format!("{name}: stopped at t = {t}; nothing was written")
@@ -334,7 +334,7 @@ fn work_precision(args: &WorkPrecisionArgs) -> CmdResult {
     }
     let pool = pool(Some(args.threads))?;
     let (points, reference_error) = pool
-        .install(|| beam_study::work_precision(args.elements_per_member as usize, args.repetitions as usize))
+        .install(|| study::work_precision(args.elements_per_member as usize, args.repetitions as usize))
         .map_err(|e| match e {
             RunFailure::Input(m) => Failure::Input(m),
             RunFailure::Numerical(m) => Failure::Run(m),
@@ -366,7 +366,7 @@ fn work_precision(args: &WorkPrecisionArgs) -> CmdResult {
     for target in [1e-2, 1e-3] {
         let mut row = serde_json::Map::new();
         for m in ["liemid", "liemid4", "newmark"] {
-            let v = beam_study::time_to_error(&points, m, target);
+            let v = study::time_to_error(&points, m, target);
             say(format!(
                 "CPU time to {target:e}: {m:<8} {}",
                 match v {

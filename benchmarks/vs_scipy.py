@@ -3,7 +3,7 @@ top to t = 0.8, at an attitude error of 1e-6; the Python overhead of liemid.inte
 its Rust run; the cost of a Python callable torque per step; liemid.ensemble on 1 and 2
 threads. Installs nothing: without scipy, the comparison is skipped with a message.
 
-Run: python crates/liemid-py/benchmarks/vs_scipy.py
+Run: python benchmarks/vs_scipy.py
 """
 
 from __future__ import annotations

@@ -6,13 +6,14 @@ use std::time::Instant;
 
 use liemid::error::Num;
 use liemid::many::problems;
-use liemid::many::{Bodies, FreeRotation, Interaction, Totals};
+use liemid::many::{Bodies, Interaction, Totals};
 use serde_json::json;
 
-use crate::{CmdResult, Failure};
-use liemid_cli::interrupt::{progress, Interrupt};
-use liemid_cli::output::{plural, OutputPlan, TrajectoryWriter};
-use liemid_cli::scenario::Format;
+use super::scenario::{self, parse_cutoff_form, Model, Rotation, Settings};
+use crate::rigid::scenario::Format;
+use crate::shared::command::{CmdResult, Failure};
+use crate::shared::interrupt::{progress, Interrupt};
+use crate::shared::output::{plural, OutputPlan, TrajectoryWriter};
 
 /// The densest dipolar fluid accepted: the WCA spheres have diameter 1 and the bodies start
 /// on a simple cubic lattice, so above 1.2 (lattice spacing 0.94) neighbours start deep in
@@ -35,46 +36,6 @@ fn available_memory() -> Option<u64> {
     let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
     let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kb * 1024)
-}
-
-/// Which built-in many-body model.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Model {
-    /// Fast Lagrangian tops in uniform gravity, each about its own pivot.
-    Independent,
-    /// Torque-free asymmetric rotors.
-    TorqueFree,
-    /// A dipolar fluid: point dipoles with WCA repulsion in a periodic box.
-    Dipoles,
-}
-
-/// How each body turns between the impulses (`--rotation`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Rotation {
-    /// The torque-free midpoint Lie rotation in two half steps, as in `liemid-ea`.
-    Midpoint,
-    /// The exact torque-free flow, as in `liemid-ex` (no Newton solve).
-    Exact,
-}
-
-impl Rotation {
-    fn free_rotation(self) -> FreeRotation {
-        match self {
-            Rotation::Midpoint => FreeRotation::Midpoint,
-            Rotation::Exact => FreeRotation::Exact,
-        }
-    }
-}
-
-impl Model {
-    /// The name on the command line and in files.
-    pub fn key(self) -> &'static str {
-        match self {
-            Model::Independent => "independent",
-            Model::TorqueFree => "torque-free",
-            Model::Dipoles => "dipoles",
-        }
-    }
 }
 
 /// Arguments of `liemid many`.
@@ -165,141 +126,11 @@ struct Observers {
     box_length: Option<f64>,
 }
 
-/// The settings of a run, from the scenario file and the command line.
-struct Settings {
-    model: Model,
-    rotation: FreeRotation,
-    thermostat: Option<(f64, f64)>,
-    bodies: usize,
-    seed: u64,
-    density: f64,
-    cutoff: Option<f64>,
-    switch_start: Option<f64>,
-    cutoff_form: liemid::interactions::CutoffForm,
-    step: Option<f64>,
-    t_end: Option<f64>,
-    out: Option<PathBuf>,
-    every: u64,
-}
-
-/// The cutoff form named `key`.
-fn parse_cutoff_form(key: &str) -> Result<liemid::interactions::CutoffForm, String> {
-    use liemid::interactions::CutoffForm;
-    [CutoffForm::Switched, CutoffForm::ShiftedForce]
-        .into_iter()
-        .find(|f| f.key() == key)
-        .ok_or_else(|| format!("unknown cutoff form \"{key}\" (switched, shifted-force)"))
-}
-
 fn settings(args: &ManyArgs) -> Result<Settings, String> {
-    let mut s = Settings {
-        model: Model::Independent,
-        rotation: FreeRotation::Midpoint,
-        thermostat: None,
-        bodies: 1000,
-        seed: 1,
-        density: 0.3,
-        cutoff: None,
-        switch_start: None,
-        cutoff_form: liemid::interactions::CutoffForm::Switched,
-        step: None,
-        t_end: None,
-        out: None,
-        every: 10,
+    let mut s = match &args.scenario {
+        Some(path) => scenario::read(path)?,
+        None => Settings::default(),
     };
-    if let Some(path) = &args.scenario {
-        let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| format!("{file}: cannot read: {e}"))?;
-        let mut parse = || -> Result<(), String> {
-            let root = liemid_cli::scenario::parse_table(&text)?;
-            for key in root.keys() {
-                if !["system", "integrator", "output"].contains(&key.as_str()) {
-                    let hint = if ["body", "initial", "torque"].contains(&key.as_str()) {
-                        "; this is a single-body scenario: run it with `liemid run FILE`"
-                    } else {
-                        ""
-                    };
-                    return Err(format!(
-                        "unknown section or key `{key}` (sections: system, integrator, output){hint}"
-                    ));
-                }
-            }
-            use liemid_cli::scenario::Section;
-            if let Some(sys) = Section::new(
-                &root,
-                "system",
-                &[
-                    "model",
-                    "bodies",
-                    "seed",
-                    "density",
-                    "cutoff",
-                    "switch_start",
-                    "cutoff_form",
-                ],
-                true,
-            )? {
-                if let Some(m) = sys.string("model")? {
-                    s.model = match m {
-                        "independent" => Model::Independent,
-                        "torque-free" => Model::TorqueFree,
-                        "dipoles" => Model::Dipoles,
-                        other => {
-                            return Err(sys.err(
-                                "model",
-                                format!("unknown model \"{other}\" (independent, torque-free, dipoles)"),
-                            ))
-                        }
-                    };
-                }
-                if let Some(n) = sys.count("bodies")? {
-                    s.bodies = n as usize;
-                }
-                if let Some(n) = sys.count("seed")? {
-                    s.seed = n;
-                }
-                if let Some(d) = sys.number("density")? {
-                    s.density = d;
-                }
-                s.cutoff = sys.number("cutoff")?;
-                s.switch_start = sys.number("switch_start")?;
-                if let Some(f) = sys.string("cutoff_form")? {
-                    s.cutoff_form = parse_cutoff_form(f).map_err(|e| sys.err("cutoff_form", e))?;
-                }
-            }
-            if let Some(integ) = Section::new(
-                &root,
-                "integrator",
-                &["step", "t_end", "rotation", "temperature", "friction"],
-                false,
-            )? {
-                if let Some(kt) = integ.number("temperature")? {
-                    s.thermostat = Some((kt, integ.number("friction")?.unwrap_or(1.0)));
-                } else if integ.number("friction")?.is_some() {
-                    return Err(integ.err("friction", "needs a temperature"));
-                }
-                s.step = integ.number("step")?;
-                s.t_end = integ.number("t_end")?;
-                if let Some(r) = integ.string("rotation")? {
-                    s.rotation = match r {
-                        "midpoint" => FreeRotation::Midpoint,
-                        "exact" => FreeRotation::Exact,
-                        other => {
-                            return Err(integ.err("rotation", format!("unknown rotation \"{other}\" (midpoint, exact)")))
-                        }
-                    };
-                }
-            }
-            if let Some(out) = Section::new(&root, "output", &["path", "every"], false)? {
-                s.out = out.string("path")?.map(PathBuf::from);
-                if let Some(e) = out.count("every")? {
-                    s.every = e;
-                }
-            }
-            Ok(())
-        };
-        parse().map_err(|e| format!("{file}: {e}"))?;
-    }
     if let Some(m) = args.model {
         s.model = m;
     }
@@ -381,7 +212,7 @@ fn run_model<I: Interaction>(
         None => None,
     };
     let mut frames = match &observers.trajectory {
-        Some((p, _)) => Some(liemid_cli::xyz::FrameWriter::create(p).map_err(Failure::Run)?),
+        Some((p, _)) => Some(crate::shared::xyz::FrameWriter::create(p).map_err(Failure::Run)?),
         None => None,
     };
     bodies
@@ -404,25 +235,26 @@ fn run_model<I: Interaction>(
         }
         Ok(())
     };
-    let keep = |out: Option<TrajectoryWriter>, frames: Option<liemid_cli::xyz::FrameWriter>| {
+    let keep = |out: Option<TrajectoryWriter>, frames: Option<crate::shared::xyz::FrameWriter>| {
         out.map(|w| format!("; {}", w.keep_partial())).unwrap_or_default()
             + &frames.map(|w| format!("; {}", w.keep_partial())).unwrap_or_default()
     };
     let traj_every = observers.trajectory.as_ref().map_or(u64::MAX, |(_, k)| *k);
     let box_length = observers.box_length;
-    let mut observe = |b: &Bodies, frames: &mut Option<liemid_cli::xyz::FrameWriter>, k: u64| -> Result<(), String> {
-        if let Some(h) = observers.rdf.as_mut() {
-            if k % args.every == 0 || k == steps {
-                h.add(&b.position, box_length);
+    let mut observe =
+        |b: &Bodies, frames: &mut Option<crate::shared::xyz::FrameWriter>, k: u64| -> Result<(), String> {
+            if let Some(h) = observers.rdf.as_mut() {
+                if k % args.every == 0 || k == steps {
+                    h.add(&b.position, box_length);
+                }
             }
-        }
-        if let Some(w) = frames.as_mut() {
-            if k % traj_every == 0 || k == steps {
-                w.write_frame(b, box_length)?;
+            if let Some(w) = frames.as_mut() {
+                if k % traj_every == 0 || k == steps {
+                    w.write_frame(b, box_length)?;
+                }
             }
-        }
-        Ok(())
-    };
+            Ok(())
+        };
     if let Err(e) = write(&bodies, &mut out).and_then(|()| observe(&bodies, &mut frames, 0)) {
         return Err(Failure::Run(format!("{e}{}", keep(out, frames))));
     }
@@ -685,7 +517,7 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
         for (r, v) in &g {
             text += &format!("{r:?},{v:?}\n");
         }
-        liemid_cli::output::write_atomically(csv, text.as_bytes())
+        crate::shared::output::write_atomically(csv, text.as_bytes())
             .map_err(|e| Failure::Run(format!("{}: cannot write: {e}", csv.display())))?;
         let title = format!(
             "{}: g(r) over {} configurations ({} bodies)",
@@ -693,7 +525,7 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
             h.samples,
             bodies.len()
         );
-        liemid_cli::plot::curve(png, &title, "r", "g(r)", &g).map_err(Failure::Run)?;
+        crate::shared::plot::curve(png, &title, "r", "g(r)", &g).map_err(Failure::Run)?;
     }
     let body_steps = steps as f64 * bodies.len() as f64;
     let throughput = if seconds > 0.0 { body_steps / seconds } else { f64::NAN };
@@ -735,7 +567,7 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
     match cli.json.as_deref() {
         Some("-") => println!("{summary}"),
         Some(path) => {
-            liemid_cli::output::write_atomically(Path::new(path), (summary.to_string() + "\n").as_bytes())
+            crate::shared::output::write_atomically(Path::new(path), (summary.to_string() + "\n").as_bytes())
                 .map_err(|e| Failure::Run(format!("{path}: cannot write: {e}")))?;
             println!("wrote {path}");
         }

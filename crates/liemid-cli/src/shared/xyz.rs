@@ -20,7 +20,7 @@ use std::path::{Path, PathBuf};
 use liemid::many::Bodies;
 use liemid::so3::Quaternion;
 
-use crate::output::partial_path;
+use crate::shared::output::partial_path;
 
 /// Bytes buffered before a write.
 const BUFFER: usize = 1 << 16;

@@ -7,9 +7,9 @@ use std::time::Instant;
 use liemid::{advance, CountingTorque, RigidBodySystem, RigidState, RotationMethod, RunSummary};
 use serde::Serialize;
 
-use crate::baseline;
-use crate::converge::Reference;
-use crate::scenario::Scenario;
+use crate::rigid::baseline;
+use crate::rigid::converge::Reference;
+use crate::rigid::scenario::Scenario;
 
 /// A method in the study: fixed-step liemid method or the adaptive baseline.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -366,7 +366,7 @@ pub fn time_to_reach(curve: &Curve, target: f64) -> Option<f64> {
 /// long ones (with an error estimate from the run at 1e-13).
 fn reference(scenario: &Scenario, t_end: f64) -> Result<(RigidState, Reference), String> {
     if t_end - scenario.initial.t <= 2.0 {
-        return crate::converge::reference(scenario, t_end, 6.25e-5).map_err(|e| e.to_string());
+        return crate::rigid::converge::reference(scenario, t_end, 6.25e-5).map_err(|e| e.to_string());
     }
     let fine = baseline::dop853(&scenario.system, scenario.initial, t_end, 1e-14)?;
     let coarse = baseline::dop853(&scenario.system, scenario.initial, t_end, 1e-13)?;
@@ -387,7 +387,7 @@ fn reference(scenario: &Scenario, t_end: f64) -> Result<(RigidState, Reference),
 pub fn study(scenario: &Scenario, t_end: f64, options: &Options) -> Result<Study, String> {
     let (ref_state, reference) = reference(scenario, t_end)?;
     let mut methods = Vec::new();
-    let bar = crate::interrupt::progress(options.entries.len() as u64, "methods", true);
+    let bar = crate::shared::interrupt::progress(options.entries.len() as u64, "methods", true);
     for entry in &options.entries {
         let curve = match entry {
             Entry::Fixed(m) => curve_fixed(scenario, *m, t_end, &ref_state, options),

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use crate::output::npy_header;
+use crate::shared::output::npy_header;
 
 /// The bytes of a `.npy` file holding `data` as `rows × columns`.
 #[must_use]

@@ -1,5 +1,6 @@
 //! `liemid run`: integrate one scenario, stream its trajectory, checkpoint and resume, and
-//! print a summary that says what is conserved.
+//! print a summary that says what is conserved; the front ends of `liemid converge`,
+//! `liemid work-precision` and `liemid methods`.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -9,11 +10,13 @@ use liemid::error::Num;
 use liemid::{RotationMethod, Run, Vec3};
 use serde_json::json;
 
-use crate::{check_positive, parse_method, CmdResult, Failure};
-use liemid_cli::checkpoint::{Checkpoint, Settings, Source};
-use liemid_cli::interrupt::{progress, Interrupt};
-use liemid_cli::output::{plural, OutputPlan, TrajectoryWriter, COLUMNS};
-use liemid_cli::scenario::{self, Conservation, Format, Scenario};
+use super::{converge, study as work_precision};
+use crate::rigid::scenario::{self, Conservation, Format, Scenario};
+use crate::shared::checkpoint::{Checkpoint, Settings, Source};
+use crate::shared::command::{check_positive, check_study_outputs, report, CmdResult, Failure};
+use crate::shared::interrupt::{progress, Interrupt};
+use crate::shared::output::{plural, OutputPlan, TrajectoryWriter, COLUMNS};
+use crate::shared::plot;
 
 /// The largest trajectory `run` writes unless `--allow-large-output` is given (bytes).
 pub const MAX_TRAJECTORY_BYTES: f64 = 4.0 * (1u64 << 30) as f64;
@@ -523,4 +526,194 @@ fn print_summary(
     } else {
         print!("{text}");
     }
+}
+
+#[derive(Args, Debug)]
+pub struct MethodsArgs {
+    /// The spin-dynamics methods of `liemid spins` instead of the rigid-body ones.
+    #[arg(long)]
+    pub spins: bool,
+    /// As JSON (with `--spins`).
+    #[arg(long, requires = "spins")]
+    pub json: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct ConvergeArgs {
+    /// Built-in problem.
+    #[arg(long, default_value = "fast-top")]
+    pub problem: String,
+    /// Scenario file (TOML) instead of a built-in problem.
+    #[arg(long, conflicts_with = "problem")]
+    pub scenario: Option<PathBuf>,
+    /// Comma-separated methods [default: all eight].
+    #[arg(long, value_delimiter = ',')]
+    pub methods: Option<Vec<String>>,
+    /// Comma-separated step sizes [default: 2e-3 halved five times].
+    #[arg(long, allow_negative_numbers = true, value_delimiter = ',')]
+    pub steps: Option<Vec<f64>>,
+    /// End time [default: the problem's].
+    #[arg(long, allow_negative_numbers = true)]
+    pub t_end: Option<f64>,
+    /// Plot file: NAME writes NAME.svg and NAME.png; NAME.svg or NAME.png writes one.
+    #[arg(long, default_value = "convergence")]
+    pub plot: PathBuf,
+    /// Write no plot.
+    #[arg(long)]
+    pub no_plot: bool,
+    /// Write the study as JSON to FILE, or to standard output with `-` (the table then
+    /// goes to standard error).
+    #[arg(long)]
+    pub json: Option<String>,
+}
+
+#[derive(Args, Debug)]
+pub struct WorkPrecisionArgs {
+    /// Built-in problem.
+    #[arg(long, default_value = "fast-top")]
+    pub problem: String,
+    /// Scenario file (TOML) instead of a built-in problem.
+    #[arg(long, conflicts_with = "problem")]
+    pub scenario: Option<PathBuf>,
+    /// End time [default: the problem's].
+    #[arg(long, allow_negative_numbers = true)]
+    pub t_end: Option<f64>,
+    /// Comma-separated methods, `dop853` for the adaptive baseline [default: all].
+    #[arg(long, value_delimiter = ',')]
+    pub methods: Option<Vec<String>>,
+    /// Timed repetitions per point; the median is reported (at least 5).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(5..))]
+    pub repetitions: u64,
+    /// Stop a method's sequence once one run takes longer than this many seconds.
+    #[arg(long, allow_negative_numbers = true, default_value_t = 0.5)]
+    pub budget: f64,
+    /// Stop a method's sequence once its attitude error is below this.
+    #[arg(long, allow_negative_numbers = true, default_value_t = 1e-11)]
+    pub min_error: f64,
+    /// At most this many points per method.
+    #[arg(long, default_value_t = 16)]
+    pub max_points: usize,
+    /// Plot file: NAME writes NAME.svg and NAME.png; NAME.svg or NAME.png writes one.
+    #[arg(long, default_value = "work-precision")]
+    pub plot: PathBuf,
+    /// Write no plot.
+    #[arg(long)]
+    pub no_plot: bool,
+    /// Write the study as JSON to FILE, or to standard output with `-`.
+    #[arg(long)]
+    pub json: Option<String>,
+}
+
+/// Print the rigid-body methods: order, torque evaluations a step, what they conserve.
+pub fn methods() {
+    println!(
+        "{:<11} {:<12} {:>5}  {:<22} conserves",
+        "name", "method", "order", "torque evals/step"
+    );
+    for m in RotationMethod::ALL {
+        println!(
+            "{:<11} {:<12} {:>5}  {:<22} {}",
+            m.key(),
+            m.name(),
+            m.order(),
+            m.torque_evaluations_per_step(),
+            m.description()
+        );
+    }
+}
+
+/// The rotation method named `name`, or an input error listing them.
+pub fn parse_method(name: &str) -> Result<RotationMethod, Failure> {
+    RotationMethod::from_key(name).ok_or_else(|| {
+        let known: Vec<&str> = RotationMethod::ALL.iter().map(|m| m.key()).collect();
+        Failure::Input(format!("unknown method `{name}` (known: {})", known.join(", ")))
+    })
+}
+
+fn load_scenario(file: Option<&Path>, problem: &str) -> Result<Scenario, Failure> {
+    match file {
+        Some(path) => scenario::load(path).map_err(Failure::Input),
+        None => scenario::builtin(problem).map_err(Failure::Input),
+    }
+}
+
+/// Run `liemid converge`.
+pub fn converge_cmd(args: ConvergeArgs) -> CmdResult {
+    let sc = load_scenario(args.scenario.as_deref(), &args.problem)?;
+    let methods: Vec<RotationMethod> = match &args.methods {
+        None => RotationMethod::PAPER.to_vec(),
+        Some(list) => list.iter().map(|m| parse_method(m.trim())).collect::<Result<_, _>>()?,
+    };
+    let steps: Vec<f64> = match &args.steps {
+        None => (0..6).map(|k| 2e-3 / f64::from(1u32 << k)).collect(),
+        Some(list) => list
+            .iter()
+            .map(|&h| check_positive("steps", h))
+            .collect::<Result<_, _>>()?,
+    };
+    if steps.is_empty() || methods.is_empty() {
+        return Err(Failure::Input("--steps and --methods must not be empty".into()));
+    }
+    let t_end = study_end(&sc, args.t_end)?;
+    check_study_outputs(args.scenario.as_deref(), &args.plot, args.no_plot, args.json.as_deref())?;
+    let study = converge::study(&sc, &methods, &steps, t_end).map_err(|e| Failure::Run(format!("reference: {e}")))?;
+    report(
+        &converge::table(&study),
+        &study,
+        plot::Figure::Convergence(&study),
+        &args.plot,
+        args.no_plot,
+        args.json.as_deref(),
+    )
+}
+
+/// The end time of a study: `--t-end` if given (after the start), else the scenario's.
+fn study_end(sc: &Scenario, t_end: Option<f64>) -> Result<f64, Failure> {
+    match t_end {
+        Some(t) if !t.is_finite() => Err(Failure::Input(format!("--t-end must be a finite number, found {t}"))),
+        Some(t) if t > sc.initial.t => Ok(t),
+        Some(t) => Err(Failure::Input(format!(
+            "--t-end {} must be after the start time {}",
+            Num(t),
+            Num(sc.initial.t)
+        ))),
+        None => Ok(sc.t_end),
+    }
+}
+
+/// Run `liemid work-precision`.
+pub fn work_precision_cmd(args: WorkPrecisionArgs) -> CmdResult {
+    let sc = load_scenario(args.scenario.as_deref(), &args.problem)?;
+    let entries: Vec<work_precision::Entry> = match &args.methods {
+        None => work_precision::Entry::all(),
+        Some(list) => list
+            .iter()
+            .map(|m| {
+                work_precision::Entry::from_key(m.trim()).ok_or_else(|| {
+                    Failure::Input(format!(
+                        "unknown method `{}` (see `liemid methods`, or dop853)",
+                        m.trim()
+                    ))
+                })
+            })
+            .collect::<Result<_, _>>()?,
+    };
+    let t_end = study_end(&sc, args.t_end)?;
+    let options = work_precision::Options {
+        entries,
+        repetitions: args.repetitions as usize,
+        budget: check_positive("budget", args.budget)?,
+        min_error: check_positive("min-error", args.min_error)?,
+        max_points: args.max_points.max(1),
+    };
+    check_study_outputs(args.scenario.as_deref(), &args.plot, args.no_plot, args.json.as_deref())?;
+    let study = work_precision::study(&sc, t_end, &options).map_err(Failure::Run)?;
+    report(
+        &work_precision::table(&study),
+        &study,
+        plot::Figure::WorkPrecision(&study),
+        &args.plot,
+        args.no_plot,
+        args.json.as_deref(),
+    )
 }

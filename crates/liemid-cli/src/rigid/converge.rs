@@ -4,7 +4,7 @@
 use liemid::{integrate_to, RigidState, RotationIntegrator, RotationMethod, RungeKutta4Quaternion};
 use serde::Serialize;
 
-use crate::scenario::Scenario;
+use crate::rigid::scenario::Scenario;
 
 /// One method's errors.
 #[derive(Clone, Debug, Serialize)]
@@ -125,7 +125,7 @@ pub fn study(
 ) -> Result<Study, liemid::Error> {
     let h_min = steps.iter().copied().fold(f64::INFINITY, f64::min);
     let (ref_state, reference) = reference(scenario, t_end, h_min)?;
-    let bar = crate::interrupt::progress((methods.len() * steps.len()) as u64, "runs", true);
+    let bar = crate::shared::interrupt::progress((methods.len() * steps.len()) as u64, "runs", true);
     let results: Vec<MethodErrors> = std::thread::scope(|scope| {
         let handles: Vec<_> = methods
             .iter()

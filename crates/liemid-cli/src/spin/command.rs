@@ -10,12 +10,12 @@ use liemid::spin::{SpinIntegrator, SpinMethod};
 use liemid::Vec3;
 use serde_json::json;
 
-use crate::{CmdResult, Failure};
-use liemid_cli::interrupt::{progress, Interrupt};
-use liemid_cli::output::{plural, write_atomically, OutputPlan, TrajectoryWriter};
-use liemid_cli::scenario::Format;
-use liemid_cli::spin_scenario::{self, SpinScenario};
-use liemid_cli::spin_study;
+use crate::rigid::scenario::Format;
+use crate::shared::command::{CmdResult, Failure};
+use crate::shared::interrupt::{progress, Interrupt};
+use crate::shared::output::{plural, write_atomically, OutputPlan, TrajectoryWriter};
+use crate::spin::scenario::{self, SpinScenario};
+use crate::spin::study;
 
 /// Columns of the time series.
 const COLUMNS: [&str; 5] = ["t", "energy", "mx", "my", "mz"];
@@ -105,8 +105,8 @@ pub struct WorkPrecisionArgs {
 fn load(file: Option<&Path>, common: &CommonArgs) -> Result<SpinScenario, Failure> {
     let mut sc = match (file, &common.problem) {
         (Some(_), Some(_)) => return Err(Failure::Input("give a scenario file or --problem, not both".into())),
-        (Some(f), None) => spin_scenario::load(f),
-        (None, p) => spin_scenario::builtin(p.as_deref().unwrap_or("square-64")),
+        (Some(f), None) => scenario::load(f),
+        (None, p) => scenario::builtin(p.as_deref().unwrap_or("square-64")),
     }
     .map_err(Failure::Input)?;
     if let Some(t) = common.t_end {
@@ -139,7 +139,7 @@ pub fn spins(args: SpinsArgs) -> CmdResult {
     let input = Failure::Input;
     let mut sc = load(args.file.as_deref(), &args.common)?;
     if let Some(m) = &args.method {
-        sc.method = spin_scenario::parse_method(m).map_err(input)?;
+        sc.method = scenario::parse_method(m).map_err(input)?;
     }
     if let Some(h) = args.step {
         sc.step = h;
@@ -264,11 +264,11 @@ pub fn spins(args: SpinsArgs) -> CmdResult {
     }
     if let Some(p) = &args.final_spins {
         let flat: Vec<f64> = spins.iter().flat_map(|s| s.to_array()).collect();
-        write_atomically(p, &liemid_cli::npy::matrix_bytes(n, 3, &flat))
+        write_atomically(p, &crate::shared::npy::matrix_bytes(n, 3, &flat))
             .map_err(|e| Failure::Run(format!("{}: cannot write: {e}", p.display())))?;
     }
     if let Some(p) = &args.snapshot {
-        liemid_cli::plot::spin_snapshot(
+        crate::shared::plot::spin_snapshot(
             p,
             &sc.system.lattice.size(),
             &spins,
@@ -350,7 +350,7 @@ fn work_precision(args: WorkPrecisionArgs) -> CmdResult {
             .collect(),
         Some(list) => list
             .iter()
-            .map(|m| spin_scenario::parse_method(m))
+            .map(|m| scenario::parse_method(m))
             .collect::<Result<_, _>>()
             .map_err(input)?,
     };
@@ -364,7 +364,7 @@ fn work_precision(args: WorkPrecisionArgs) -> CmdResult {
     let plot_paths = if args.no_plot {
         Vec::new()
     } else {
-        liemid_cli::plot::plot_paths(&args.plot)
+        crate::shared::plot::plot_paths(&args.plot)
     };
     for p in &plot_paths {
         plan.add("--plot", p).map_err(input)?;
@@ -374,9 +374,9 @@ fn work_precision(args: WorkPrecisionArgs) -> CmdResult {
     }
     let pool = pool(args.common.threads)?;
     let study = pool
-        .install(|| spin_study::run(&sc, &methods, args.budget))
+        .install(|| study::run(&sc, &methods, args.budget))
         .map_err(Failure::Run)?;
-    let table = spin_study::table(&study);
+    let table = study::table(&study);
     if args.json.as_deref() == Some("-") {
         eprint!("{table}");
         println!("{}", serde_json::to_string(&study).expect("serialisable"));
@@ -392,7 +392,7 @@ fn work_precision(args: WorkPrecisionArgs) -> CmdResult {
         }
     }
     for p in &plot_paths {
-        liemid_cli::plot::write(p, &liemid_cli::plot::Figure::SpinWorkPrecision(&study)).map_err(Failure::Run)?;
+        crate::shared::plot::write(p, &crate::shared::plot::Figure::SpinWorkPrecision(&study)).map_err(Failure::Run)?;
         if args.json.as_deref() != Some("-") {
             println!("wrote {}", p.display());
         }

@@ -6,7 +6,7 @@ use std::time::Instant;
 use liemid::beam::{BeamMethod, BeamSystem, Newmark};
 use serde_json::{json, Value};
 
-use crate::beam_scenario::{BeamIntegrator, BeamScenario};
+use crate::beam::scenario::{BeamIntegrator, BeamScenario};
 
 /// Why a run failed: bad input (a step above the critical one, a bad step) or a failure
 /// of the integration itself.
@@ -239,7 +239,7 @@ fn history_error(run: &BeamRun, reference: &BeamRun, node: usize, sample: f64) -
 pub fn work_precision(per_leg: usize, repetitions: usize) -> Result<(Vec<WorkPoint>, f64), RunFailure> {
     let scenario = |method: BeamIntegrator| -> Result<BeamScenario, RunFailure> {
         let mut s =
-            crate::beam_scenario::builtin("right-angle-cantilever", Some(per_leg)).map_err(RunFailure::Input)?;
+            crate::beam::scenario::builtin("right-angle-cantilever", Some(per_leg)).map_err(RunFailure::Input)?;
         s.method = method;
         Ok(s)
     };

@@ -17,7 +17,7 @@ use std::io::{self, Seek, SeekFrom, Write};
 use std::os::unix::fs::{FileTypeExt, MetadataExt};
 use std::path::{Path, PathBuf};
 
-use crate::scenario::Format;
+use crate::rigid::scenario::Format;
 
 /// Column names of a trajectory row.
 pub const COLUMNS: [&str; 17] = [

@@ -11,7 +11,7 @@ use liemid::spin::{SpinIntegrator, SpinMethod};
 use liemid::Vec3;
 use serde::Serialize;
 
-use crate::spin_scenario::SpinScenario;
+use crate::spin::scenario::SpinScenario;
 
 /// One run.
 #[derive(Clone, Debug, Serialize)]
