@@ -10,10 +10,10 @@ use serde_json::json;
 
 use crate::beam::scenario::{self, BeamIntegrator, BeamScenario};
 use crate::beam::study::{self, RunFailure};
-use crate::rigid::scenario::Format;
 use crate::shared::command::pool;
 use crate::shared::command::{CmdResult, Failure};
 use crate::shared::interrupt::Interrupt;
+use crate::shared::output::Format;
 use crate::shared::output::{write_atomically, OutputPlan, TrajectoryWriter};
 use crate::shared::plot::{self, Histories};
 

@@ -10,9 +10,9 @@ use liemid::many::{Bodies, Interaction, Totals};
 use serde_json::json;
 
 use super::scenario::{self, parse_cutoff_form, Model, Rotation, Settings};
-use crate::rigid::scenario::Format;
 use crate::shared::command::{CmdResult, Failure};
 use crate::shared::interrupt::{progress, Interrupt};
+use crate::shared::output::Format;
 use crate::shared::output::{plural, OutputPlan, TrajectoryWriter};
 
 /// The densest dipolar fluid accepted: the WCA spheres have diameter 1 and the bodies start

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use liemid::many::FreeRotation;
 
-use crate::rigid::scenario::{parse_table, Section};
+use crate::shared::toml_table::{parse_table, Section};
 
 /// Which built-in many-body model.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]

@@ -8,4 +8,5 @@ pub mod interrupt;
 pub mod npy;
 pub mod output;
 pub mod plot;
+pub mod toml_table;
 pub mod xyz;

@@ -17,7 +17,14 @@ use std::io::{self, Seek, SeekFrom, Write};
 use std::os::unix::fs::{FileTypeExt, MetadataExt};
 use std::path::{Path, PathBuf};
 
-use crate::rigid::scenario::Format;
+/// Trajectory file format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Format {
+    /// Comma-separated values with a header line.
+    Csv,
+    /// NumPy `.npy`, a little-endian f64 matrix.
+    Npy,
+}
 
 /// Column names of a trajectory row.
 pub const COLUMNS: [&str; 17] = [

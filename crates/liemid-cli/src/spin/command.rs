@@ -10,9 +10,9 @@ use liemid::spin::{SpinIntegrator, SpinMethod};
 use liemid::Vec3;
 use serde_json::json;
 
-use crate::rigid::scenario::Format;
 use crate::shared::command::{CmdResult, Failure};
 use crate::shared::interrupt::{progress, Interrupt};
+use crate::shared::output::Format;
 use crate::shared::output::{plural, write_atomically, OutputPlan, TrajectoryWriter};
 use crate::spin::scenario::{self, SpinScenario};
 use crate::spin::study;

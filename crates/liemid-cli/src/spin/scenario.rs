@@ -28,7 +28,7 @@ use std::path::{Path, PathBuf};
 use liemid::spin::{self, problems, Lattice, LatticeKind, SpinMethod, SpinSystem};
 use liemid::Vec3;
 
-use crate::rigid::scenario::{parse_table, Section};
+use crate::shared::toml_table::{parse_table, Section};
 
 /// A spin scenario: the system, its initial spins, the method and the run's settings.
 #[derive(Clone, Debug)]
