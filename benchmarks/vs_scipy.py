@@ -1,7 +1,8 @@
 """liemid.integrate against scipy.integrate.solve_ivp(method="DOP853") on the paper's fast
 top to t = 0.8, at an attitude error of 1e-6; the Python overhead of liemid.integrate over
 its Rust run; the cost of a Python callable torque per step; liemid.ensemble on 1 and 2
-threads. Installs nothing: without scipy, the comparison is skipped with a message.
+threads. Installs nothing: without numpy or the liemid package the script skips with a
+message; without scipy, the solve_ivp comparison is skipped with a message.
 
 Run: python benchmarks/vs_scipy.py
 """
@@ -9,11 +10,19 @@ Run: python benchmarks/vs_scipy.py
 from __future__ import annotations
 
 import statistics
+import sys
 import time
 
-import numpy as np
-
-import liemid
+try:
+    import numpy as np
+except ImportError:
+    print("vs_scipy: numpy is not installed; skipping")
+    sys.exit(0)
+try:
+    import liemid
+except ImportError:
+    print("vs_scipy: the liemid package is not installed (pip install ./crates/liemid-py); skipping")
+    sys.exit(0)
 
 TOP = liemid.problems.fast_top()
 T_END = 0.8
