@@ -11,10 +11,10 @@ use serde_json::json;
 use crate::beam::scenario::{self, BeamIntegrator, BeamScenario};
 use crate::beam::study::{self, RunFailure};
 use crate::shared::command::pool;
-use crate::shared::command::{CmdResult, Failure};
+use crate::shared::command::{emit_json, CmdResult, Failure};
 use crate::shared::interrupt::Interrupt;
 use crate::shared::output::Format;
-use crate::shared::output::{write_atomically, OutputPlan, TrajectoryWriter};
+use crate::shared::output::{OutputPlan, TrajectoryWriter};
 use crate::shared::plot::{self, Histories};
 
 /// Arguments of `liemid beam`.
@@ -114,16 +114,6 @@ fn load(args: &BeamArgs) -> Result<BeamScenario, Failure> {
         sc.sample = Some(s);
     }
     Ok(sc)
-}
-
-fn emit_json(target: Option<&str>, value: &serde_json::Value) -> CmdResult {
-    match target {
-        Some("-") => println!("{value}"),
-        Some(path) => write_atomically(Path::new(path), (value.to_string() + "\n").as_bytes())
-            .map_err(|e| Failure::Run(format!("{path}: cannot write: {e}")))?,
-        None => {}
-    }
-    Ok(())
 }
 
 /// Run `liemid beam`.

@@ -92,3 +92,15 @@ pub fn write_json<T: serde::Serialize>(target: &str, value: &T) -> CmdResult {
     }
     Ok(())
 }
+
+/// Write a summary as one line of JSON to `target` (`-` for standard output), atomically
+/// for files; nothing without a target.
+pub fn emit_json(target: Option<&str>, value: &serde_json::Value) -> CmdResult {
+    match target {
+        Some("-") => println!("{value}"),
+        Some(path) => output::write_atomically(Path::new(path), (value.to_string() + "\n").as_bytes())
+            .map_err(|e| Failure::Run(format!("{path}: cannot write: {e}")))?,
+        None => {}
+    }
+    Ok(())
+}

@@ -635,6 +635,28 @@ pub fn histories(path: &Path, h: &Histories<'_>) -> Result<(), String> {
     }
 }
 
+/// [`Histories`] stacked in one figure sharing the time axis, each panel with its own
+/// title and legend (the joint coordinates and the energy error of `liemid multibody`).
+///
+/// # Errors
+/// An extension other than `.svg` or `.png`, or a drawing or file error.
+pub fn stacked_histories(path: &Path, panels: &[Histories<'_>]) -> Result<(), String> {
+    register_font();
+    let size = (1100, 420 * panels.len().max(1) as u32);
+    match path.extension().and_then(|x| x.to_str()) {
+        Some("svg") => draw_stacked(SVGBackend::new(path, size).into_drawing_area(), panels),
+        Some("png") => draw_stacked(BitMapBackend::new(path, size).into_drawing_area(), panels),
+        _ => Err(format!("plot: {}: use a .svg or .png file name", path.display())),
+    }
+}
+
+fn draw_stacked<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, panels: &[Histories<'_>]) -> Result<(), String> {
+    for (area, h) in root.split_evenly((panels.len().max(1), 1)).into_iter().zip(panels) {
+        draw_histories(area, h)?;
+    }
+    root.present().map_err(e)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
