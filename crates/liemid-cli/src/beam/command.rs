@@ -170,12 +170,20 @@ pub fn beam(args: BeamArgs) -> CmdResult {
     let signal: Mutex<Option<u8>> = Mutex::new(None);
     let result = pool.install(|| {
         let title = args.view.as_ref().map(|_| sc.name.as_str());
-        study::run_viewed(&sc, t_end, sc.step, sample, args.force_step, &mut |t| {
-            interrupt.requested().map(|(name, code)| {
-                *signal.lock().expect("not poisoned") = Some(code);
-                format!("{name}: stopped at t = {t}; nothing was written")
-            })
-        }, title)
+        study::run_viewed(
+            &sc,
+            t_end,
+            sc.step,
+            sample,
+            args.force_step,
+            &mut |t| {
+                interrupt.requested().map(|(name, code)| {
+                    *signal.lock().expect("not poisoned") = Some(code);
+                    format!("{name}: stopped at t = {t}; nothing was written")
+                })
+            },
+            title,
+        )
     });
     let (run, page) = match result {
         Ok(r) => r,

@@ -158,7 +158,12 @@ pub fn run_viewed(
     let mut page = view.map(|title| {
         let scene = Scene::Beam {
             nodes: system.frame.nodes.len(),
-            elements: system.frame.elements.iter().map(|e| e.nodes.map(|i| i as u32)).collect(),
+            elements: system
+                .frame
+                .elements
+                .iter()
+                .map(|e| e.nodes.map(|i| i as u32))
+                .collect(),
         };
         let mut page = ViewPage::new(scene, title);
         page.set_energy_label("total energy (it changes while the loads act)");

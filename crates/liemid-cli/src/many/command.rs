@@ -233,26 +233,27 @@ fn run_model<I: Interaction>(
     };
     let mut max_de = 0.0f64;
     let mut page = observers.view.take();
-    let mut write = |b: &Bodies, out: &mut Option<TrajectoryWriter>, page: &mut Option<ViewPage>| -> Result<(), String> {
-        let tot = b.totals(model);
-        let de = ((tot.energy - first.energy) / first.energy).abs();
-        max_de = max_de.max(de);
-        if let Some(p) = page.as_mut() {
-            p.energy_error(b.t, (tot.energy - first.energy) / first.energy.abs());
-            let frame: Vec<f32> = (0..b.len())
-                .flat_map(|i| {
-                    let (x, q) = (b.position[i], view::quaternion(&b.rotation[i].m));
-                    [x.x as f32, x.y as f32, x.z as f32, q[0], q[1], q[2], q[3]]
-                })
-                .collect();
-            p.push_frame(b.t, &frame);
-        }
-        if let Some(w) = out.as_mut() {
-            let (p, l) = (tot.linear_momentum, tot.angular_momentum);
-            w.write_row(&[b.t, tot.energy, p.x, p.y, p.z, l.x, l.y, l.z])?;
-        }
-        Ok(())
-    };
+    let mut write =
+        |b: &Bodies, out: &mut Option<TrajectoryWriter>, page: &mut Option<ViewPage>| -> Result<(), String> {
+            let tot = b.totals(model);
+            let de = ((tot.energy - first.energy) / first.energy).abs();
+            max_de = max_de.max(de);
+            if let Some(p) = page.as_mut() {
+                p.energy_error(b.t, (tot.energy - first.energy) / first.energy.abs());
+                let frame: Vec<f32> = (0..b.len())
+                    .flat_map(|i| {
+                        let (x, q) = (b.position[i], view::quaternion(&b.rotation[i].m));
+                        [x.x as f32, x.y as f32, x.z as f32, q[0], q[1], q[2], q[3]]
+                    })
+                    .collect();
+                p.push_frame(b.t, &frame);
+            }
+            if let Some(w) = out.as_mut() {
+                let (p, l) = (tot.linear_momentum, tot.angular_momentum);
+                w.write_row(&[b.t, tot.energy, p.x, p.y, p.z, l.x, l.y, l.z])?;
+            }
+            Ok(())
+        };
     let keep = |out: Option<TrajectoryWriter>, frames: Option<crate::shared::xyz::FrameWriter>| {
         out.map(|w| format!("; {}", w.keep_partial())).unwrap_or_default()
             + &frames.map(|w| format!("; {}", w.keep_partial())).unwrap_or_default()

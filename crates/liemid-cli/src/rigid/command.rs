@@ -307,7 +307,10 @@ pub fn run(args: RunArgs) -> CmdResult {
     let sample = |page: &mut Option<ViewPage>, s: &liemid::RigidState, d: &liemid::Diagnostics| {
         if let Some(p) = page.as_mut() {
             let r = row(s, d);
-            p.push_frame(s.t, &r[4..13].iter().chain(&r[14..17]).map(|&v| v as f32).collect::<Vec<_>>());
+            p.push_frame(
+                s.t,
+                &r[4..13].iter().chain(&r[14..17]).map(|&v| v as f32).collect::<Vec<_>>(),
+            );
             p.energy_error(s.t, (d.energy - e0) / e0.abs().max(f64::MIN_POSITIVE));
         }
     };
@@ -391,7 +394,11 @@ pub fn run(args: RunArgs) -> CmdResult {
     }
     let trajectory = writer.map(TrajectoryWriter::finish).transpose().map_err(Failure::Run)?;
     let viewed = match (&page, &args.view) {
-        (Some(p), Some(path)) => Some(view::report(path, p.write(path, run.total_steps).map_err(Failure::Run)?, run.total_steps)),
+        (Some(p), Some(path)) => Some(view::report(
+            path,
+            p.write(path, run.total_steps).map_err(Failure::Run)?,
+            run.total_steps,
+        )),
         _ => None,
     };
     print_summary(

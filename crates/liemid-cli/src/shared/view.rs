@@ -361,12 +361,18 @@ impl ViewPage {
             frames.saturating_sub(1)
         )?;
         let meta_text = meta.to_string().replace("</", "<\\/");
-        write!(w, "<script type=\"application/json\" id=\"meta\">{meta_text}</script>\n")?;
+        write!(
+            w,
+            "<script type=\"application/json\" id=\"meta\">{meta_text}</script>\n"
+        )?;
         write_floats(w, "data-times", self.times.iter().copied().chain(last.map(|l| l.0)))?;
         write_floats(
             w,
             "data-frames",
-            self.frames.iter().copied().chain(last.into_iter().flat_map(|l| l.1.iter().copied())),
+            self.frames
+                .iter()
+                .copied()
+                .chain(last.into_iter().flat_map(|l| l.1.iter().copied())),
         )?;
         write_floats(w, "data-energy", self.energy.iter().flatten().copied())?;
         write_floats(w, "data-static", self.static_data().into_iter())?;
@@ -399,7 +405,10 @@ fn script_safe(text: &str) -> std::borrow::Cow<'_, str> {
 }
 
 fn escape_html(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
 }
 
 const BASE64: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
@@ -411,7 +420,11 @@ fn base64_into(bytes: &[u8], out: &mut Vec<u8>) {
         let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
         out.push(BASE64[(n >> 18) as usize & 63]);
         out.push(BASE64[(n >> 12) as usize & 63]);
-        out.push(if c.len() > 1 { BASE64[(n >> 6) as usize & 63] } else { b'=' });
+        out.push(if c.len() > 1 {
+            BASE64[(n >> 6) as usize & 63]
+        } else {
+            b'='
+        });
         out.push(if c.len() > 2 { BASE64[n as usize & 63] } else { b'=' });
     }
 }
@@ -442,16 +455,36 @@ pub fn quaternion(r: &[[f64; 3]; 3]) -> [f32; 4] {
     let t = r[0][0] + r[1][1] + r[2][2];
     let q = if t > 0.0 {
         let s = 2.0 * (1.0 + t).sqrt();
-        [0.25 * s, (r[2][1] - r[1][2]) / s, (r[0][2] - r[2][0]) / s, (r[1][0] - r[0][1]) / s]
+        [
+            0.25 * s,
+            (r[2][1] - r[1][2]) / s,
+            (r[0][2] - r[2][0]) / s,
+            (r[1][0] - r[0][1]) / s,
+        ]
     } else if r[0][0] > r[1][1] && r[0][0] > r[2][2] {
         let s = 2.0 * (1.0 + r[0][0] - r[1][1] - r[2][2]).sqrt();
-        [(r[2][1] - r[1][2]) / s, 0.25 * s, (r[0][1] + r[1][0]) / s, (r[0][2] + r[2][0]) / s]
+        [
+            (r[2][1] - r[1][2]) / s,
+            0.25 * s,
+            (r[0][1] + r[1][0]) / s,
+            (r[0][2] + r[2][0]) / s,
+        ]
     } else if r[1][1] > r[2][2] {
         let s = 2.0 * (1.0 + r[1][1] - r[0][0] - r[2][2]).sqrt();
-        [(r[0][2] - r[2][0]) / s, (r[0][1] + r[1][0]) / s, 0.25 * s, (r[1][2] + r[2][1]) / s]
+        [
+            (r[0][2] - r[2][0]) / s,
+            (r[0][1] + r[1][0]) / s,
+            0.25 * s,
+            (r[1][2] + r[2][1]) / s,
+        ]
     } else {
         let s = 2.0 * (1.0 + r[2][2] - r[0][0] - r[1][1]).sqrt();
-        [(r[1][0] - r[0][1]) / s, (r[0][2] + r[2][0]) / s, (r[1][2] + r[2][1]) / s, 0.25 * s]
+        [
+            (r[1][0] - r[0][1]) / s,
+            (r[0][2] + r[2][0]) / s,
+            (r[1][2] + r[2][1]) / s,
+            0.25 * s,
+        ]
     };
     q.map(|v| v as f32)
 }
@@ -504,7 +537,9 @@ mod tests {
 
     #[test]
     fn frames_stay_within_the_budget_and_the_last_is_kept() {
-        let scene = Scene::Spins { sites: vec![[0.0; 3]; 100] };
+        let scene = Scene::Spins {
+            sites: vec![[0.0; 3]; 100],
+        };
         let mut page = ViewPage::with_budget(scene, "x", 4 * 300 * 50);
         for k in 0..1000 {
             page.push_frame(k as f64, &[k as f32; 300]);
