@@ -287,7 +287,9 @@
 
     // Camera and size.
     const r = view.radius;
-    camera.position.copy(view.centre).add(new THREE.Vector3(1.5 * r, 1.0 * r, 1.9 * r));
+    const flat = sc.kind === 'spins' && stat.every((v, k) => k % 3 !== 2 || v === 0);
+    camera.up.set(0, flat ? 0 : 1, flat ? 1 : 0);
+    camera.position.copy(view.centre).add(flat ? new THREE.Vector3(0, -0.9 * r, 2.0 * r) : new THREE.Vector3(1.5 * r, 1.0 * r, 1.9 * r));
     camera.near = 0.01 * r;
     camera.far = 100 * r;
     controls.target.copy(view.centre);

@@ -225,7 +225,11 @@ pub fn spins(args: SpinsArgs) -> CmdResult {
     let (mut max_de, mut max_norm, mut max_sz) = (0.0f64, 0.0f64, 0.0f64);
     let mut page = args.view.as_ref().map(|_| {
         let sites = view::lattice_sites(&system.lattice);
-        ViewPage::new(Scene::Spins { sites }, &format!("{} ({n} spins)", sc.name))
+        let mut page = ViewPage::new(Scene::Spins { sites }, &format!("{} ({n} spins)", sc.name));
+        if system.damping > 0.0 {
+            page.set_energy_label("relative energy change (damped: not conserved)");
+        }
+        page
     });
     let mut observe = |s: &[Vec3], t: f64, w: &mut Option<TrajectoryWriter>| -> Result<(), String> {
         let e = system.energy(s);
