@@ -46,7 +46,8 @@ fn view_page(
     match path {
         Some(p) => {
             let mut plan = liemid_cli::shared::output::OutputPlan::new(&[]);
-            plan.add("view", std::path::Path::new(&p)).map_err(PyValueError::new_err)?;
+            plan.add("view", std::path::Path::new(&p))
+                .map_err(PyValueError::new_err)?;
             page.write(std::path::Path::new(&p), total_steps)
                 .map_err(PyValueError::new_err)?;
             Ok(p)

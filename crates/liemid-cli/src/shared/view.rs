@@ -361,10 +361,7 @@ impl ViewPage {
             frames.saturating_sub(1)
         )?;
         let meta_text = meta.to_string().replace("</", "<\\/");
-        write!(
-            w,
-            "<script type=\"application/json\" id=\"meta\">{meta_text}</script>\n"
-        )?;
+        writeln!(w, "<script type=\"application/json\" id=\"meta\">{meta_text}</script>")?;
         write_floats(w, "data-times", self.times.iter().copied().chain(last.map(|l| l.0)))?;
         write_floats(
             w,
