@@ -17,6 +17,7 @@ use crate::shared::command::{check_positive, check_study_outputs, report, CmdRes
 use crate::shared::interrupt::{progress, Interrupt};
 use crate::shared::output::{plural, OutputPlan, TrajectoryWriter, COLUMNS};
 use crate::shared::plot;
+use crate::shared::view::{self, Scene, ViewPage};
 
 /// The largest trajectory `run` writes unless `--allow-large-output` is given (bytes).
 pub const MAX_TRAJECTORY_BYTES: f64 = 4.0 * (1u64 << 30) as f64;
@@ -80,6 +81,10 @@ pub struct RunArgs {
     /// Print the summary as one JSON object.
     #[arg(long)]
     json: bool,
+    /// Write a self-contained 3-D animation of the run (HTML) to FILE, sampled every
+    /// `--every` steps.
+    #[arg(long, conflicts_with = "resume")]
+    view: Option<PathBuf>,
 }
 
 fn format_key(f: Format) -> &'static str {
@@ -260,6 +265,9 @@ pub fn run(args: RunArgs) -> CmdResult {
     if let Some((path, _)) = &settings.checkpoint {
         plan.add("--checkpoint", Path::new(path)).map_err(Failure::Input)?;
     }
+    if let Some(path) = &args.view {
+        plan.add("--view", path).map_err(Failure::Input)?;
+    }
 
     let system = &sc.system;
     let conservation = system.conservation();
@@ -288,6 +296,25 @@ pub fn run(args: RunArgs) -> CmdResult {
         ),
     };
     let to_stdout = settings.output.as_ref().is_some_and(|(p, _)| p == "-");
+    let mut page = args.view.as_ref().map(|_| {
+        let i = liemid::RigidBodySystem::inertia(system).matrix().m;
+        let scene = Scene::RigidBody {
+            half_extents: view::box_of_inertia([i[0][0], i[1][1], i[2][2]]),
+        };
+        ViewPage::new(scene, &sc.name)
+    });
+    let e0 = run.progress.initial.energy;
+    let sample = |page: &mut Option<ViewPage>, s: &liemid::RigidState, d: &liemid::Diagnostics| {
+        if let Some(p) = page.as_mut() {
+            let r = row(s, d);
+            p.push_frame(
+                s.t,
+                &r[4..13].iter().chain(&r[14..17]).map(|&v| v as f32).collect::<Vec<_>>(),
+            );
+            p.energy_error(s.t, (d.energy - e0) / e0.abs().max(f64::MIN_POSITIVE));
+        }
+    };
+    sample(&mut page, run.state(), &run.progress.initial);
     let checkpoint = |run: &Run, cache, max_conserved, writer: &mut Option<TrajectoryWriter>| -> Result<(), String> {
         let Some((path, _)) = &settings.checkpoint else {
             return Ok(());
@@ -343,6 +370,7 @@ pub fn run(args: RunArgs) -> CmdResult {
         }
         let k = run.progress.steps;
         if k % every == 0 || run.is_done() {
+            sample(&mut page, run.state(), &d);
             if let Some(w) = writer.as_mut() {
                 if let Err(e) = w.write_row(&row(run.state(), &d)) {
                     break Some(e);
@@ -365,6 +393,14 @@ pub fn run(args: RunArgs) -> CmdResult {
         return Err(Failure::Run(format!("{message}{kept}")));
     }
     let trajectory = writer.map(TrajectoryWriter::finish).transpose().map_err(Failure::Run)?;
+    let viewed = match (&page, &args.view) {
+        (Some(p), Some(path)) => Some(view::report(
+            path,
+            p.write(path, run.total_steps).map_err(Failure::Run)?,
+            run.total_steps,
+        )),
+        _ => None,
+    };
     print_summary(
         &args,
         &settings,
@@ -376,6 +412,13 @@ pub fn run(args: RunArgs) -> CmdResult {
         trajectory,
         to_stdout,
     );
+    if let Some(line) = viewed {
+        if args.json || to_stdout {
+            eprintln!("{line}");
+        } else {
+            println!("{line}");
+        }
+    }
     Ok(())
 }
 
