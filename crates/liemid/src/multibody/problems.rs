@@ -1,0 +1,1 @@
+//! Multibody problems built in code.
