@@ -40,6 +40,7 @@ use crate::inertia::Inertia;
 use crate::linalg::{Mat3, Vec3};
 use crate::midpoint;
 use crate::rotation::newton_error;
+use crate::so3;
 
 use super::constraints::{JointGeometry, JointRows, Row};
 use super::model::{JointKind, Model};
@@ -203,6 +204,12 @@ pub struct MultibodySystem {
     omega: Vec<Vec3>,
     solver: TreeSolver,
     backup: MultibodyState,
+    // The drift's midpoint data per body (Ψ₁, Ψ₂, P, Π_a) and the effective inertia blocks
+    // `h (∂θ⁺/∂P)⁻¹` of the exact drift Jacobian.
+    psi1: Vec<Vec3>,
+    psi2: Vec<Vec3>,
+    pi_a: Vec<Vec3>,
+    effective: Vec<Mat3>,
 }
 
 impl core::fmt::Debug for MultibodySystem {
@@ -301,6 +308,10 @@ impl MultibodySystem {
             omega: z3,
             solver: TreeSolver::new(&parents, &tree_rows, &loops),
             backup: MultibodyState::zeros(nb),
+            psi1: vec![Vec3::ZERO; nb],
+            psi2: vec![Vec3::ZERO; nb],
+            pi_a: vec![Vec3::ZERO; nb],
+            effective: vec![Mat3::IDENTITY; nb],
         })
     }
 
@@ -588,6 +599,9 @@ impl MultibodySystem {
             let pa = inc1.inverse_apply(self.big_p[i]);
             let (inc2, _) = midpoint::solve_increment(inertia, pa, hh)
                 .map_err(|e| newton_error(name, "midpoint equation (M)", state.t, h, e))?;
+            self.psi1[i] = inc1.psi();
+            self.psi2[i] = inc2.psi();
+            self.pi_a[i] = pa;
             self.r_new[i] = inc2.rotate(&inc1.rotate(&state.rotation[i]));
             self.pi_new[i] = inc2.inverse_apply(pa);
         }
@@ -606,10 +620,36 @@ impl MultibodySystem {
         r
     }
 
-    fn factor(&mut self, left_is_new: bool) -> Result<()> {
+    /// The exact Jacobian `D = ∂θ⁺/∂P` of the drift's rotation (body-frame increment of
+    /// `R⁺` per start impulse `δP`), from the last drift: with `J_k` the midpoint Jacobians,
+    /// `A₁ = J₁⁻¹ exp(−Ψ₁/2) h/2`, `B = exp(−Ψ₁)(1 + hat(P) Jr(−Ψ₁) A₁)`,
+    /// `A₂ = J₂⁻¹ exp(−Ψ₂/2) (h/2) B`, `D = exp(−Ψ₂) Jr(Ψ₁) A₁ + Jr(Ψ₂) A₂`; stored as
+    /// the effective inertia `h D⁻¹` (`= I` to leading order in `h`).
+    fn drift_jacobian(&mut self, h: f64) {
+        let hh = 0.5 * h;
+        for i in 0..self.mass.len() {
+            let (psi1, psi2) = (self.psi1[i], self.psi2[i]);
+            let inertia = &self.inertia[i];
+            let j1 = midpoint::jacobian(inertia, self.big_p[i], hh, psi1);
+            let j2 = midpoint::jacobian(inertia, self.pi_a[i], hh, psi2);
+            let (Some(j1i), Some(j2i)) = (j1.inverse(), j2.inverse()) else {
+                self.effective[i] = self.inertia_matrix[i];
+                continue;
+            };
+            let a1 = j1i * so3::exp(-psi1 * 0.5) * hh;
+            let e1 = so3::exp(-psi1);
+            let b = e1 + e1 * so3::hat(self.big_p[i]) * so3::right_jacobian(-psi1) * a1;
+            let a2 = j2i * so3::exp(-psi2 * 0.5) * b * hh;
+            let d = so3::exp(-psi2) * so3::right_jacobian(psi1) * a1 + so3::right_jacobian(psi2) * a2;
+            self.effective[i] = d.inverse().map_or(self.inertia_matrix[i], |m| m * h);
+        }
+    }
+
+    fn factor(&mut self, left_is_new: bool, exact: bool) -> Result<()> {
         let (left, right) = if left_is_new { (&self.rows1, &self.rows0) } else { (&self.rows1, &self.rows1) };
+        let inertia = if exact { &self.effective } else { &self.inertia_matrix };
         self.solver
-            .factor(&self.mass, &self.inertia_matrix, &self.pairs, left, right)
+            .factor(&self.mass, inertia, &self.pairs, left, right)
             .map_err(|s| Error::InvalidModel {
                 reason: format!(
                     "dependent constraint rows at joint {:?} / body {:?}: relative pivot {:.3e} (a joint set with \
@@ -649,7 +689,12 @@ impl MultibodySystem {
                 });
             }
             if !factored || r > 0.25 * prev {
-                self.factor(true)?;
+                // First the spec's matrix; when that converges slowly (fast spin about an axis
+                // of small inertia), the exact drift Jacobian at the current iterate.
+                if factored {
+                    self.drift_jacobian(h);
+                }
+                self.factor(true, factored)?;
                 factored = true;
                 report.factorizations += 1;
             }
@@ -710,7 +755,7 @@ impl MultibodySystem {
         let hh = 0.5 * h;
         let any_rows = self.rows1.iter().any(|r| r.n > 0);
         if any_rows {
-            self.factor(false)?;
+            self.factor(false, false)?;
             report.factorizations += 1;
         }
         self.damp_f.iter_mut().for_each(|v| *v = Vec3::ZERO);
@@ -750,7 +795,7 @@ impl MultibodySystem {
                     limit_pass += 1;
                     report.limit_changes += 1;
                     Self::rows_at(&self.joints, &self.limit, &self.params, &self.c_new, &self.r_new, &mut self.rows1);
-                    self.factor(false)?;
+                    self.factor(false, false)?;
                     report.factorizations += 1;
                     continue;
                 }

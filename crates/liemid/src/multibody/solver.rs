@@ -133,8 +133,12 @@ fn lu(a: &mut Blk, n: usize, piv: &mut [usize; 6]) -> Result<(), f64> {
 }
 
 fn lu_solve(a: &Blk, n: usize, piv: &[usize; 6], b: &mut V6) {
+    // The factorization swapped whole rows (multipliers included), so `P A = L U` with the
+    // final `L`: permute `b` completely before the forward substitution.
     for k in 0..n {
         b.swap(k, piv[k]);
+    }
+    for k in 0..n {
         for i in k + 1..n {
             b[i] -= a[i][k] * b[k];
         }
