@@ -186,7 +186,11 @@ impl JointGeometry {
 
     fn ball(&self, ci: Vec3, ri: &Mat3, cj: Vec3, rj: &Mat3, out: &mut JointRows) {
         let g = ci + *ri * self.a - cj - *rj * self.b;
-        let units = [Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0), Vec3::new(0.0, 0.0, 1.0)];
+        let units = [
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+            Vec3::new(0.0, 0.0, 1.0),
+        ];
         for (k, e) in units.into_iter().enumerate() {
             let grad = Row {
                 ci: e,

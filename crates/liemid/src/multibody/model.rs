@@ -271,7 +271,10 @@ impl Model {
         check_vec("gravity", self.gravity)?;
         for (i, b) in self.bodies.iter().enumerate() {
             if !(b.mass.is_finite() && b.mass > 0.0) {
-                return Err(invalid(format!("body `{}` ({i}): mass {} must be finite and > 0", b.name, b.mass)));
+                return Err(invalid(format!(
+                    "body `{}` ({i}): mass {} must be finite and > 0",
+                    b.name, b.mass
+                )));
             }
             self.inertia(i)?;
             check_vec(&format!("body `{}` ({i}) com", b.name), b.com)?;
@@ -311,11 +314,16 @@ impl Model {
                 }
             }
             if k >= nb && j.kind == JointKind::Free {
-                return Err(invalid(format!("{name}: a free joint cannot close a loop (it has no rows)")));
+                return Err(invalid(format!(
+                    "{name}: a free joint cannot close a loop (it has no rows)"
+                )));
             }
             if let Some(u) = j.kind.axis() {
                 if !u.is_finite() || (u.norm() - 1.0).abs() > UNIT_TOLERANCE {
-                    return Err(invalid(format!("{name}: axis {u:?} is not a finite unit vector (|u| = {})", u.norm())));
+                    return Err(invalid(format!(
+                        "{name}: axis {u:?} is not a finite unit vector (|u| = {})",
+                        u.norm()
+                    )));
                 }
             }
             check_vec(&format!("{name} anchor_parent"), j.anchor_parent)?;
@@ -323,10 +331,16 @@ impl Model {
             check_rotation(&format!("{name} reference_rotation"), &j.reference_rotation)?;
             if let Some((lo, hi)) = j.range {
                 if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
-                    return Err(invalid(format!("{name}: range ({lo}, {hi}) must be finite with lower <= upper")));
+                    return Err(invalid(format!(
+                        "{name}: range ({lo}, {hi}) must be finite with lower <= upper"
+                    )));
                 }
             }
-            for (what, v) in [("stiffness", j.stiffness), ("damping", j.damping), ("armature", j.armature)] {
+            for (what, v) in [
+                ("stiffness", j.stiffness),
+                ("damping", j.damping),
+                ("armature", j.armature),
+            ] {
                 if !(v.is_finite() && v >= 0.0) {
                     return Err(invalid(format!("{name}: {what} = {v} must be finite and >= 0")));
                 }
@@ -337,7 +351,11 @@ impl Model {
         }
         if let Some(q) = &self.qpos {
             if q.len() != self.nq() {
-                return Err(invalid(format!("qpos has {} entries, the tree joints need {}", q.len(), self.nq())));
+                return Err(invalid(format!(
+                    "qpos has {} entries, the tree joints need {}",
+                    q.len(),
+                    self.nq()
+                )));
             }
             if let Some(k) = q.iter().position(|x| !x.is_finite()) {
                 return Err(invalid(format!("qpos[{k}] = {} is not finite", q[k])));
@@ -345,7 +363,11 @@ impl Model {
         }
         if let Some(v) = &self.qvel {
             if v.len() != self.nv() {
-                return Err(invalid(format!("qvel has {} entries, the tree joints need {}", v.len(), self.nv())));
+                return Err(invalid(format!(
+                    "qvel has {} entries, the tree joints need {}",
+                    v.len(),
+                    self.nv()
+                )));
             }
             if let Some(k) = v.iter().position(|x| !x.is_finite()) {
                 return Err(invalid(format!("qvel[{k}] = {} is not finite", v[k])));
@@ -429,7 +451,7 @@ impl Model {
         let quat = |q: &[f64], name: &str| -> Result<Mat3> {
             let qq = Quaternion::new(q[0], q[1], q[2], q[3]);
             let n = qq.norm();
-            if !(n > 0.0) {
+            if n.is_nan() || n <= 0.0 {
                 return Err(invalid(format!("joint `{name}`: zero quaternion in qpos")));
             }
             Ok(qq.normalized().to_matrix())

@@ -47,7 +47,15 @@ fn body(name: &str, mass: f64, com: Vec3, inertia: Mat3, position: Vec3, rotatio
 }
 
 #[allow(clippy::too_many_arguments)]
-fn joint(name: &str, kind: JointKind, parent: Link, child: usize, anchor_parent: Vec3, anchor_child: Vec3, q: Mat3) -> Joint {
+fn joint(
+    name: &str,
+    kind: JointKind,
+    parent: Link,
+    child: usize,
+    anchor_parent: Vec3,
+    anchor_child: Vec3,
+    q: Mat3,
+) -> Joint {
     Joint {
         name: name.into(),
         kind,
@@ -88,8 +96,24 @@ pub fn double_pendulum() -> Model {
             body("link2", 1.0, com, inertia, down, Mat3::IDENTITY),
         ],
         joints: vec![
-            joint("hinge1", JointKind::Hinge { axis: Y }, Link::World, 0, Vec3::ZERO, Vec3::ZERO, Mat3::IDENTITY),
-            joint("hinge2", JointKind::Hinge { axis: Y }, Link::Body(0), 1, down, Vec3::ZERO, Mat3::IDENTITY),
+            joint(
+                "hinge1",
+                JointKind::Hinge { axis: Y },
+                Link::World,
+                0,
+                Vec3::ZERO,
+                Vec3::ZERO,
+                Mat3::IDENTITY,
+            ),
+            joint(
+                "hinge2",
+                JointKind::Hinge { axis: Y },
+                Link::Body(0),
+                1,
+                down,
+                Vec3::ZERO,
+                Mat3::IDENTITY,
+            ),
         ],
         gravity: G,
         timestep: Some(1e-3),
@@ -114,9 +138,28 @@ pub fn chain(n: usize) -> Model {
     let mut joints = Vec::with_capacity(n);
     let mut qpos = Vec::with_capacity(4 * n);
     for k in 0..n {
-        bodies.push(body(&format!("link{k}"), m, com, inertia, end * k as f64, Mat3::IDENTITY));
-        let (parent, anchor) = if k == 0 { (Link::World, Vec3::ZERO) } else { (Link::Body(k - 1), end) };
-        joints.push(joint(&format!("ball{k}"), JointKind::Ball, parent, k, anchor, Vec3::ZERO, Mat3::IDENTITY));
+        bodies.push(body(
+            &format!("link{k}"),
+            m,
+            com,
+            inertia,
+            end * k as f64,
+            Mat3::IDENTITY,
+        ));
+        let (parent, anchor) = if k == 0 {
+            (Link::World, Vec3::ZERO)
+        } else {
+            (Link::Body(k - 1), end)
+        };
+        joints.push(joint(
+            &format!("ball{k}"),
+            JointKind::Ball,
+            parent,
+            k,
+            anchor,
+            Vec3::ZERO,
+            Mat3::IDENTITY,
+        ));
         let tilt = if k == 0 {
             Vec3::new(0.4, 0.0, 0.0)
         } else if k % 2 == 0 {
@@ -149,9 +192,33 @@ pub fn spacecraft() -> Model {
     let w = Vec3::new(1.0, 0.5, 0.3);
     let w = w * (20.0 / w.norm());
     let mut joints = vec![
-        joint("hub", JointKind::Free, Link::World, 0, Vec3::ZERO, Vec3::ZERO, Mat3::IDENTITY),
-        joint("hinge+", JointKind::Hinge { axis: X }, Link::Body(0), 1, Vec3::new(0.0, 0.5, 0.0), Vec3::ZERO, Mat3::IDENTITY),
-        joint("hinge-", JointKind::Hinge { axis: X }, Link::Body(0), 2, Vec3::new(0.0, -0.5, 0.0), Vec3::ZERO, Mat3::IDENTITY),
+        joint(
+            "hub",
+            JointKind::Free,
+            Link::World,
+            0,
+            Vec3::ZERO,
+            Vec3::ZERO,
+            Mat3::IDENTITY,
+        ),
+        joint(
+            "hinge+",
+            JointKind::Hinge { axis: X },
+            Link::Body(0),
+            1,
+            Vec3::new(0.0, 0.5, 0.0),
+            Vec3::ZERO,
+            Mat3::IDENTITY,
+        ),
+        joint(
+            "hinge-",
+            JointKind::Hinge { axis: X },
+            Link::Body(0),
+            2,
+            Vec3::new(0.0, -0.5, 0.0),
+            Vec3::ZERO,
+            Mat3::IDENTITY,
+        ),
     ];
     joints[1].stiffness = 200.0;
     joints[2].stiffness = 200.0;
@@ -159,8 +226,22 @@ pub fn spacecraft() -> Model {
         name: "spacecraft".into(),
         bodies: vec![
             body("hub", 200.0, Vec3::ZERO, hub, Vec3::ZERO, Mat3::IDENTITY),
-            body("panel+", 10.0, Vec3::new(0.0, 1.0, 0.0), panel, Vec3::new(0.0, 0.5, 0.0), Mat3::IDENTITY),
-            body("panel-", 10.0, Vec3::new(0.0, -1.0, 0.0), panel, Vec3::new(0.0, -0.5, 0.0), Mat3::IDENTITY),
+            body(
+                "panel+",
+                10.0,
+                Vec3::new(0.0, 1.0, 0.0),
+                panel,
+                Vec3::new(0.0, 0.5, 0.0),
+                Mat3::IDENTITY,
+            ),
+            body(
+                "panel-",
+                10.0,
+                Vec3::new(0.0, -1.0, 0.0),
+                panel,
+                Vec3::new(0.0, -0.5, 0.0),
+                Mat3::IDENTITY,
+            ),
         ],
         joints,
         gravity: Vec3::ZERO,
@@ -209,8 +290,24 @@ pub fn closed_loop() -> Model {
         ],
         joints: vec![
             joint("A", hinge, Link::World, 0, a, Vec3::ZERO, rc),
-            joint("B", hinge, Link::Body(0), 1, Vec3::new(lc, 0.0, 0.0), Vec3::ZERO, rc.transpose() * rk),
-            joint("C", hinge, Link::Body(1), 2, Vec3::new(lk, 0.0, 0.0), Vec3::ZERO, rk.transpose() * rr),
+            joint(
+                "B",
+                hinge,
+                Link::Body(0),
+                1,
+                Vec3::new(lc, 0.0, 0.0),
+                Vec3::ZERO,
+                rc.transpose() * rk,
+            ),
+            joint(
+                "C",
+                hinge,
+                Link::Body(1),
+                2,
+                Vec3::new(lk, 0.0, 0.0),
+                Vec3::ZERO,
+                rk.transpose() * rr,
+            ),
             joint("D", hinge, Link::World, 2, d, Vec3::new(lr, 0.0, 0.0), rr),
         ],
         gravity: G,
@@ -234,11 +331,22 @@ pub fn test_chain() -> Model {
         Vec3::new(-0.02, 0.04, -0.22),
         Vec3::new(0.05, 0.01, -0.27),
     ];
-    let turns = [Vec3::new(0.2, -0.1, 0.4), Vec3::new(-0.3, 0.2, 0.1), Vec3::new(0.1, 0.5, -0.2)];
+    let turns = [
+        Vec3::new(0.2, -0.1, 0.4),
+        Vec3::new(-0.3, 0.2, 0.1),
+        Vec3::new(0.1, 0.5, -0.2),
+    ];
     let bodies = (0..3)
         .map(|k| {
             let i = rotated(box_inertia(masses[k], [0.06, 0.08, l]), so3::exp(turns[k]));
-            body(&format!("link{k}"), masses[k], coms[k], i, end * k as f64, Mat3::IDENTITY)
+            body(
+                &format!("link{k}"),
+                masses[k],
+                coms[k],
+                i,
+                end * k as f64,
+                Mat3::IDENTITY,
+            )
         })
         .collect();
     let s = std::f64::consts::FRAC_1_SQRT_2;
@@ -248,9 +356,33 @@ pub fn test_chain() -> Model {
         name: "test-chain".into(),
         bodies,
         joints: vec![
-            joint("hinge-y", JointKind::Hinge { axis: Y }, Link::World, 0, Vec3::ZERO, Vec3::ZERO, Mat3::IDENTITY),
-            joint("hinge-x", JointKind::Hinge { axis: X }, Link::Body(0), 1, end, Vec3::ZERO, Mat3::IDENTITY),
-            joint("ball", JointKind::Ball, Link::Body(1), 2, end, Vec3::ZERO, Mat3::IDENTITY),
+            joint(
+                "hinge-y",
+                JointKind::Hinge { axis: Y },
+                Link::World,
+                0,
+                Vec3::ZERO,
+                Vec3::ZERO,
+                Mat3::IDENTITY,
+            ),
+            joint(
+                "hinge-x",
+                JointKind::Hinge { axis: X },
+                Link::Body(0),
+                1,
+                end,
+                Vec3::ZERO,
+                Mat3::IDENTITY,
+            ),
+            joint(
+                "ball",
+                JointKind::Ball,
+                Link::Body(1),
+                2,
+                end,
+                Vec3::ZERO,
+                Mat3::IDENTITY,
+            ),
         ],
         gravity: G,
         timestep: Some(1e-4),
@@ -276,7 +408,15 @@ pub fn fast_top_ball() -> Model {
     Model {
         name: "fast-top-ball".into(),
         bodies: vec![body("block", top.mass, s, inertia, Vec3::ZERO, Mat3::IDENTITY)],
-        joints: vec![joint("pivot", JointKind::Ball, Link::World, 0, Vec3::ZERO, Vec3::ZERO, Mat3::IDENTITY)],
+        joints: vec![joint(
+            "pivot",
+            JointKind::Ball,
+            Link::World,
+            0,
+            Vec3::ZERO,
+            Vec3::ZERO,
+            Mat3::IDENTITY,
+        )],
         gravity: top.gravity,
         timestep: Some(1e-4),
         qpos: Some(qpos),

@@ -131,7 +131,8 @@ pub struct StepReport {
     pub factorizations: u32,
     /// Largest `|g|` at the end (length rows divided by the model's length scale).
     pub position_violation: f64,
-    /// Largest `|G (v, Ω)|` at the end, divided by `max_i (|v_i| + L |Ω_i|)`.
+    /// Largest `|G (v, Ω)|` at the end, divided by `max_i (|v_i| + L |Ω_i|)` (at least
+    /// `√(|g| L)`, [`MultibodySystem::velocity_floor`]).
     pub velocity_violation: f64,
     /// Joint limits switched on or off.
     pub limit_changes: u32,
@@ -210,6 +211,9 @@ pub struct MultibodySystem {
     psi2: Vec<Vec3>,
     pi_a: Vec<Vec3>,
     effective: Vec<Mat3>,
+    profiling: bool,
+    solver_time: std::time::Duration,
+    step_time: std::time::Duration,
 }
 
 impl core::fmt::Debug for MultibodySystem {
@@ -312,6 +316,9 @@ impl MultibodySystem {
             psi2: vec![Vec3::ZERO; nb],
             pi_a: vec![Vec3::ZERO; nb],
             effective: vec![Mat3::IDENTITY; nb],
+            profiling: false,
+            solver_time: std::time::Duration::ZERO,
+            step_time: std::time::Duration::ZERO,
         })
     }
 
@@ -330,6 +337,14 @@ impl MultibodySystem {
     #[must_use]
     pub fn length_scale(&self) -> f64 {
         self.length
+    }
+
+    /// The floor `√(|g| L)` of the velocity scale of the relative velocity violation, so
+    /// that a body at rest (against a limit, at the bottom of a swing) does not divide a
+    /// round-off rate by a round-off speed.
+    #[must_use]
+    pub fn velocity_floor(&self) -> f64 {
+        (self.gravity.norm() * self.length).sqrt()
     }
 
     /// Number of bodies.
@@ -370,6 +385,21 @@ impl MultibodySystem {
         self.lambda.iter_mut().for_each(|l| *l = [0.0; 6]);
     }
 
+    /// Switch timing on or off (and reset it): with it on, every step and every
+    /// factorization and solve of `G M⁻¹ Gᵀ` is timed with [`std::time::Instant`].
+    pub fn set_profiling(&mut self, on: bool) {
+        self.profiling = on;
+        self.solver_time = std::time::Duration::ZERO;
+        self.step_time = std::time::Duration::ZERO;
+    }
+
+    /// Time spent since [`MultibodySystem::set_profiling`] in the constraint solves
+    /// (factorizations and solves) and in whole steps.
+    #[must_use]
+    pub fn profile(&self) -> (std::time::Duration, std::time::Duration) {
+        (self.solver_time, self.step_time)
+    }
+
     /// The current state of joint `k`'s limit.
     #[must_use]
     pub fn limit_state(&self, k: usize) -> Option<LimitState> {
@@ -379,14 +409,7 @@ impl MultibodySystem {
     /// The position-dependent forces (gravity, constant loads, springs, the hook) at
     /// `(t, c, R)` into `force`, `torque`.
     #[allow(clippy::too_many_arguments)]
-    fn forces(
-        &mut self,
-        t: f64,
-        c: &[Vec3],
-        r: &[Mat3],
-        force: &mut [Vec3],
-        torque: &mut [Vec3],
-    ) {
+    fn forces(&mut self, t: f64, c: &[Vec3], r: &[Mat3], force: &mut [Vec3], torque: &mut [Vec3]) {
         for i in 0..self.mass.len() {
             force[i] = self.gravity * self.mass[i] + self.const_force[i];
             torque[i] = self.const_torque[i];
@@ -417,7 +440,9 @@ impl MultibodySystem {
             }
             let (pi, pj) = pose(g, c, r);
             if let Some((_, grad)) = g.coordinate(pi, pj) {
-                let (vi, wi) = g.parent.map_or((Vec3::ZERO, Vec3::ZERO), |p| (self.vel[p], self.omega[p]));
+                let (vi, wi) = g
+                    .parent
+                    .map_or((Vec3::ZERO, Vec3::ZERO), |p| (self.vel[p], self.omega[p]));
                 let rate = grad.rate(vi, wi, self.vel[g.child], self.omega[g.child]);
                 apply(g, &grad, -d * rate, &mut self.damp_f, &mut self.damp_t);
             }
@@ -425,7 +450,14 @@ impl MultibodySystem {
     }
 
     /// The rows (with active limit rows) of every joint at `(c, R)` into `out`.
-    pub(super) fn rows_at(joints: &[JointGeometry], limit: &[LimitState], params: &[JointParams], c: &[Vec3], r: &[Mat3], out: &mut [JointRows]) {
+    pub(super) fn rows_at(
+        joints: &[JointGeometry],
+        limit: &[LimitState],
+        params: &[JointParams],
+        c: &[Vec3],
+        r: &[Mat3],
+        out: &mut [JointRows],
+    ) {
         for (k, g) in joints.iter().enumerate() {
             let (pi, pj) = pose(g, c, r);
             g.rows(pi, pj, &mut out[k]);
@@ -452,7 +484,14 @@ impl MultibodySystem {
         self.forces(state.t, &state.c, &state.rotation, &mut f, &mut tq);
         self.force = f;
         self.torque = tq;
-        Self::rows_at(&self.joints, &self.limit, &self.params, &state.c, &state.rotation, &mut self.rows0);
+        Self::rows_at(
+            &self.joints,
+            &self.limit,
+            &self.params,
+            &state.c,
+            &state.rotation,
+            &mut self.rows0,
+        );
         self.remember(state);
     }
 
@@ -486,6 +525,7 @@ impl MultibodySystem {
             });
         }
         let t0 = state.t;
+        let start = self.profiling.then(std::time::Instant::now);
         let mut report = StepReport::default();
         match self.method.scheme() {
             None => self.stage(state, h, &mut report)?,
@@ -501,6 +541,9 @@ impl MultibodySystem {
                 state.t = t0 + h;
             }
         }
+        if let Some(start) = start {
+            self.step_time += start.elapsed();
+        }
         Ok(report)
     }
 
@@ -515,7 +558,11 @@ impl MultibodySystem {
             self.damping(&state.c, &state.rotation);
         }
         for i in 0..nb {
-            let (df, dt) = if self.has_damping { (self.damp_f[i], self.damp_t[i]) } else { (Vec3::ZERO, Vec3::ZERO) };
+            let (df, dt) = if self.has_damping {
+                (self.damp_f[i], self.damp_t[i])
+            } else {
+                (Vec3::ZERO, Vec3::ZERO)
+            };
             self.pb[i] = state.p[i] + (self.force[i] + df) * hh;
             self.pib[i] = state.pi[i] + (self.torque[i] + dt) * hh;
         }
@@ -530,7 +577,14 @@ impl MultibodySystem {
             if passes > MAX_LIMIT_PASSES {
                 break;
             }
-            Self::rows_at(&self.joints, &self.limit, &self.params, &state.c, &state.rotation, &mut self.rows0);
+            Self::rows_at(
+                &self.joints,
+                &self.limit,
+                &self.params,
+                &state.c,
+                &state.rotation,
+                &mut self.rows0,
+            );
         }
         // End forces (position-dependent: cached for the next step).
         let t1 = t + h;
@@ -646,17 +700,32 @@ impl MultibodySystem {
     }
 
     fn factor(&mut self, left_is_new: bool, exact: bool) -> Result<()> {
-        let (left, right) = if left_is_new { (&self.rows1, &self.rows0) } else { (&self.rows1, &self.rows1) };
+        let (left, right) = if left_is_new {
+            (&self.rows1, &self.rows0)
+        } else {
+            (&self.rows1, &self.rows1)
+        };
         let inertia = if exact { &self.effective } else { &self.inertia_matrix };
-        self.solver
-            .factor(&self.mass, inertia, &self.pairs, left, right)
-            .map_err(|s| Error::InvalidModel {
-                reason: format!(
-                    "dependent constraint rows at joint {:?} / body {:?}: relative pivot {:.3e} (a joint set with \
+        let start = self.profiling.then(std::time::Instant::now);
+        let result = self.solver.factor(&self.mass, inertia, &self.pairs, left, right);
+        if let Some(start) = start {
+            self.solver_time += start.elapsed();
+        }
+        result.map_err(|s| Error::InvalidModel {
+            reason: format!(
+                "dependent constraint rows at joint {:?} / body {:?}: relative pivot {:.3e} (a joint set with \
                      redundant rows in the tree, or a singular configuration)",
-                    s.joint, s.body, s.ratio
-                ),
-            })
+                s.joint, s.body, s.ratio
+            ),
+        })
+    }
+
+    fn timed_solve(&mut self) {
+        let start = self.profiling.then(std::time::Instant::now);
+        self.solver.solve(&self.pairs, &self.rhs, &mut self.delta);
+        if let Some(start) = start {
+            self.solver_time += start.elapsed();
+        }
     }
 
     /// The quasi-Newton iteration for λ.
@@ -667,7 +736,14 @@ impl MultibodySystem {
         let mut it = 0;
         loop {
             self.drift(state, h)?;
-            Self::rows_at(&self.joints, &self.limit, &self.params, &self.c_new, &self.r_new, &mut self.rows1);
+            Self::rows_at(
+                &self.joints,
+                &self.limit,
+                &self.params,
+                &self.c_new,
+                &self.r_new,
+                &mut self.rows1,
+            );
             if !any_rows {
                 return Ok(());
             }
@@ -704,7 +780,7 @@ impl MultibodySystem {
                     self.rhs[k][r] = jr.value[r] * s;
                 }
             }
-            self.solver.solve(&self.pairs, &self.rhs, &mut self.delta);
+            self.timed_solve();
             for (k, jr) in self.rows1.iter().enumerate() {
                 for r in 0..jr.n {
                     self.lambda[k][r] += self.delta[k][r];
@@ -737,7 +813,11 @@ impl MultibodySystem {
                 }
                 LimitState::Lower | LimitState::Upper => {
                     let l = self.lambda[k][base];
-                    let pulls = if self.limit[k] == LimitState::Lower { l < 0.0 } else { l > 0.0 };
+                    let pulls = if self.limit[k] == LimitState::Lower {
+                        l < 0.0
+                    } else {
+                        l > 0.0
+                    };
                     if pulls {
                         self.limit[k] = LimitState::Inactive;
                         self.lambda[k][base] = 0.0;
@@ -773,12 +853,14 @@ impl MultibodySystem {
                 let s = -2.0 / h;
                 for (k, jr) in self.rows1.iter().enumerate() {
                     let g = &self.joints[k];
-                    let (vi, wi) = g.parent.map_or((Vec3::ZERO, Vec3::ZERO), |p| (self.vel[p], self.omega[p]));
+                    let (vi, wi) = g
+                        .parent
+                        .map_or((Vec3::ZERO, Vec3::ZERO), |p| (self.vel[p], self.omega[p]));
                     for r in 0..jr.n {
                         self.rhs[k][r] = s * jr.grad[r].rate(vi, wi, self.vel[g.child], self.omega[g.child]);
                     }
                 }
-                self.solver.solve(&self.pairs, &self.rhs, &mut self.delta);
+                self.timed_solve();
                 // A plastic limit row whose μ pulls is released and the solve redone.
                 let mut released = false;
                 for k in 0..self.joints.len() {
@@ -786,7 +868,9 @@ impl MultibodySystem {
                         continue;
                     }
                     let m = self.delta[k][self.joints[k].kind.rows()];
-                    if (self.limit[k] == LimitState::Lower && m < 0.0) || (self.limit[k] == LimitState::Upper && m > 0.0) {
+                    if (self.limit[k] == LimitState::Lower && m < 0.0)
+                        || (self.limit[k] == LimitState::Upper && m > 0.0)
+                    {
                         self.limit[k] = LimitState::Inactive;
                         released = true;
                     }
@@ -794,7 +878,14 @@ impl MultibodySystem {
                 if released && limit_pass < MAX_LIMIT_PASSES {
                     limit_pass += 1;
                     report.limit_changes += 1;
-                    Self::rows_at(&self.joints, &self.limit, &self.params, &self.c_new, &self.r_new, &mut self.rows1);
+                    Self::rows_at(
+                        &self.joints,
+                        &self.limit,
+                        &self.params,
+                        &self.c_new,
+                        &self.r_new,
+                        &mut self.rows1,
+                    );
                     self.factor(false, false)?;
                     report.factorizations += 1;
                     continue;
@@ -833,11 +924,15 @@ impl MultibodySystem {
         }
         // Velocity violation of the result.
         self.velocities_of_new();
-        let vscale = (0..nb).fold(0.0f64, |m, i| m.max(self.vel[i].norm() + self.length * self.omega[i].norm()));
+        let vscale = (0..nb).fold(self.velocity_floor(), |m, i| {
+            m.max(self.vel[i].norm() + self.length * self.omega[i].norm())
+        });
         let mut worst: f64 = 0.0;
         for (k, jr) in self.rows1.iter().enumerate() {
             let g = &self.joints[k];
-            let (vi, wi) = g.parent.map_or((Vec3::ZERO, Vec3::ZERO), |p| (self.vel[p], self.omega[p]));
+            let (vi, wi) = g
+                .parent
+                .map_or((Vec3::ZERO, Vec3::ZERO), |p| (self.vel[p], self.omega[p]));
             for r in 0..jr.n {
                 worst = worst.max(jr.grad[r].rate(vi, wi, self.vel[g.child], self.omega[g.child]).abs());
             }

@@ -34,6 +34,9 @@
 //! 1996; G. H. Golub, C. F. Van Loan, *Matrix Computations*, 4th ed., 8.6.3 (one-sided
 //! Jacobi SVD) and 5.5 (minimum-norm least squares).
 
+// Small dense blocks with explicit row and column bounds read best as index loops.
+#![allow(clippy::needless_range_loop)]
+
 use crate::linalg::Mat3;
 
 use super::constraints::{JointRows, Row};
@@ -116,7 +119,7 @@ fn lu(a: &mut Blk, n: usize, piv: &mut [usize; 6]) -> Result<(), f64> {
         }
         piv[k] = p;
         let pivot = a[p][k];
-        if !(pivot.abs() > PIVOT_TOLERANCE * scale) || !pivot.is_finite() {
+        if !pivot.is_finite() || pivot.abs() <= PIVOT_TOLERANCE * scale {
             return Err(if scale > 0.0 { pivot.abs() / scale } else { 0.0 });
         }
         a.swap(k, p);
@@ -369,7 +372,12 @@ impl TreeSolver {
                 self.s[l * nl + m] = -v;
             }
         }
-        self.rank = jacobi_svd(&mut self.s[..nl * nl], &mut self.sv[..nl * nl], &mut self.sigma[..nl], nl);
+        self.rank = jacobi_svd(
+            &mut self.s[..nl * nl],
+            &mut self.sv[..nl * nl],
+            &mut self.sigma[..nl],
+            nl,
+        );
     }
 
     /// Leaves-to-root forward elimination and root-to-leaves back substitution on `self.z`.
@@ -507,7 +515,7 @@ fn pseudo_solve(a: &[f64], v: &[f64], sigma: &[f64], n: usize, b: &[f64], x: &mu
     let smax = sigma.iter().fold(0.0f64, |m, &s| m.max(s));
     x.iter_mut().for_each(|e| *e = 0.0);
     for j in 0..n {
-        if !(sigma[j] > PSEUDO_INVERSE_TOLERANCE * smax) {
+        if sigma[j].is_nan() || sigma[j] <= PSEUDO_INVERSE_TOLERANCE * smax {
             continue;
         }
         let coef = (0..n).map(|i| a[i * n + j] * b[i]).sum::<f64>() / (sigma[j] * sigma[j]);

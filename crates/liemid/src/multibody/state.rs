@@ -167,7 +167,9 @@ impl MultibodySystem {
     /// The total angular momentum about the origin, in space: `Σ c_i × p_i + R_i Π_i`.
     #[must_use]
     pub fn angular_momentum(&self, state: &MultibodyState) -> Vec3 {
-        (0..state.len()).fold(Vec3::ZERO, |s, i| s + state.c[i].cross(state.p[i]) + state.rotation[i] * state.pi[i])
+        (0..state.len()).fold(Vec3::ZERO, |s, i| {
+            s + state.c[i].cross(state.p[i]) + state.rotation[i] * state.pi[i]
+        })
     }
 
     /// The relative position and velocity constraint violations of `state` (as in
@@ -177,7 +179,7 @@ impl MultibodySystem {
         let mut pos: f64 = 0.0;
         let mut vel: f64 = 0.0;
         let mut rows = JointRows::default();
-        let mut vscale: f64 = 0.0;
+        let mut vscale: f64 = self.velocity_floor();
         for i in 0..state.len() {
             let v = state.p[i] * (1.0 / self.mass[i]);
             let w = self.inertia[i].apply_inverse(state.pi[i]);
@@ -195,7 +197,10 @@ impl MultibodySystem {
             );
             let vel_of = |i: Option<usize>| {
                 i.map_or((Vec3::ZERO, Vec3::ZERO), |i| {
-                    (state.p[i] * (1.0 / self.mass[i]), self.inertia[i].apply_inverse(state.pi[i]))
+                    (
+                        state.p[i] * (1.0 / self.mass[i]),
+                        self.inertia[i].apply_inverse(state.pi[i]),
+                    )
                 })
             };
             let (vi, wi) = vel_of(g.parent);
@@ -217,7 +222,13 @@ impl MultibodySystem {
     /// [`Error::ObserverFailed`] when the observer returns an error.
     ///
     /// Reference: `crate::driver::integrate` (the same time stepping).
-    pub fn integrate<O>(&mut self, state: &mut MultibodyState, t_end: f64, h: f64, mut observer: O) -> Result<MultibodyRun>
+    pub fn integrate<O>(
+        &mut self,
+        state: &mut MultibodyState,
+        t_end: f64,
+        h: f64,
+        mut observer: O,
+    ) -> Result<MultibodyRun>
     where
         O: FnMut(u64, &MultibodyState, &StepReport) -> core::result::Result<(), String>,
     {
