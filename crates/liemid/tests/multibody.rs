@@ -591,3 +591,37 @@ fn energy_profiles() {
         println!("{} h = {h}: max |E - E0| per tenth {:?}", model.name, e);
     }
 }
+
+#[test]
+#[ignore = "chain-10 energy drift study, printed"]
+fn chain_energy_study() {
+    let model = problems::chain(10);
+    for (method, h) in [
+        (MultibodyMethod::Liemid, 1e-3),
+        (MultibodyMethod::Liemid, 5e-4),
+        (MultibodyMethod::Liemid, 2.5e-4),
+        (MultibodyMethod::Liemid4, 1e-3),
+    ] {
+        let (mut sys, mut s) = system(&model, method);
+        let e0 = sys.energy(&s);
+        let steps = (20.0 / h) as u64;
+        let mut out = [0.0f64; 10];
+        let mut omega_max = 0.0f64;
+        for k in 0..steps {
+            sys.step(&mut s, h).unwrap();
+            let w = (k * 10 / steps) as usize;
+            out[w] = out[w].max((sys.energy(&s) - e0).abs());
+            if k % 100 == 0 {
+                for i in 0..s.len() {
+                    let inertia = liemid::Inertia::from_matrix(model.bodies[i].inertia.m).unwrap();
+                    omega_max = omega_max.max(inertia.apply_inverse(s.pi[i]).norm());
+                }
+            }
+        }
+        println!(
+            "{} h = {h}: per tenth {:?}; max |Omega| {omega_max:.1}",
+            method.name(),
+            out.map(|e| format!("{e:.2e}"))
+        );
+    }
+}

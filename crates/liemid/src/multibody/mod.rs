@@ -36,6 +36,8 @@
 //! multipliers", SIGGRAPH 1996; P. Krysl, Int. J. Numer. Meth. Engng 63 (2005).
 
 pub mod constraints;
+pub mod forces;
+pub mod method;
 pub mod model;
 pub mod problems;
 pub mod rattle;
@@ -43,6 +45,8 @@ pub mod solver;
 pub mod state;
 
 pub use constraints::{JointGeometry, JointRows, Row};
+pub use forces::ForceHook;
+pub use method::{LimitState, MultibodyMethod, StepReport};
 pub use model::{Body, Joint, JointKind, Link, Model};
-pub use rattle::{ForceHook, LimitState, MultibodyMethod, MultibodySystem, StepReport};
+pub use rattle::MultibodySystem;
 pub use state::{MultibodyRun, MultibodyState};

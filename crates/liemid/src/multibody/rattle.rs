@@ -34,7 +34,6 @@
 //! Springer 2006, VII.1; B. Leimkuhler, S. Reich, *Simulating Hamiltonian Dynamics*,
 //! Cambridge 2004, ch. 7-8; P. Krysl, Int. J. Numer. Meth. Engng 63 (2005) (LIEMID\[EA\]).
 
-use crate::composition::Scheme;
 use crate::error::{Error, Result};
 use crate::inertia::Inertia;
 use crate::linalg::{Mat3, Vec3};
@@ -42,7 +41,9 @@ use crate::midpoint;
 use crate::rotation::newton_error;
 use crate::so3;
 
-use super::constraints::{JointGeometry, JointRows, Row};
+use super::constraints::{JointGeometry, JointRows};
+use super::forces::ForceHook;
+use super::method::{JointParams, LimitState, MultibodyMethod, StepReport};
 use super::model::{JointKind, Model};
 use super::solver::TreeSolver;
 use super::MultibodyState;
@@ -51,111 +52,6 @@ use super::MultibodyState;
 pub const MAX_ITERATIONS: u32 = 60;
 /// Most re-solves of one step for joint limits switching on or off.
 pub const MAX_LIMIT_PASSES: u32 = 8;
-
-/// The integration method: the RATTLE/EA step or a symmetric composition of it.
-///
-/// Reference: E. Hairer, C. Lubich, G. Wanner, *Geometric Numerical Integration*, V.3.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum MultibodyMethod {
-    /// The second-order step.
-    Liemid,
-    /// Suzuki's 5-stage composition, order 4.
-    Liemid4,
-    /// Kahan-Li 9-stage composition, order 6.
-    Liemid6,
-    /// Kahan-Li 17-stage composition, order 8.
-    Liemid8,
-}
-
-impl MultibodyMethod {
-    /// All methods, lowest order first.
-    pub const ALL: [MultibodyMethod; 4] = [Self::Liemid, Self::Liemid4, Self::Liemid6, Self::Liemid8];
-
-    /// The name (`MB-LIEMID`, `MB-LIEMID4`, ...).
-    #[must_use]
-    pub fn name(&self) -> &'static str {
-        match self {
-            Self::Liemid => "MB-LIEMID",
-            Self::Liemid4 => "MB-LIEMID4",
-            Self::Liemid6 => "MB-LIEMID6",
-            Self::Liemid8 => "MB-LIEMID8",
-        }
-    }
-
-    /// The composition scheme, `None` for the base step.
-    #[must_use]
-    pub fn scheme(&self) -> Option<Scheme> {
-        match self {
-            Self::Liemid => None,
-            Self::Liemid4 => Some(Scheme::SUZUKI4),
-            Self::Liemid6 => Some(Scheme::KAHAN_LI6),
-            Self::Liemid8 => Some(Scheme::KAHAN_LI8),
-        }
-    }
-
-    /// The order of accuracy.
-    #[must_use]
-    pub fn order(&self) -> u32 {
-        self.scheme().map_or(2, |s| s.order)
-    }
-}
-
-/// A force law added to gravity, springs and constant loads: given the time and the
-/// configuration (centres of mass `c`, attitudes `R`), add to each body's force (space,
-/// at the centre of mass) and torque (body frame). Forces that depend on the positions
-/// only keep the step symplectic when they are the gradient of a potential.
-///
-/// Reference: multibody spec section 3 (`F(q)`, `T(q)`).
-pub trait ForceHook: Send {
-    /// Add the forces and body torques at `(t, c, rotation)`.
-    fn add(&mut self, t: f64, c: &[Vec3], rotation: &[Mat3], force: &mut [Vec3], torque: &mut [Vec3]);
-}
-
-impl<F> ForceHook for F
-where
-    F: FnMut(f64, &[Vec3], &[Mat3], &mut [Vec3], &mut [Vec3]) + Send,
-{
-    fn add(&mut self, t: f64, c: &[Vec3], rotation: &[Mat3], force: &mut [Vec3], torque: &mut [Vec3]) {
-        self(t, c, rotation, force, torque);
-    }
-}
-
-/// What a step did.
-///
-/// Reference: multibody spec section 5 (constraints at round-off every step).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct StepReport {
-    /// Quasi-Newton iterations of the position solve, over all stages.
-    pub iterations: u32,
-    /// Factorizations of `G M⁻¹ Gᵀ`, over all stages.
-    pub factorizations: u32,
-    /// Largest `|g|` at the end (length rows divided by the model's length scale).
-    pub position_violation: f64,
-    /// Largest `|G (v, Ω)|` at the end, divided by `max_i (|v_i| + L |Ω_i|)` (at least
-    /// `√(|g| L)`, [`MultibodySystem::velocity_floor`]).
-    pub velocity_violation: f64,
-    /// Joint limits switched on or off.
-    pub limit_changes: u32,
-}
-
-/// State of one joint limit.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum LimitState {
-    /// Not touching.
-    Inactive,
-    /// Held at the lower bound.
-    Lower,
-    /// Held at the upper bound.
-    Upper,
-}
-
-#[derive(Clone, Copy, Debug)]
-pub(super) struct JointParams {
-    pub stiffness: f64,
-    pub spring_ref: f64,
-    pub damping: f64,
-    pub range: Option<(f64, f64)>,
-}
 
 /// A multibody system built from a validated [`Model`]: structure, mass properties,
 /// forces, the factorization and every scratch array, so that a step allocates nothing.
@@ -176,9 +72,9 @@ pub struct MultibodySystem {
     pub(super) has_damping: bool,
     pub(super) const_force: Vec<Vec3>,
     pub(super) const_torque: Vec<Vec3>,
-    hook: Option<Box<dyn ForceHook>>,
+    pub(super) hook: Option<Box<dyn ForceHook>>,
     // Cached start-of-step quantities, valid for (cache_t, cache_c, cache_r).
-    cache_valid: bool,
+    pub(super) cache_valid: bool,
     cache_t: f64,
     cache_c: Vec<Vec3>,
     cache_r: Vec<Mat3>,
@@ -199,10 +95,10 @@ pub struct MultibodySystem {
     pi_new: Vec<Vec3>,
     force1: Vec<Vec3>,
     torque1: Vec<Vec3>,
-    damp_f: Vec<Vec3>,
-    damp_t: Vec<Vec3>,
-    vel: Vec<Vec3>,
-    omega: Vec<Vec3>,
+    pub(super) damp_f: Vec<Vec3>,
+    pub(super) damp_t: Vec<Vec3>,
+    pub(super) vel: Vec<Vec3>,
+    pub(super) omega: Vec<Vec3>,
     solver: TreeSolver,
     backup: MultibodyState,
     // The drift's midpoint data per body (Ψ₁, Ψ₂, P, Π_a) and the effective inertia blocks
@@ -353,31 +249,6 @@ impl MultibodySystem {
         self.mass.len()
     }
 
-    /// A constant force (space, at the centre of mass) and body-frame torque on body `i`;
-    /// the force has the potential `−F·c` (included in the energy), the body torque none.
-    ///
-    /// # Errors
-    /// [`Error::InvalidParameter`] for an index out of range or a non-finite vector.
-    pub fn set_body_load(&mut self, i: usize, force: Vec3, torque: Vec3) -> Result<()> {
-        if i >= self.mass.len() || !force.is_finite() || !torque.is_finite() {
-            return Err(Error::InvalidParameter {
-                name: "body load",
-                value: i as f64,
-                reason: "body index out of range or load not finite",
-            });
-        }
-        self.const_force[i] = force;
-        self.const_torque[i] = torque;
-        self.cache_valid = false;
-        Ok(())
-    }
-
-    /// Install a force hook (replacing any earlier one).
-    pub fn set_force_hook(&mut self, hook: Box<dyn ForceHook>) {
-        self.hook = Some(hook);
-        self.cache_valid = false;
-    }
-
     /// Forget the cached forces, rows and multipliers (after editing a state by hand the
     /// cache is detected as stale anyway).
     pub fn reset(&mut self) {
@@ -404,49 +275,6 @@ impl MultibodySystem {
     #[must_use]
     pub fn limit_state(&self, k: usize) -> Option<LimitState> {
         self.limit.get(k).copied()
-    }
-
-    /// The position-dependent forces (gravity, constant loads, springs, the hook) at
-    /// `(t, c, R)` into `force`, `torque`.
-    #[allow(clippy::too_many_arguments)]
-    fn forces(&mut self, t: f64, c: &[Vec3], r: &[Mat3], force: &mut [Vec3], torque: &mut [Vec3]) {
-        for i in 0..self.mass.len() {
-            force[i] = self.gravity * self.mass[i] + self.const_force[i];
-            torque[i] = self.const_torque[i];
-        }
-        for (k, g) in self.joints.iter().enumerate() {
-            let par = &self.params[k];
-            if par.stiffness == 0.0 {
-                continue;
-            }
-            let (pi, pj) = pose(g, c, r);
-            if let Some((q, grad)) = g.coordinate(pi, pj) {
-                apply(g, &grad, -par.stiffness * (q - par.spring_ref), force, torque);
-            }
-        }
-        if let Some(hook) = self.hook.as_mut() {
-            hook.add(t, c, r, force, torque);
-        }
-    }
-
-    /// Damper forces at positions `(c, R)` and velocities `(v, Ω)` into `damp_f`, `damp_t`.
-    fn damping(&mut self, c: &[Vec3], r: &[Mat3]) {
-        self.damp_f.iter_mut().for_each(|v| *v = Vec3::ZERO);
-        self.damp_t.iter_mut().for_each(|v| *v = Vec3::ZERO);
-        for (k, g) in self.joints.iter().enumerate() {
-            let d = self.params[k].damping;
-            if d == 0.0 {
-                continue;
-            }
-            let (pi, pj) = pose(g, c, r);
-            if let Some((_, grad)) = g.coordinate(pi, pj) {
-                let (vi, wi) = g
-                    .parent
-                    .map_or((Vec3::ZERO, Vec3::ZERO), |p| (self.vel[p], self.omega[p]));
-                let rate = grad.rate(vi, wi, self.vel[g.child], self.omega[g.child]);
-                apply(g, &grad, -d * rate, &mut self.damp_f, &mut self.damp_t);
-            }
-        }
     }
 
     /// The rows (with active limit rows) of every joint at `(c, R)` into `out`.
@@ -983,15 +811,4 @@ pub(super) fn pose<'a>(g: &JointGeometry, c: &'a [Vec3], r: &'a [Mat3]) -> ((Vec
     const IDENTITY: &Mat3 = &Mat3::IDENTITY;
     let pi = g.parent.map_or((Vec3::ZERO, IDENTITY), |p| (c[p], &r[p]));
     (pi, (c[g.child], &r[g.child]))
-}
-
-/// Add the generalized force `f` along the gradient `grad` to the bodies of joint `g`.
-#[inline]
-fn apply(g: &JointGeometry, grad: &Row, f: f64, force: &mut [Vec3], torque: &mut [Vec3]) {
-    if let Some(p) = g.parent {
-        force[p] += grad.ci * f;
-        torque[p] += grad.ti * f;
-    }
-    force[g.child] += grad.cj * f;
-    torque[g.child] += grad.tj * f;
 }

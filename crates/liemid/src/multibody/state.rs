@@ -5,7 +5,8 @@ use crate::linalg::{Mat3, Vec3};
 use crate::so3::Quaternion;
 
 use super::constraints::JointRows;
-use super::rattle::{pose, MultibodySystem, StepReport};
+use super::method::StepReport;
+use super::rattle::{pose, MultibodySystem};
 
 /// The state of `n` bodies in maximal coordinates: per body `i` the centre of mass `c_i`,
 /// the linear momentum `p_i = m_i v_i`, the attitude `R_i` (body to space) and the body
