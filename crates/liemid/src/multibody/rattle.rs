@@ -249,6 +249,67 @@ impl MultibodySystem {
         self.mass.len()
     }
 
+    /// The numerical rank and the size of the loop Schur complement at the last
+    /// factorization (equal when the loop rows are independent; the four-bar of four
+    /// hinges gives `(2, 5)`).
+    #[must_use]
+    pub fn loop_rank(&self) -> (usize, usize) {
+        self.solver.loop_rank()
+    }
+
+    /// Project the velocities of `state` onto the velocity constraints `G (v, Ω) = 0` in
+    /// the kinetic-energy metric: `(G M⁻¹ Gᵀ) μ = −G (v, Ω)`, `p += G_cᵀ μ`,
+    /// `Π += G_θᵀ μ` (minimum-norm `μ` for redundant loop rows). For joint velocities that
+    /// do not respect loop-closing joints (a loader's `qvel` on a closed loop). Returns the
+    /// relative velocity violation before the projection.
+    ///
+    /// # Errors
+    /// [`Error::InvalidModel`] when the tree rows are dependent at this configuration.
+    ///
+    /// Reference: E. Hairer, C. Lubich, G. Wanner, *Geometric Numerical Integration*, VII.1
+    /// (the velocity projection of RATTLE).
+    pub fn project_velocities(&mut self, state: &mut MultibodyState) -> Result<f64> {
+        let (_, before) = self.constraint_violation(state);
+        Self::rows_at(
+            &self.joints,
+            &self.limit,
+            &self.params,
+            &state.c,
+            &state.rotation,
+            &mut self.rows1,
+        );
+        if self.rows1.iter().all(|r| r.n == 0) {
+            return Ok(before);
+        }
+        self.factor(false, false)?;
+        self.velocities(&state.p, &state.pi);
+        for (k, jr) in self.rows1.iter().enumerate() {
+            let g = &self.joints[k];
+            let (vi, wi) = g
+                .parent
+                .map_or((Vec3::ZERO, Vec3::ZERO), |p| (self.vel[p], self.omega[p]));
+            for r in 0..jr.n {
+                self.rhs[k][r] = -jr.grad[r].rate(vi, wi, self.vel[g.child], self.omega[g.child]);
+            }
+        }
+        self.timed_solve();
+        for (k, g) in self.joints.iter().enumerate() {
+            let rows = &self.rows1[k];
+            for r in 0..rows.n {
+                let m = self.delta[k][r];
+                let gr = &rows.grad[r];
+                if let Some(p) = g.parent {
+                    state.p[p] += gr.ci * m;
+                    state.pi[p] += gr.ti * m;
+                }
+                state.p[g.child] += gr.cj * m;
+                state.pi[g.child] += gr.tj * m;
+            }
+        }
+        self.cache_valid = false;
+        Ok(before)
+    }
+
     /// Forget the cached forces, rows and multipliers (after editing a state by hand the
     /// cache is detected as stale anyway).
     pub fn reset(&mut self) {
