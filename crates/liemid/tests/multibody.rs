@@ -532,6 +532,24 @@ fn steps_allocate_nothing() {
 #[test]
 #[ignore = "timing and growth measurements, printed"]
 fn measurements() {
+    // The spec's table (section 5) on our test chain, against MB-LIEMID8 at h = 2e-4.
+    let model = problems::test_chain();
+    let (mut sys, mut reference) = system(&model, MultibodyMethod::Liemid8);
+    run(&mut sys, &mut reference, 2e-4, 5000);
+    for h in [4e-4, 2e-4, 1e-4] {
+        let (mut sys, mut s) = system(&model, MultibodyMethod::Liemid);
+        let e0 = sys.energy(&s);
+        let (mut de, mut worst) = (0.0f64, 0.0f64);
+        for _ in 0..(1.0 / h) as usize {
+            let r = sys.step(&mut s, h).unwrap();
+            worst = worst.max(r.position_violation.max(r.velocity_violation));
+            de = de.max(((sys.energy(&s) - e0) / e0).abs());
+        }
+        let origin = (0..3).fold(0.0f64, |m, i| {
+            m.max((sys.frame_origin(&s, i) - sys.frame_origin(&reference, i)).norm())
+        });
+        println!("test-chain h = {h}: body-origin error {origin:.2e} m, max constraint {worst:.1e}, max relative energy error {de:.2e}");
+    }
     for n in [100, 300, 1000] {
         reversal_distance(&problems::chain(10), 1e-3, n);
     }

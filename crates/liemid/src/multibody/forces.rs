@@ -2,6 +2,9 @@
 //! (generalized forces along the exact gradient of the joint coordinate), and a user hook.
 //! Springs are conservative (`−k (q − q_ref) ∇q` is the gradient of `½ k (q − q_ref)²`);
 //! dampers (`−d q̇ ∇q`) are not, so they make the step neither symplectic nor reversible.
+//! The hinge angle is read in `(−π, π]`, so a hinge spring's potential jumps where the
+//! angle wraps at `±π` from its rest angle: springs are meant for hinges that stay within
+//! half a turn of `spring_ref`.
 //!
 //! Reference: multibody spec section 3; B. Leimkuhler, S. Reich, *Simulating Hamiltonian
 //! Dynamics*, ch. 7.
@@ -60,7 +63,6 @@ impl MultibodySystem {
 
     /// The position-dependent forces (gravity, constant loads, springs, the hook) at
     /// `(t, c, R)` into `force`, `torque`.
-    #[allow(clippy::too_many_arguments)]
     pub(super) fn forces(&mut self, t: f64, c: &[Vec3], r: &[Mat3], force: &mut [Vec3], torque: &mut [Vec3]) {
         for i in 0..self.mass.len() {
             force[i] = self.gravity * self.mass[i] + self.const_force[i];

@@ -65,7 +65,7 @@ pub struct StepReport {
     /// Largest `|g|` at the end (length rows divided by the model's length scale).
     pub position_violation: f64,
     /// Largest `|G (v, Ω)|` at the end, divided by `max_i (|v_i| + L |Ω_i|)` (at least
-    /// `√(|g| L)`, [`MultibodySystem::velocity_floor`]).
+    /// `√(|g| L)`, [`super::MultibodySystem::velocity_floor`]).
     pub velocity_violation: f64,
     /// Joint limits switched on or off.
     pub limit_changes: u32,

@@ -415,7 +415,9 @@ impl Model {
     ///   joint's linear velocity is that of the child frame origin, in the parent frame.
     ///
     /// Then `c = x + R s`, `p = m v_c`, `Π = I Rᵀ ω`. Loop-closing joints are not used:
-    /// the coordinates must satisfy them (the system checks the rows before the first step).
+    /// the coordinates must satisfy them; check with
+    /// [`super::MultibodySystem::constraint_violation`] and bring loop-violating velocities
+    /// onto the constraints with [`super::MultibodySystem::project_velocities`].
     ///
     /// # Errors
     /// Whatever [`Model::validate`] reports, and a zero quaternion.
