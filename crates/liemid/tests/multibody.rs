@@ -613,6 +613,33 @@ fn energy_profiles() {
 #[test]
 #[ignore = "chain-10 energy drift study, printed"]
 fn chain_energy_study() {
+    // The same chain with a thick link (box 6 x 7 x 10 cm, moments within 2x): no fast spin
+    // about the link axis.
+    let mut thick = problems::chain(10);
+    let i = problems::rotated(
+        problems::box_inertia(0.1, [0.06, 0.07, 0.1]),
+        so3::exp(Vec3::new(0.1, 0.2, 0.3)),
+    );
+    thick.bodies.iter_mut().for_each(|b| b.inertia = i);
+    for (model, method, h) in [
+        (thick.clone(), MultibodyMethod::Liemid, 1e-3),
+        (thick, MultibodyMethod::Liemid, 5e-4),
+    ] {
+        let (mut sys, mut s) = system(&model, method);
+        let e0 = sys.energy(&s);
+        let steps = (100.0 / h) as u64;
+        let mut out = [0.0f64; 10];
+        for k in 0..steps {
+            sys.step(&mut s, h).unwrap();
+            let w = (k * 10 / steps) as usize;
+            out[w] = out[w].max((sys.energy(&s) - e0).abs());
+        }
+        println!(
+            "thick chain {} h = {h}, 100 s: per tenth {:?}",
+            method.name(),
+            out.map(|e| format!("{e:.2e}"))
+        );
+    }
     let model = problems::chain(10);
     for (method, h) in [
         (MultibodyMethod::Liemid, 1e-3),
@@ -687,4 +714,52 @@ fn force_hook_matches_gravity() {
     run(&mut hooked, &mut s2, 1e-4, 500);
     let d = s.distance(&s2);
     assert!(d.iter().all(|&x| x < 1e-13), "{d:?}");
+}
+
+#[test]
+#[ignore = "energy drift study on variants, printed"]
+fn energy_variants_study() {
+    let mut variants: Vec<(String, Model)> = Vec::new();
+    let mut diag = problems::chain(10);
+    diag.bodies.iter_mut().for_each(|b| {
+        b.inertia = problems::box_inertia(0.1, [0.06, 0.07, 0.1]);
+        b.com = Vec3::new(0.0, 0.0, -0.05);
+    });
+    variants.push(("chain10-diag-onaxis".into(), diag));
+    let full_i = problems::rotated(
+        problems::box_inertia(0.1, [0.06, 0.07, 0.1]),
+        so3::exp(Vec3::new(0.1, 0.2, 0.3)),
+    );
+    let mut full_onaxis = problems::chain(10);
+    full_onaxis.bodies.iter_mut().for_each(|b| {
+        b.inertia = full_i;
+        b.com = Vec3::new(0.0, 0.0, -0.05);
+    });
+    variants.push(("chain10-full-onaxis".into(), full_onaxis));
+    let mut diag_off = problems::chain(10);
+    diag_off
+        .bodies
+        .iter_mut()
+        .for_each(|b| b.inertia = problems::box_inertia(0.1, [0.06, 0.07, 0.1]));
+    variants.push(("chain10-diag-offaxis".into(), diag_off));
+    let mut two = problems::chain(2);
+    two.qpos = Some(vec![(0.05f64).cos(), (0.05f64).sin(), 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]);
+    variants.push(("chain2-small".into(), two));
+    let mut tc = problems::test_chain();
+    tc.qpos = Some(vec![0.1, -0.05, 1.0, 0.0, 0.0, 0.0]);
+    variants.push(("test-chain-small".into(), tc));
+    for (name, model) in variants {
+        for h in [1e-3, 5e-4] {
+            let (mut sys, mut s) = system(&model, MultibodyMethod::Liemid);
+            let e0 = sys.energy(&s);
+            let steps = (40.0 / h) as u64;
+            let mut out = [0.0f64; 10];
+            for k in 0..steps {
+                sys.step(&mut s, h).unwrap();
+                let w = (k * 10 / steps) as usize;
+                out[w] = out[w].max((sys.energy(&s) - e0).abs());
+            }
+            println!("{name} h = {h}, 40 s: per tenth {:?}", out.map(|e| format!("{e:.2e}")));
+        }
+    }
 }
