@@ -763,3 +763,20 @@ fn energy_variants_study() {
         }
     }
 }
+
+#[test]
+fn one_force_evaluation_per_step() {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::Arc;
+    let calls = Arc::new(AtomicUsize::new(0));
+    let counter = Arc::clone(&calls);
+    let (mut sys, mut s) = system(&problems::test_chain(), MultibodyMethod::Liemid);
+    sys.set_force_hook(Box::new(
+        move |_t: f64, _c: &[Vec3], _r: &[Mat3], _f: &mut [Vec3], _tq: &mut [Vec3]| {
+            counter.fetch_add(1, Ordering::Relaxed);
+        },
+    ));
+    run(&mut sys, &mut s, 1e-4, 100);
+    // One evaluation at the start of the run, then one at the end of each step.
+    assert_eq!(calls.load(Ordering::Relaxed), 101);
+}
