@@ -41,6 +41,7 @@ pub mod error;
 pub mod linalg;
 pub mod many;
 pub use many::interactions;
+pub mod multibody;
 pub mod random;
 pub mod rigid;
 pub mod so3;
