@@ -133,6 +133,9 @@ pub fn parse(text: &str, name_for_errors: &str) -> Result<Loaded> {
     })
 }
 
+/// A keyframe's `qpos` and `qvel`, each when given.
+type KeyState = (Option<Vec<f64>>, Option<Vec<f64>>);
+
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum FromGeom {
     False,
@@ -481,7 +484,7 @@ impl<'a, 'i> State<'a, 'i> {
         let [mass] = cx
             .array::<1>(node, "mass")?
             .ok_or_else(|| cx.err(node, "<inertial> needs a mass"))?;
-        if !(mass > 0.0) {
+        if mass <= 0.0 {
             return Err(cx.err(node, format!("mass {mass} must be positive")));
         }
         let full = cx.array::<6>(node, "fullinertia")?;
@@ -679,7 +682,7 @@ impl<'a, 'i> State<'a, 'i> {
             (_, None) => 3,
             (_, Some(_)) => 2,
         };
-        if size.len() < needed || size[..needed].iter().any(|&s| !(s > 0.0)) {
+        if size.len() < needed || size[..needed].iter().any(|&s| s <= 0.0) {
             return Err(cx.err(node, format!("a {ty} geom needs {needed} positive size values")));
         }
         let s = |k: usize| {
@@ -746,7 +749,7 @@ impl<'a, 'i> State<'a, 'i> {
     }
 
     /// The first keyframe's `qpos` and `qvel`, shifted by each hinge's and slide's `ref`.
-    fn read_key(&mut self, key: Node<'a, 'i>) -> Result<(Option<Vec<f64>>, Option<Vec<f64>>)> {
+    fn read_key(&mut self, key: Node<'a, 'i>) -> Result<KeyState> {
         let cx = self.cx;
         let dims = |k: RawKind| match k {
             RawKind::Weld => (0, 0),

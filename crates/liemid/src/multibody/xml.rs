@@ -223,7 +223,7 @@ impl<'a, 'i> Ctx<'a, 'i> {
     pub(crate) fn unit(&self, node: Node, attr: &str, v: [f64; 3]) -> Result<Vec3> {
         let v = Vec3::from_array(v);
         let n = v.norm();
-        if !(n > 1e-300) || !n.is_finite() {
+        if n <= 1e-300 || !n.is_finite() {
             return Err(self.err(node, format!("attribute {attr}: a zero vector has no direction")));
         }
         Ok(v * (1.0 / n))
@@ -299,7 +299,7 @@ pub(crate) fn check_inertia(i: &Mat3) -> std::result::Result<(), String> {
         }
     }
     let [a, b, c] = symmetric_eigenvalues(i);
-    if !(a > 1e-12 * scale) || scale == 0.0 {
+    if a.is_nan() || a <= 1e-12 * scale || scale == 0.0 {
         return Err(format!(
             "the inertia tensor is not positive definite (principal moments {a:e}, {b:e}, {c:e})"
         ));
@@ -480,7 +480,7 @@ pub(crate) fn build(file: &str, mut raw: Vec<RawBody>) -> Result<Built> {
             continue;
         }
         let b = &raw[i];
-        if !(b.mass.mass > 0.0) {
+        if b.mass.mass <= 0.0 {
             let how = if b.kind == RawKind::Weld {
                 "is welded to a moving parent"
             } else {
