@@ -399,6 +399,14 @@ fn refuses_bad_masses() {
     }
     let t = one_body(&format!("{JOINT}\n<geom type=\"sphere\" size=\"1\" mass=\"-2\"/>"));
     refused(mjcf::parse(&t, "m.xml"), 5, "geom", "negative");
+    for (value, words) in [
+        ("-1", "negative"),
+        ("nan", "not finite"),
+        ("1 2", "has 2 values, 1 expected"),
+    ] {
+        let u = format!("<robot name=\"r\">\n<link name=\"a\">\n<inertial>\n<mass value=\"{value}\"/>\n</inertial></link>\n</robot>");
+        refused(urdf::parse(&u, "m.urdf"), 4, "mass", words);
+    }
 }
 
 #[test]

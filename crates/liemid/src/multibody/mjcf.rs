@@ -39,7 +39,7 @@ use roxmltree::Node;
 use super::model::Model;
 use super::xml::{
     axis_angle, build, check_inertia, coordinate_rotation, parse_document, quat_matrix, read_bounded, rotation_to_z,
-    symmetric_eigenvalues, Ctx, Ignored, MassProps, Merge, RawBody, RawKind,
+    Ctx, Ignored, MassProps, Merge, RawBody, RawKind,
 };
 use crate::error::Result;
 use crate::linalg::{Mat3, Vec3};
@@ -780,11 +780,4 @@ impl<'a, 'i> State<'a, 'i> {
         self.note_other_attributes(key, &["name", "qpos", "qvel", "time"]);
         Ok((qpos, qvel))
     }
-}
-
-/// Principal moments (ascending) of a symmetric tensor; exposed for tests of rotated
-/// inertias.
-#[must_use]
-pub fn principal_moments(inertia: &Mat3) -> [f64; 3] {
-    symmetric_eigenvalues(inertia)
 }
