@@ -19,7 +19,7 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use liemid::{
-    rigid::midpoint, rigid::rigid::problems, so3, HeavyTop, RigidBodySystem, RigidState, RotationIntegrator, RotationMethod,
+    rigid::midpoint, rigid::problems, so3, HeavyTop, RigidBodySystem, RigidState, RotationIntegrator, RotationMethod,
     Vec3,
 };
 

@@ -3,7 +3,7 @@
 //!
 //! Run with `cargo run --release --example fast_top`.
 
-use liemid::{integrate_to, rigid::rigid::problems, RotationIntegrator, RotationMethod, RungeKutta4Quaternion};
+use liemid::{integrate_to, rigid::problems, RotationIntegrator, RotationMethod, RungeKutta4Quaternion};
 
 fn main() -> Result<(), liemid::Error> {
     let top = problems::fast_top();

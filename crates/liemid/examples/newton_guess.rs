@@ -3,7 +3,7 @@
 //! the largest relative distance from each candidate guess to the converged `Ψ`.
 //!
 //! `cargo run --release -p liemid --example newton_guess`
-use liemid::{rigid::midpoint, rigid::rigid::problems, so3, RigidBodySystem, Vec3};
+use liemid::{rigid::midpoint, rigid::problems, so3, RigidBodySystem, Vec3};
 
 fn main() {
     let top = problems::fast_top();

@@ -5,7 +5,7 @@
 //!
 //! EA4 (Suzuki) at `h = 8.136e-3` is the point nearest 1e-3, EA6 (Kahan-Li) at `5.753e-3`
 //! the point nearest 1e-6 and EA8 (Kahan-Li) at `4.068e-3` a point below 1e-9.
-use liemid::{integrate_to, rigid::rigid::problems, Composition, LieMidpointAlternating, Scheme};
+use liemid::{integrate_to, rigid::problems, Composition, LieMidpointAlternating, Scheme};
 fn main() {
     let mut args = std::env::args().skip(1);
     let (scheme, default_step) = match args.next().as_deref() {

@@ -1,5 +1,5 @@
 //! Steps the fast top with LIEMID[EA] many times, for profilers.
-use liemid::{rigid::rigid::problems, LieMidpointAlternating, RotationIntegrator};
+use liemid::{rigid::problems, LieMidpointAlternating, RotationIntegrator};
 fn main() {
     let top = problems::fast_top();
     let mut s = top.initial;

@@ -13,6 +13,8 @@
 //!   parallel by the splitting integrator, identical for any thread count.
 //! - [`spin`]: atomistic spin lattices (the LLG equation) by an exact-flow splitting.
 //! - [`beam`]: flexible 3-D beam frames, nodes as rigid bodies.
+//! - [`multibody`]: rigid bodies joined by joints (RATTLE on EA's rotation), read from
+//!   MJCF and URDF files.
 //! - [`vector`]: symplectic Euler, its adjoint, Verlet and explicit Newmark on `ℝⁿ`, with
 //!   test problems in [`vector::problems`].
 //!

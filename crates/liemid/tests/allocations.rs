@@ -4,7 +4,7 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
 use liemid::vector::{PhaseState, VectorIntegrator, Verlet};
-use liemid::{integrate_to, rigid::rigid::problems, Composition, RotationIntegrator, RotationMethod, Scheme};
+use liemid::{integrate_to, rigid::problems, Composition, RotationIntegrator, RotationMethod, Scheme};
 
 struct Counting;
 

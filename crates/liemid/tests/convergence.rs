@@ -4,7 +4,7 @@
 mod common;
 
 use common::{errors, halvings, observed_order, reference, run, shipped_fast_top_reference};
-use liemid::{rigid::rigid::problems, RotationMethod};
+use liemid::{rigid::problems, RotationMethod};
 
 /// Orders from momentum and attitude errors over a halving sequence.
 fn orders(

@@ -5,7 +5,7 @@ mod common;
 
 use common::{errors, run, shipped_fast_top_reference};
 use liemid::{
-    rigid::rigid::problems, so3, CountingTorque, FreeBody, FreeFlow, Inertia, LieMidpointExact, RigidBodySystem, RigidState,
+    rigid::problems, so3, CountingTorque, FreeBody, FreeFlow, Inertia, LieMidpointExact, RigidBodySystem, RigidState,
     RotationIntegrator, RotationMethod, Vec3,
 };
 

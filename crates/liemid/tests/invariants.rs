@@ -3,7 +3,7 @@
 
 mod common;
 
-use liemid::{integrate, integrate_to, rigid::rigid::problems, RotationIntegrator, RotationMethod};
+use liemid::{integrate, integrate_to, rigid::problems, RotationIntegrator, RotationMethod};
 
 const MIDPOINT_FAMILY: [RotationMethod; 4] = [
     RotationMethod::LieMidpointE1,

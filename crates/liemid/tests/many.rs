@@ -7,7 +7,7 @@ use liemid::many::{Bodies, FreeRotation, Interaction};
 use liemid::random::Rng;
 use liemid::rigid::free_flow::FreeFlow;
 use liemid::rigid::inertia::Inertia;
-use liemid::{rigid::rigid::problems, so3, LieMidpointAlternating, LieMidpointExact, Mat3, RotationIntegrator, Vec3};
+use liemid::{rigid::problems, so3, LieMidpointAlternating, LieMidpointExact, Mat3, RotationIntegrator, Vec3};
 
 /// `n` free dipolar spheres on a jittered cubic lattice of spacing `a`, random attitudes,
 /// random momenta and spins.

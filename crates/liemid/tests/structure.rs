@@ -4,7 +4,7 @@
 mod common;
 
 use liemid::{
-    integrate, integrate_to, rigid::rigid::problems, CountingTorque, Error, Inertia, LieMidpointAlternating, LieMidpointE1,
+    integrate, integrate_to, rigid::problems, CountingTorque, Error, Inertia, LieMidpointAlternating, LieMidpointE1,
     LieMidpointE2, RigidState, RotationIntegrator, RotationMethod, Vec3,
 };
 

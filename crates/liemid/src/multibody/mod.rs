@@ -38,11 +38,14 @@
 pub mod constraints;
 pub mod forces;
 pub mod method;
+pub mod mjcf;
 pub mod model;
 pub mod problems;
 pub mod rattle;
 pub mod solver;
 pub mod state;
+pub mod urdf;
+mod xml;
 
 pub use constraints::{JointGeometry, JointRows, Row};
 pub use forces::ForceHook;
@@ -50,3 +53,4 @@ pub use method::{LimitState, MultibodyMethod, StepReport};
 pub use model::{Body, Joint, JointKind, Link, Model};
 pub use rattle::MultibodySystem;
 pub use state::{MultibodyRun, MultibodyState};
+pub use xml::Loaded;

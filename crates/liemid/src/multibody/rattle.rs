@@ -35,8 +35,8 @@
 //! Cambridge 2004, ch. 7-8; P. Krysl, Int. J. Numer. Meth. Engng 63 (2005) (LIEMID\[EA\]).
 
 use crate::error::{Error, Result};
-use crate::rigid::inertia::Inertia;
 use crate::linalg::{Mat3, Vec3};
+use crate::rigid::inertia::Inertia;
 use crate::rigid::midpoint;
 use crate::rigid::rotation::newton_error;
 use crate::so3;
