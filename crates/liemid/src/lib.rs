@@ -47,6 +47,7 @@ pub mod linalg;
 pub mod many;
 pub use many::interactions;
 pub mod midpoint;
+pub mod multibody;
 pub mod problems;
 pub mod random;
 pub mod rigid;
