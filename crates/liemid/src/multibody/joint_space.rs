@@ -940,8 +940,11 @@ impl JointSpaceModel {
                 f[k] = mul6(&w.ia[i], &w.s[i][k]);
             }
             for a in 0..n.nd {
-                for b in 0..n.nd {
-                    m[(n.iv + a) * nv + n.iv + b] = dot6(&w.s[i][a], &f[b]);
+                for b in 0..=a {
+                    // Exactly symmetric: the mean of the two round-offs.
+                    let x = 0.5 * (dot6(&w.s[i][a], &f[b]) + dot6(&w.s[i][b], &f[a]));
+                    m[(n.iv + a) * nv + n.iv + b] = x;
+                    m[(n.iv + b) * nv + n.iv + a] = x;
                 }
             }
             if n.nd == 1 {

@@ -1,0 +1,636 @@
+//! The joint-space reference dynamics (`multibody::joint_space`): ABA against the closed
+//! form of the compound double pendulum, ABA against CRBA + RNEA and the kinetic energy,
+//! the kinematics against the joint constraints and finite differences, RK4's energy and
+//! momentum errors falling as h⁴, the reference pose, and errors instead of panics.
+
+use liemid::multibody::joint_space::JointSpaceModel;
+use liemid::multibody::model::{Body, Joint, JointKind, Link, Model};
+use liemid::random::Rng;
+use liemid::{so3, Mat3, Vec3};
+
+/// A physical full inertia tensor: principal moments obeying the triangle inequality,
+/// turned by a random rotation.
+fn full_inertia(rng: &mut Rng, scale: f64) -> Mat3 {
+    let a = 1.0 + rng.uniform();
+    let b = 1.0 + rng.uniform();
+    let c = 0.5 * (a + b) * (0.6 + 0.8 * rng.uniform()); // |a − b| < c < a + b
+    let r = rng.rotation();
+    let m = r * Mat3::from_diagonal(Vec3::new(a, b, c) * scale) * r.transpose();
+    // Exactly symmetric.
+    (m + m.transpose()) * 0.5
+}
+
+fn body(name: &str, mass: f64, com: Vec3, inertia: Mat3, position: Vec3, rotation: Mat3) -> Body {
+    Body {
+        name: name.into(),
+        mass,
+        com,
+        inertia,
+        position,
+        rotation,
+    }
+}
+
+/// A joint between `parent` and `child` at the world point `at` of the reference
+/// configuration: anchors and reference rotation from the bodies' reference poses.
+fn joint(bodies: &[Body], name: &str, kind: JointKind, parent: Link, child: usize, at: Vec3) -> Joint {
+    let (xp, rp) = match parent {
+        Link::World => (Vec3::ZERO, Mat3::IDENTITY),
+        Link::Body(p) => (bodies[p].position, bodies[p].rotation),
+    };
+    let c = &bodies[child];
+    Joint {
+        name: name.into(),
+        kind,
+        parent,
+        child,
+        anchor_parent: rp.tr_mul_vec(at - xp),
+        anchor_child: c.rotation.tr_mul_vec(at - c.position),
+        reference_rotation: rp.transpose() * c.rotation,
+        range: None,
+        stiffness: 0.0,
+        spring_ref: 0.0,
+        damping: 0.0,
+        armature: 0.0,
+    }
+}
+
+fn model(name: &str, bodies: Vec<Body>, joints: Vec<Joint>, gravity: Vec3) -> Model {
+    Model {
+        name: name.into(),
+        bodies,
+        joints,
+        gravity,
+        timestep: None,
+        qpos: None,
+        qvel: None,
+    }
+}
+
+const G: f64 = 9.81;
+
+/// Two uniform rods (mass m_k, length L_k, com at the middle, inertia m L²/12 about the
+/// com across the rod) hanging along −z from hinges about y: rod 1 from the world origin,
+/// rod 2 from rod 1's end.
+fn double_pendulum(m1: f64, l1: f64, m2: f64, l2: f64) -> Model {
+    let rod = |m: f64, l: f64| {
+        let t = m * l * l / 12.0;
+        Mat3::from_diagonal(Vec3::new(t, t, 1e-3 * t))
+    };
+    let bodies = vec![
+        body(
+            "rod1",
+            m1,
+            Vec3::new(0.0, 0.0, -0.5 * l1),
+            rod(m1, l1),
+            Vec3::ZERO,
+            Mat3::IDENTITY,
+        ),
+        body(
+            "rod2",
+            m2,
+            Vec3::new(0.0, 0.0, -0.5 * l2),
+            rod(m2, l2),
+            Vec3::new(0.0, 0.0, -l1),
+            Mat3::IDENTITY,
+        ),
+    ];
+    let y = JointKind::Hinge {
+        axis: Vec3::new(0.0, 1.0, 0.0),
+    };
+    let joints = vec![
+        joint(&bodies, "h1", y, Link::World, 0, Vec3::ZERO),
+        joint(&bodies, "h2", y, Link::Body(0), 1, Vec3::new(0.0, 0.0, -l1)),
+    ];
+    model("double pendulum", bodies, joints, Vec3::new(0.0, 0.0, -G))
+}
+
+/// The compound double pendulum's Lagrange equations. With absolute angles φ₁ = θ₁,
+/// φ₂ = θ₁ + θ₂ (θ the hinge angles, rotation about +y turns −z towards −x), the rods'
+/// directions are (−sin φ, 0, −cos φ), and
+///   T = ½ a φ̇₁² + ½ b φ̇₂² + c cos(φ₁ − φ₂) φ̇₁ φ̇₂,  V = −g (e₁ cos φ₁ + e₂ cos φ₂)
+/// with a = m₁L₁²/3 + m₂L₁², b = m₂L₂²/3, c = m₂L₁L₂/2, e₁ = (m₁/2 + m₂) L₁, e₂ = m₂L₂/2:
+///   a φ̈₁ + c cos Δ φ̈₂ + c sin Δ φ̇₂² + g e₁ sin φ₁ = Q₁
+///   c cos Δ φ̈₁ + b φ̈₂ − c sin Δ φ̇₁² + g e₂ sin φ₂ = Q₂,   Δ = φ₁ − φ₂,
+/// the generalised forces Q₁ = τ₁ − τ₂, Q₂ = τ₂ from the hinge torques (δW = τ·δθ).
+/// Returns the hinge accelerations (θ̈₁, θ̈₂) = (φ̈₁, φ̈₂ − φ̈₁).
+#[allow(clippy::too_many_arguments)]
+fn double_pendulum_closed_form(
+    (m1, l1, m2, l2): (f64, f64, f64, f64),
+    th: [f64; 2],
+    thd: [f64; 2],
+    tau: [f64; 2],
+) -> [f64; 2] {
+    let (p1, p2) = (th[0], th[0] + th[1]);
+    let (w1, w2) = (thd[0], thd[0] + thd[1]);
+    let a = m1 * l1 * l1 / 3.0 + m2 * l1 * l1;
+    let b = m2 * l2 * l2 / 3.0;
+    let c = 0.5 * m2 * l1 * l2;
+    let e1 = (0.5 * m1 + m2) * l1;
+    let e2 = 0.5 * m2 * l2;
+    let d = p1 - p2;
+    let r1 = tau[0] - tau[1] - c * d.sin() * w2 * w2 - G * e1 * p1.sin();
+    let r2 = tau[1] + c * d.sin() * w1 * w1 - G * e2 * p2.sin();
+    let (m11, m12, m22) = (a, c * d.cos(), b);
+    let det = m11 * m22 - m12 * m12;
+    let f1 = (m22 * r1 - m12 * r2) / det;
+    let f2 = (m11 * r2 - m12 * r1) / det;
+    [f1, f2 - f1]
+}
+
+#[test]
+fn aba_matches_the_compound_double_pendulum_closed_form() {
+    let mut rng = Rng::new(11);
+    let mut worst: f64 = 0.0;
+    for case in 0..50 {
+        let p = (
+            0.5 + rng.uniform(),
+            0.5 + rng.uniform(),
+            0.5 + rng.uniform(),
+            0.5 + rng.uniform(),
+        );
+        let mut js = JointSpaceModel::new(&double_pendulum(p.0, p.1, p.2, p.3)).unwrap();
+        assert_eq!((js.nq(), js.nv()), (2, 2));
+        let th = [6.0 * rng.uniform() - 3.0, 6.0 * rng.uniform() - 3.0];
+        let thd = [4.0 * rng.normal(), 4.0 * rng.normal()];
+        let tau = if case % 2 == 0 {
+            [0.0, 0.0]
+        } else {
+            [rng.normal(), rng.normal()]
+        };
+        let mut qdd = [0.0; 2];
+        js.aba(&th, &thd, &tau, &mut qdd).unwrap();
+        let want = double_pendulum_closed_form(p, th, thd, tau);
+        let scale = want[0].abs().max(want[1].abs());
+        let err = (qdd[0] - want[0]).abs().max((qdd[1] - want[1]).abs()) / scale;
+        worst = worst.max(err);
+    }
+    println!("double pendulum: worst relative difference ABA vs closed form {worst:.2e}");
+    assert!(worst < 1e-12, "{worst:e}");
+}
+
+/// Hinge (world) – ball – slide, with random reference attitudes, off-axis centres of
+/// mass, full inertia tensors; springs on the hinge and the slide, and optionally dampers
+/// and armatures.
+fn chain(rng: &mut Rng, dissipative: bool) -> Model {
+    let mut bodies = Vec::new();
+    let positions = [
+        Vec3::new(0.1, -0.05, 0.2),
+        Vec3::new(0.4, 0.1, -0.3),
+        Vec3::new(0.7, -0.2, -0.6),
+    ];
+    for (k, x) in positions.iter().enumerate() {
+        let com = Vec3::new(0.1 * rng.normal(), 0.1 * rng.normal(), 0.1 * rng.normal());
+        let m = 0.5 + rng.uniform();
+        let inertia = full_inertia(rng, 0.05 * m);
+        bodies.push(body(&format!("b{k}"), m, com, inertia, *x, rng.rotation()));
+    }
+    let mut joints = vec![
+        joint(
+            &bodies,
+            "hinge",
+            JointKind::Hinge {
+                axis: rng.unit_vector(),
+            },
+            Link::World,
+            0,
+            Vec3::new(0.0, 0.0, 0.25),
+        ),
+        joint(
+            &bodies,
+            "ball",
+            JointKind::Ball,
+            Link::Body(0),
+            1,
+            Vec3::new(0.3, 0.0, -0.1),
+        ),
+        joint(
+            &bodies,
+            "slide",
+            JointKind::Slide {
+                axis: rng.unit_vector(),
+            },
+            Link::Body(1),
+            2,
+            Vec3::new(0.6, 0.0, -0.5),
+        ),
+    ];
+    joints[0].stiffness = 2.0;
+    joints[0].spring_ref = 0.3;
+    joints[2].stiffness = 40.0;
+    joints[2].spring_ref = -0.05;
+    if dissipative {
+        joints[0].damping = 0.3;
+        joints[2].damping = 0.7;
+        joints[0].armature = 0.02;
+        joints[2].armature = 0.1;
+    }
+    model("chain", bodies, joints, Vec3::new(0.0, 0.0, -G))
+}
+
+/// A free-floating base with two hinged children (one of them with a weld-attached body).
+fn floating_base(rng: &mut Rng, gravity: Vec3) -> Model {
+    let mut bodies = Vec::new();
+    for (k, x) in [
+        Vec3::new(0.2, 0.3, 1.0),
+        Vec3::new(0.5, 0.3, 1.1),
+        Vec3::new(-0.1, 0.2, 0.9),
+        Vec3::new(-0.3, 0.25, 0.8),
+    ]
+    .iter()
+    .enumerate()
+    {
+        let com = Vec3::new(0.1 * rng.normal(), 0.1 * rng.normal(), 0.1 * rng.normal());
+        let m = 0.5 + rng.uniform();
+        let inertia = full_inertia(rng, 0.05 * m);
+        bodies.push(body(&format!("f{k}"), m, com, inertia, *x, rng.rotation()));
+    }
+    let mut joints = vec![
+        joint(&bodies, "free", JointKind::Free, Link::World, 0, bodies[0].position),
+        joint(
+            &bodies,
+            "left",
+            JointKind::Hinge {
+                axis: rng.unit_vector(),
+            },
+            Link::Body(0),
+            1,
+            Vec3::new(0.35, 0.3, 1.05),
+        ),
+        joint(
+            &bodies,
+            "right",
+            JointKind::Hinge {
+                axis: rng.unit_vector(),
+            },
+            Link::Body(0),
+            2,
+            Vec3::new(0.05, 0.25, 0.95),
+        ),
+        joint(
+            &bodies,
+            "weld",
+            JointKind::Weld,
+            Link::Body(2),
+            3,
+            Vec3::new(-0.2, 0.2, 0.85),
+        ),
+    ];
+    // The free joint's anchors are those of the child frame origin.
+    joints[0].anchor_child = Vec3::ZERO;
+    joints[1].stiffness = 1.5;
+    joints[2].damping = 0.2;
+    model("floating base", bodies, joints, gravity)
+}
+
+fn random_quat(rng: &mut Rng) -> [f64; 4] {
+    let q = so3::Quaternion::new(rng.normal(), rng.normal(), rng.normal(), rng.normal()).normalized();
+    [q.w, q.x, q.y, q.z]
+}
+
+/// A random state: hinge and slide coordinates in (−1.5, 1.5), quaternions Haar, free
+/// positions near the reference; velocities standard normal.
+fn random_state(rng: &mut Rng, m: &Model, js: &JointSpaceModel) -> (Vec<f64>, Vec<f64>) {
+    let mut q = Vec::new();
+    for (k, j) in m.joints.iter().enumerate() {
+        match j.kind {
+            JointKind::Hinge { .. } | JointKind::Slide { .. } => q.push(3.0 * rng.uniform() - 1.5),
+            JointKind::Ball => q.extend(random_quat(rng)),
+            JointKind::Free => {
+                let x = m.bodies[j.child].position;
+                q.extend([x.x + rng.normal(), x.y + rng.normal(), x.z + rng.normal()]);
+                q.extend(random_quat(rng));
+            }
+            JointKind::Weld => {}
+        }
+        let _ = k;
+    }
+    assert_eq!(q.len(), js.nq());
+    let v = (0..js.nv()).map(|_| rng.normal()).collect();
+    (q, v)
+}
+
+fn matvec(m: &[f64], x: &[f64]) -> Vec<f64> {
+    let n = x.len();
+    (0..n).map(|i| (0..n).map(|j| m[i * n + j] * x[j]).sum()).collect()
+}
+
+/// `M(q) q̈ + bias(q, v) = τ` with `q̈` from ABA, `M` from CRBA and the bias from RNEA at
+/// zero acceleration; RNEA inverts ABA; `M` is symmetric positive definite and is the
+/// Hessian of the kinetic energy (`E(q, v) − E(q, 0) = ½ vᵀ M v`).
+#[test]
+fn aba_agrees_with_crba_rnea_and_the_kinetic_energy() {
+    let mut rng = Rng::new(5);
+    let models = [
+        chain(&mut rng, true),
+        floating_base(&mut rng, Vec3::new(0.0, 0.0, -G)),
+    ];
+    for m in &models {
+        let mut js = JointSpaceModel::new(m).unwrap();
+        let nv = js.nv();
+        let (mut worst_eq, mut worst_inv, mut worst_ke): (f64, f64, f64) = (0.0, 0.0, 0.0);
+        for _ in 0..40 {
+            let (q, v) = random_state(&mut rng, m, &js);
+            let tau: Vec<f64> = (0..nv).map(|_| rng.normal()).collect();
+            let mut qdd = vec![0.0; nv];
+            js.aba(&q, &v, &tau, &mut qdd).unwrap();
+            let mut mm = vec![0.0; nv * nv];
+            js.mass_matrix(&q, &mut mm).unwrap();
+            let mut bias = vec![0.0; nv];
+            js.inverse_dynamics(&q, &v, &vec![0.0; nv], &mut bias).unwrap();
+            let mq = matvec(&mm, &qdd);
+            let scale = tau.iter().chain(&bias).chain(&mq).fold(1.0f64, |a, x| a.max(x.abs()));
+            for i in 0..nv {
+                worst_eq = worst_eq.max((mq[i] + bias[i] - tau[i]).abs() / scale);
+            }
+            let mut back = vec![0.0; nv];
+            js.inverse_dynamics(&q, &v, &qdd, &mut back).unwrap();
+            for i in 0..nv {
+                worst_inv = worst_inv.max((back[i] - tau[i]).abs() / scale);
+            }
+            // Symmetric positive definite (Cholesky).
+            for i in 0..nv {
+                for j in 0..nv {
+                    assert_eq!(mm[i * nv + j], mm[j * nv + i]);
+                }
+            }
+            let mut l = mm.clone();
+            for k in 0..nv {
+                for p in 0..k {
+                    l[k * nv + k] -= l[k * nv + p] * l[k * nv + p];
+                }
+                assert!(l[k * nv + k] > 0.0, "M not positive definite");
+                l[k * nv + k] = l[k * nv + k].sqrt();
+                for i in k + 1..nv {
+                    for p in 0..k {
+                        l[i * nv + k] -= l[i * nv + p] * l[k * nv + p];
+                    }
+                    l[i * nv + k] /= l[k * nv + k];
+                }
+            }
+            let ke = js.energy(&q, &v).unwrap() - js.energy(&q, &vec![0.0; nv]).unwrap();
+            let quad = 0.5 * v.iter().zip(matvec(&mm, &v)).map(|(a, b)| a * b).sum::<f64>();
+            worst_ke = worst_ke.max((ke - quad).abs() / quad);
+        }
+        println!(
+            "{}: |M qdd + bias - tau| {worst_eq:.2e}, |RNEA(ABA) - tau| {worst_inv:.2e}, \
+             |T - v'Mv/2|/T {worst_ke:.2e}",
+            m.name
+        );
+        assert!(worst_eq < 1e-12, "{worst_eq:e}");
+        assert!(worst_inv < 1e-12, "{worst_inv:e}");
+        assert!(worst_ke < 1e-12, "{worst_ke:e}");
+    }
+}
+
+/// The kinematics obeys the joints' constraints of the maximal-coordinate method (anchor
+/// points coincide for hinge, ball and weld, hinge axes aligned, slide attitude locked and
+/// offset along the axis), and the bodies' velocities are the time derivatives of the
+/// kinematics along `q̇ = Q(q) v` (central differences).
+#[test]
+fn kinematics_obeys_the_joints_and_velocities_differentiate_it() {
+    let mut rng = Rng::new(23);
+    let models = [
+        chain(&mut rng, false),
+        floating_base(&mut rng, Vec3::new(0.0, 0.0, -G)),
+    ];
+    for m in &models {
+        let mut js = JointSpaceModel::new(m).unwrap();
+        for _ in 0..20 {
+            let (q, v) = random_state(&mut rng, m, &js);
+            let poses = js.forward_kinematics(&q).unwrap();
+            let pose = |l: Link| match l {
+                Link::World => (Vec3::ZERO, Mat3::IDENTITY),
+                Link::Body(p) => poses[p],
+            };
+            for j in &m.joints {
+                let (xp, rp) = pose(j.parent);
+                let (xc, rc) = poses[j.child];
+                let gap = (xp + rp * j.anchor_parent - xc - rc * j.anchor_child).max_abs();
+                let rel = rp.transpose() * rc;
+                match j.kind {
+                    JointKind::Ball => assert!(gap < 1e-14, "{}: {gap:e}", j.name),
+                    JointKind::Hinge { axis } => {
+                        assert!(gap < 1e-14, "{}: {gap:e}", j.name);
+                        let a = (j.reference_rotation * axis - rel * axis).max_abs();
+                        assert!(a < 1e-14, "{}: {a:e}", j.name);
+                    }
+                    JointKind::Weld => {
+                        assert!(gap < 1e-14, "{}: {gap:e}", j.name);
+                        assert!((rel - j.reference_rotation).max_abs() < 1e-14);
+                    }
+                    JointKind::Slide { axis } => {
+                        assert!((rel - j.reference_rotation).max_abs() < 1e-14);
+                        // The offset of the anchor points is along the axis, by q.
+                        let d = rp.tr_mul_vec(xc + rc * j.anchor_child - xp - rp * j.anchor_parent);
+                        let along = j.reference_rotation * axis;
+                        assert!((d - along * d.dot(along)).max_abs() < 1e-14);
+                    }
+                    JointKind::Free => {}
+                }
+            }
+            // Velocities against central differences of the kinematics.
+            let d = 1e-6;
+            let mut qd = vec![0.0; js.nq()];
+            js.qdot(&q, &v, &mut qd).unwrap();
+            let shift = |s: f64| -> Vec<f64> { q.iter().zip(&qd).map(|(a, b)| a + s * b).collect() };
+            let states = js.com_states(&q, &v).unwrap();
+            let plus = js.forward_kinematics(&shift(d)).unwrap();
+            let minus = js.forward_kinematics(&shift(-d)).unwrap();
+            for (i, b) in m.bodies.iter().enumerate() {
+                let cp = plus[i].0 + plus[i].1 * b.com;
+                let cm = minus[i].0 + minus[i].1 * b.com;
+                let vc = (cp - cm) * (0.5 / d);
+                let om = so3::log(&(plus[i].1 * minus[i].1.transpose())) * (0.5 / d);
+                assert!((vc - states[i].1).max_abs() < 1e-7, "{} {:?} {:?}", b.name, vc, states[i].1);
+                assert!((om - states[i].2).max_abs() < 1e-7, "{} {:?} {:?}", b.name, om, states[i].2);
+            }
+        }
+    }
+}
+
+/// The largest `|E(t) − E(0)| / |E(0)|` over `t ≤ t_end` with RK4 at step `h`.
+fn rk4_energy_error(js: &mut JointSpaceModel, q0: &[f64], v0: &[f64], h: f64, t_end: f64) -> f64 {
+    let (mut q, mut v) = (q0.to_vec(), v0.to_vec());
+    let e0 = js.energy(&q, &v).unwrap();
+    let n = (t_end / h).round() as usize;
+    let mut worst: f64 = 0.0;
+    for _ in 0..n {
+        js.rk4_step(&mut q, &mut v, h).unwrap();
+        worst = worst.max((js.energy(&q, &v).unwrap() - e0).abs() / e0.abs());
+    }
+    worst
+}
+
+/// Without dampers, RK4's energy error falls as h⁴: ABA is the exact dynamics of
+/// `energy`, with the quaternion kinematics of the ball joint.
+#[test]
+fn rk4_energy_error_is_fourth_order_on_the_chain() {
+    let mut rng = Rng::new(7);
+    let m = chain(&mut rng, false);
+    let mut js = JointSpaceModel::new(&m).unwrap();
+    let mut q = js.qpos0().to_vec();
+    q[0] = 0.4;
+    q[1..5].copy_from_slice(&random_quat(&mut rng));
+    q[5] = 0.1;
+    let v = vec![1.0, -2.0, 1.5, 2.5, 0.5];
+    let hs = [1.0 / 100.0, 1.0 / 200.0, 1.0 / 400.0, 1.0 / 800.0];
+    let errs: Vec<f64> = hs.iter().map(|&h| rk4_energy_error(&mut js, &q, &v, h, 1.0)).collect();
+    println!("chain RK4 energy errors (t <= 1) at h = 1/100 .. 1/800: {:?}", errs.iter().map(|e| format!("{e:.3e}")).collect::<Vec<_>>());
+    for w in errs.windows(2) {
+        let order = (w[0] / w[1]).log2();
+        println!("  observed order {order:.3}");
+        assert!((order - 4.0).abs() < 0.2, "order {order}");
+    }
+    // With the dampers on, the energy only falls.
+    let md = chain(&mut Rng::new(7), true);
+    let mut jd = JointSpaceModel::new(&md).unwrap();
+    let (mut qq, mut vv) = (q.clone(), v.clone());
+    let mut e = jd.energy(&qq, &vv).unwrap();
+    for _ in 0..200 {
+        jd.rk4_step(&mut qq, &mut vv, 1.0 / 400.0).unwrap();
+        let e1 = jd.energy(&qq, &vv).unwrap();
+        assert!(e1 < e, "{e1} >= {e}");
+        e = e1;
+    }
+}
+
+/// A single free body without gravity: RK4 keeps the spatial momenta to O(h⁴); the
+/// linear momentum and centre-of-mass motion are exact up to round-off in the linear
+/// velocity of the com only in the limit, so both are checked to order 4.
+#[test]
+fn free_body_keeps_its_momenta_to_fourth_order() {
+    let mut rng = Rng::new(3);
+    let x = Vec3::new(0.3, -0.2, 0.5);
+    let r = rng.rotation();
+    let b = body(
+        "free",
+        1.3,
+        Vec3::new(0.15, -0.1, 0.05),
+        full_inertia(&mut rng, 0.1),
+        x,
+        r,
+    );
+    let bodies = vec![b];
+    let mut j = joint(&bodies, "free", JointKind::Free, Link::World, 0, x);
+    j.anchor_child = Vec3::ZERO;
+    let m = model("free body", bodies, vec![j], Vec3::ZERO);
+    let mut js = JointSpaceModel::new(&m).unwrap();
+    assert_eq!((js.nq(), js.nv()), (7, 6));
+    let q = js.qpos0().to_vec();
+    let v = vec![0.2, -0.1, 0.3, 3.0, -5.0, 4.0];
+    let (p0, l0) = js.momentum(&q, &v).unwrap();
+    let mut errs = Vec::new();
+    for h in [1.0 / 100.0, 1.0 / 200.0, 1.0 / 400.0, 1.0 / 800.0] {
+        let (mut qq, mut vv) = (q.clone(), v.clone());
+        let n = (1.0 / h) as usize;
+        let mut worst: f64 = 0.0;
+        for _ in 0..n {
+            js.rk4_step(&mut qq, &mut vv, h).unwrap();
+            let (p, l) = js.momentum(&qq, &vv).unwrap();
+            worst = worst.max((l - l0).norm() / l0.norm()).max((p - p0).norm() / l0.norm());
+        }
+        errs.push(worst);
+    }
+    println!("free body RK4 momentum errors (t <= 1) at h = 1/100 .. 1/800: {:?}", errs.iter().map(|e| format!("{e:.3e}")).collect::<Vec<_>>());
+    for w in errs.windows(2) {
+        let order = (w[0] / w[1]).log2();
+        println!("  observed order {order:.3}");
+        assert!((order - 4.0).abs() < 0.2, "order {order}");
+    }
+}
+
+/// At `qpos0` the kinematics gives every body's reference world pose (to round-off), and
+/// `qpos0` of a free root is the body's reference pose.
+#[test]
+fn reference_pose_reproduces_the_reference_world_poses() {
+    let mut rng = Rng::new(99);
+    let models = [
+        chain(&mut rng, true),
+        floating_base(&mut rng, Vec3::new(0.0, 0.0, -G)),
+        double_pendulum(1.0, 1.0, 1.0, 1.0),
+    ];
+    let mut worst: f64 = 0.0;
+    for m in &models {
+        let mut js = JointSpaceModel::new(m).unwrap();
+        let q0 = js.qpos0().to_vec();
+        assert_eq!(js.initial_q(), &q0[..]);
+        assert!(js.initial_v().iter().all(|&x| x == 0.0));
+        let poses = js.forward_kinematics(&q0).unwrap();
+        let quats = js.body_poses(&q0).unwrap();
+        for (i, b) in m.bodies.iter().enumerate() {
+            worst = worst
+                .max((poses[i].0 - b.position).max_abs())
+                .max((poses[i].1 - b.rotation).max_abs());
+            assert_eq!(quats[i].0, poses[i].0);
+            assert!((quats[i].1.to_matrix() - b.rotation).max_abs() < 1e-15 * 8.0);
+        }
+        if let JointKind::Free = m.joints[0].kind {
+            let x = m.bodies[0].position;
+            assert_eq!(&q0[..3], &[x.x, x.y, x.z]);
+        }
+    }
+    println!("reference pose: worst difference from the reference world poses {worst:.2e}");
+    assert!(worst <= 8.0 * f64::EPSILON, "{worst:e}");
+}
+
+/// Bad models and states are errors, not panics.
+#[test]
+fn bad_input_is_an_error() {
+    let mut rng = Rng::new(1);
+    let m = chain(&mut rng, false);
+    // A loop joint.
+    let mut looped = m.clone();
+    let extra = joint(
+        &looped.bodies,
+        "loop",
+        JointKind::Ball,
+        Link::World,
+        2,
+        looped.bodies[2].position,
+    );
+    looped.joints.push(extra);
+    assert!(JointSpaceModel::new(&looped).is_err());
+    // A body without a joint.
+    let mut orphan = m.clone();
+    orphan.joints.pop();
+    assert!(JointSpaceModel::new(&orphan).is_err());
+    // Inconsistent anchors, a non-unit axis, a bad mass, a wrong qpos length.
+    let mut bad = m.clone();
+    bad.joints[1].anchor_parent.x += 1e-3;
+    assert!(JointSpaceModel::new(&bad).is_err());
+    let mut bad = m.clone();
+    bad.joints[0].kind = JointKind::Hinge {
+        axis: Vec3::new(1.0, 1.0, 0.0),
+    };
+    assert!(JointSpaceModel::new(&bad).is_err());
+    let mut bad = m.clone();
+    bad.bodies[1].mass = 0.0;
+    assert!(JointSpaceModel::new(&bad).is_err());
+    let mut bad = m.clone();
+    bad.qpos = Some(vec![0.0; 3]);
+    assert!(JointSpaceModel::new(&bad).is_err());
+
+    let mut js = JointSpaceModel::new(&m).unwrap();
+    let (nq, nv) = (js.nq(), js.nv());
+    assert_eq!((nq, nv), (6, 5));
+    let q = js.qpos0().to_vec();
+    let v = vec![0.0; nv];
+    let mut qdd = vec![0.0; nv];
+    assert!(js.aba(&q[..5], &v, &v, &mut qdd).is_err());
+    assert!(js.aba(&q, &v, &v[..4], &mut qdd).is_err());
+    let mut nan = q.clone();
+    nan[0] = f64::NAN;
+    assert!(js.aba(&nan, &v, &v, &mut qdd).is_err());
+    let mut zero = q.clone();
+    zero[1..5].copy_from_slice(&[0.0; 4]);
+    assert!(js.aba(&zero, &v, &v, &mut qdd).is_err());
+    assert!(js.rk4_step(&mut q.clone(), &mut v.clone(), 0.0).is_err());
+    assert!(js.rk4_step(&mut q.clone(), &mut v.clone(), f64::INFINITY).is_err());
+    let mut dy = vec![0.0; nq + nv];
+    assert!(js.derivative(0.0, &q, &mut dy).is_err());
+    assert!(js.mass_matrix(&q, &mut [0.0; 3]).is_err());
+    // And the good call still works after the failures.
+    js.aba(&q, &v, &v, &mut qdd).unwrap();
+    assert!(qdd.iter().all(|x| x.is_finite()));
+}
