@@ -57,6 +57,9 @@
 //! R. Featherstone, *Rigid Body Dynamics Algorithms*, Springer 2008: spatial vectors
 //! (ch. 2), joint models (ch. 4), RNEA (ch. 5), CRBA (ch. 6), ABA (ch. 7).
 
+// Small dense blocks (6x6, the joint's nd x nd) are indexed as in the formulas.
+#![allow(clippy::needless_range_loop)]
+
 use crate::error::{Error, Result};
 use crate::inertia::Inertia;
 use crate::linalg::{Mat3, Vec3};
@@ -208,7 +211,7 @@ fn invert_small(a: &M6, n: usize) -> Option<M6> {
     for col in 0..n {
         let piv = (col..n).max_by(|&x, &y| m[x][col].abs().total_cmp(&m[y][col].abs()))?;
         let p = m[piv][col];
-        if !(p.abs() > 1e-14 * scale) || !p.is_finite() {
+        if !p.is_finite() || p.abs() <= 1e-14 * scale {
             return None;
         }
         m.swap(col, piv);
@@ -345,7 +348,7 @@ fn check_len(name: &'static str, x: &[f64], n: usize) -> Result<()> {
 fn quat_at(q: &[f64]) -> Result<Quaternion> {
     let quat = Quaternion::new(q[0], q[1], q[2], q[3]);
     let n = quat.norm();
-    if !(n > 1e-150) {
+    if n.is_nan() || n <= 1e-150 {
         return Err(Error::InvalidParameter {
             name: "q",
             value: n,
@@ -396,11 +399,7 @@ impl JointSpaceModel {
             }
             joint_of[j.child] = Some(k);
         }
-        let scale = model
-            .bodies
-            .iter()
-            .map(|b| b.position.max_abs())
-            .fold(1.0, f64::max);
+        let scale = model.bodies.iter().map(|b| b.position.max_abs()).fold(1.0, f64::max);
         let tol = 1e-8;
         let mut nodes: Vec<Option<Node>> = vec![None; nb];
         let (mut nq, mut nv) = (0, 0);
@@ -419,7 +418,7 @@ impl JointSpaceModel {
                     )))
                 }
             };
-            if !(body.mass > 0.0 && body.mass.is_finite()) || !body.com.is_finite() {
+            if !(body.mass > 0.0 && body.mass.is_finite() && body.com.is_finite()) {
                 return Err(invalid(format!(
                     "body `{}`: mass {} must be positive and the centre of mass finite",
                     body.name, body.mass
@@ -451,10 +450,16 @@ impl JointSpaceModel {
                 JointKind::Ball => (Kind::Ball, 4, 3),
                 JointKind::Free => (Kind::Free, 7, 6),
             };
+            if !(j.anchor_parent.is_finite() && j.anchor_child.is_finite() && j.reference_rotation.is_finite()) {
+                return Err(invalid(format!(
+                    "joint `{}`: anchors or reference_rotation not finite",
+                    j.name
+                )));
+            }
             if kind != Kind::Free {
                 let gap = (t0 + e0 * j.anchor_child - j.anchor_parent).max_abs();
                 let rot = (e0 - j.reference_rotation).max_abs();
-                if !(gap <= tol * scale) || !(rot <= tol) {
+                if gap.is_nan() || rot.is_nan() || gap > tol * scale || rot > tol {
                     return Err(invalid(format!(
                         "joint `{}`: anchors or reference_rotation disagree with the bodies' reference \
                          poses (anchor gap {gap:.3e} m, rotation gap {rot:.3e})",
@@ -469,7 +474,10 @@ impl JointSpaceModel {
                 ("armature", j.armature),
             ] {
                 if !x.is_finite() || (name != "spring_ref" && x < 0.0) {
-                    return Err(invalid(format!("joint `{}`: {name} = {x} (must be finite, ≥ 0)", j.name)));
+                    return Err(invalid(format!(
+                        "joint `{}`: {name} = {x} (must be finite, ≥ 0)",
+                        j.name
+                    )));
                 }
             }
             match kind {
@@ -711,9 +719,7 @@ impl JointSpaceModel {
     /// The passive generalised force of a hinge or slide joint: `−k (q − q_ref) − d q̇`.
     fn passive(n: &Node, q: &[f64], v: &[f64]) -> f64 {
         match n.kind {
-            Kind::Hinge(_) | Kind::Slide(_) => {
-                -n.stiffness * (q[n.iq] - n.spring_ref) - n.damping * v[n.iv]
-            }
+            Kind::Hinge(_) | Kind::Slide(_) => -n.stiffness * (q[n.iq] - n.spring_ref) - n.damping * v[n.iv],
             _ => 0.0,
         }
     }
