@@ -7,6 +7,36 @@ use liemid::multibody::joint_space::JointSpaceModel;
 use liemid::multibody::model::{Body, Joint, JointKind, Link, Model};
 use liemid::random::Rng;
 use liemid::{so3, Mat3, Vec3};
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+
+/// Counts this thread's allocations (tests run on separate threads).
+struct Counting;
+
+thread_local! {
+    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.with(|c| c.set(c.get() + 1));
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.with(|c| c.set(c.get() + 1));
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn allocations() -> u64 {
+    ALLOCATIONS.with(Cell::get)
+}
 
 /// A physical full inertia tensor: principal moments obeying the triangle inequality,
 /// turned by a random rotation.
@@ -114,7 +144,6 @@ fn double_pendulum(m1: f64, l1: f64, m2: f64, l2: f64) -> Model {
 ///   c cos Δ φ̈₁ + b φ̈₂ − c sin Δ φ̇₁² + g e₂ sin φ₂ = Q₂,   Δ = φ₁ − φ₂,
 /// the generalised forces Q₁ = τ₁ − τ₂, Q₂ = τ₂ from the hinge torques (δW = τ·δθ).
 /// Returns the hinge accelerations (θ̈₁, θ̈₂) = (φ̈₁, φ̈₂ − φ̈₁).
-#[allow(clippy::too_many_arguments)]
 fn double_pendulum_closed_form(
     (m1, l1, m2, l2): (f64, f64, f64, f64),
     th: [f64; 2],
@@ -678,4 +707,30 @@ fn bad_input_is_an_error() {
     // And the good call still works after the failures.
     js.aba(&q, &v, &v, &mut qdd).unwrap();
     assert!(qdd.iter().all(|x| x.is_finite()));
+}
+
+/// ABA, RNEA, CRBA, the derivative and the RK4 step allocate nothing.
+#[test]
+fn dynamics_and_steps_allocate_nothing() {
+    let mut rng = Rng::new(17);
+    let m = floating_base(&mut rng, Vec3::new(0.0, 0.0, -G));
+    let mut js = JointSpaceModel::new(&m).unwrap();
+    let (nq, nv) = (js.nq(), js.nv());
+    let (mut q, mut v) = random_state(&mut rng, &m, &js);
+    let tau = vec![0.1; nv];
+    let mut qdd = vec![0.0; nv];
+    let mut back = vec![0.0; nv];
+    let mut mm = vec![0.0; nv * nv];
+    let y: Vec<f64> = q.iter().chain(&v).copied().collect();
+    let mut dy = vec![0.0; nq + nv];
+    let before = allocations();
+    for _ in 0..10 {
+        js.aba(&q, &v, &tau, &mut qdd).unwrap();
+        js.inverse_dynamics(&q, &v, &qdd, &mut back).unwrap();
+        js.mass_matrix(&q, &mut mm).unwrap();
+        js.derivative(0.0, &y, &mut dy).unwrap();
+        js.rk4_step(&mut q, &mut v, 1e-3).unwrap();
+        js.energy(&q, &v).unwrap();
+    }
+    assert_eq!(allocations() - before, 0);
 }
