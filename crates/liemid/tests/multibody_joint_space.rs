@@ -734,3 +734,312 @@ fn dynamics_and_steps_allocate_nothing() {
     }
     assert_eq!(allocations() - before, 0);
 }
+
+/// A body as MJCF gives it: pose relative to its parent, inertial, and its joint.
+struct Spec {
+    parent: Option<usize>,
+    pos: [f64; 3],
+    quat: [f64; 4],
+    com: [f64; 3],
+    mass: f64,
+    /// MJCF `fullinertia`: ixx iyy izz ixy ixz iyz.
+    full: [f64; 6],
+    kind: JointKind,
+    /// MJCF joint `pos` (in the body frame).
+    at: [f64; 3],
+    /// Stiffness, springref, damping, armature.
+    passive: [f64; 4],
+}
+
+/// The `Model` of an MJCF-like nesting: world poses composed from the relative ones,
+/// the joint anchor `at` in the child and its image in the parent.
+fn from_specs(name: &str, specs: &[Spec]) -> Model {
+    let mut bodies: Vec<Body> = Vec::new();
+    let mut joints = Vec::new();
+    for (i, s) in specs.iter().enumerate() {
+        let (xp, rp) = match s.parent {
+            None => (Vec3::ZERO, Mat3::IDENTITY),
+            Some(p) => (bodies[p].position, bodies[p].rotation),
+        };
+        let rel = so3::Quaternion::new(s.quat[0], s.quat[1], s.quat[2], s.quat[3])
+            .normalized()
+            .to_matrix();
+        let f = s.full;
+        let inertia = Mat3::from_rows([[f[0], f[3], f[4]], [f[3], f[1], f[5]], [f[4], f[5], f[2]]]);
+        bodies.push(body(
+            &format!("b{i}"),
+            s.mass,
+            Vec3::from_array(s.com),
+            inertia,
+            xp + rp * Vec3::from_array(s.pos),
+            rp * rel,
+        ));
+        let at = bodies[i].position + bodies[i].rotation * Vec3::from_array(s.at);
+        let parent = s.parent.map_or(Link::World, Link::Body);
+        let mut j = joint(&bodies, &format!("j{i}"), s.kind, parent, i, at);
+        j.anchor_child = Vec3::from_array(s.at);
+        [j.stiffness, j.spring_ref, j.damping, j.armature] = s.passive;
+        joints.push(j);
+    }
+    model(name, bodies, joints, Vec3::new(0.0, 0.0, -G))
+}
+
+fn unit(a: [f64; 3]) -> Vec3 {
+    let v = Vec3::from_array(a);
+    v * (1.0 / v.norm())
+}
+
+fn unit_quat(q: [f64; 4]) -> [f64; 4] {
+    let u = so3::Quaternion::new(q[0], q[1], q[2], q[3]).normalized();
+    [u.w, u.x, u.y, u.z]
+}
+
+/// Compare ABA's accelerations and the kinematics with MuJoCo's `mj_forward` (`qacc`,
+/// `xpos`, `xquat`; MuJoCo 4.0.0 from PyPI, the same models written as MJCF with
+/// `fullinertia`, hinge/ball/slide/free joints, stiffness, springref, damping, armature,
+/// and the applied forces in `qfrc_applied`; values copied at 17 digits). The MJCF needs
+/// `<compiler angle="radian"/>`: MuJoCo reads a hinge's `springref` in degrees by default,
+/// and `Model::spring_ref` is in radians.
+fn check_against_mujoco(
+    m: &Model,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+    qacc: &[f64],
+    xpos: &[[f64; 3]],
+    xquat: &[[f64; 4]],
+) -> (f64, f64) {
+    let mut js = JointSpaceModel::new(m).unwrap();
+    let mut qdd = vec![0.0; js.nv()];
+    js.aba(q, v, tau, &mut qdd).unwrap();
+    let scale = qacc.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    let acc = qdd.iter().zip(qacc).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max) / scale;
+    let poses = js.body_poses(q).unwrap();
+    let mut pose: f64 = 0.0;
+    for (i, (x, quat)) in poses.iter().enumerate() {
+        pose = pose.max((*x - Vec3::from_array(xpos[i])).max_abs());
+        let w = xquat[i];
+        // q and −q are the same rotation.
+        let s = if quat.w * w[0] + quat.x * w[1] + quat.y * w[2] + quat.z * w[3] < 0.0 {
+            -1.0
+        } else {
+            1.0
+        };
+        for (a, b) in [quat.w, quat.x, quat.y, quat.z].iter().zip(w) {
+            pose = pose.max((a - s * b).abs());
+        }
+    }
+    (acc, pose)
+}
+
+/// The MJCF of the two models (MuJoCo 4.0.0: `MjModel.from_xml_string`, `qpos`, `qvel`,
+/// `qfrc_applied` set as below, `mj_forward`, then `qacc`, `xpos[1:]`, `xquat[1:]`):
+///
+/// ```xml
+/// <mujoco><compiler angle="radian"/><option gravity="0 0 -9.81"/><worldbody>
+///  <body name="b0" pos="0.1 -0.05 0.2" quat="0.9 0.1 -0.3 0.2">
+///   <inertial pos="0.05 -0.02 0.03" mass="1.2" fullinertia="0.05 0.04 0.03 0.004 -0.002 0.003"/>
+///   <joint name="hinge" type="hinge" pos="0.02 0.01 0.05" axis="0.3 -0.5 0.8" stiffness="2" springref="0.3" damping="0.3" armature="0.02"/>
+///   <body name="b1" pos="0.3 0.1 -0.4" quat="0.7 -0.2 0.5 0.1">
+///    <inertial pos="-0.03 0.06 0.01" mass="0.8" fullinertia="0.02 0.025 0.03 -0.003 0.001 0.002"/>
+///    <joint name="ball" type="ball" pos="-0.05 0.02 0.1"/>
+///    <body name="b2" pos="0.2 -0.1 -0.25" quat="0.8 0.4 0.1 -0.3">
+///     <inertial pos="0.02 0.03 -0.04" mass="0.6" fullinertia="0.01 0.012 0.015 0.001 0.0005 -0.001"/>
+///     <joint name="slide" type="slide" pos="0.01 0 0.02" axis="0.2 0.9 -0.4" stiffness="40" springref="-0.05" damping="0.7" armature="0.1"/>
+///    </body>
+///   </body>
+///  </body>
+/// </worldbody></mujoco>
+/// <mujoco><compiler angle="radian"/><option gravity="0 0 -9.81"/><worldbody>
+///  <body name="f0" pos="0.2 0.3 1.0" quat="0.6 0.2 -0.5 0.3">
+///   <freejoint name="free"/>
+///   <inertial pos="0.04 -0.03 0.02" mass="1.5" fullinertia="0.06 0.05 0.04 0.005 -0.003 0.002"/>
+///   <body name="f1" pos="0.3 0 0.1" quat="0.9 0 0.3 0.1">
+///    <inertial pos="0.1 0.01 -0.02" mass="0.7" fullinertia="0.01 0.02 0.025 0.001 -0.002 0.0015"/>
+///    <joint name="left" type="hinge" pos="0.05 0 0" axis="0 1 0.2"/>
+///   </body>
+///   <body name="f2" pos="-0.3 -0.1 -0.1" quat="1 0.2 0.2 0">
+///    <inertial pos="-0.05 0.02 0.03" mass="0.9" fullinertia="0.02 0.015 0.018 -0.002 0.001 0.001"/>
+///    <joint name="right" type="hinge" pos="0.02 0.03 0" axis="1 0.3 0" stiffness="1.5" damping="0.2"/>
+///   </body>
+///  </body>
+/// </worldbody></mujoco>
+/// ```
+#[test]
+fn aba_and_kinematics_match_mujoco() {
+    let none = [0.0; 4];
+    let chain = from_specs(
+        "mujoco chain",
+        &[
+            Spec {
+                parent: None,
+                pos: [0.1, -0.05, 0.2],
+                quat: [0.9, 0.1, -0.3, 0.2],
+                com: [0.05, -0.02, 0.03],
+                mass: 1.2,
+                full: [0.05, 0.04, 0.03, 0.004, -0.002, 0.003],
+                kind: JointKind::Hinge {
+                    axis: unit([0.3, -0.5, 0.8]),
+                },
+                at: [0.02, 0.01, 0.05],
+                passive: [2.0, 0.3, 0.3, 0.02],
+            },
+            Spec {
+                parent: Some(0),
+                pos: [0.3, 0.1, -0.4],
+                quat: [0.7, -0.2, 0.5, 0.1],
+                com: [-0.03, 0.06, 0.01],
+                mass: 0.8,
+                full: [0.02, 0.025, 0.03, -0.003, 0.001, 0.002],
+                kind: JointKind::Ball,
+                at: [-0.05, 0.02, 0.1],
+                passive: none,
+            },
+            Spec {
+                parent: Some(1),
+                pos: [0.2, -0.1, -0.25],
+                quat: [0.8, 0.4, 0.1, -0.3],
+                com: [0.02, 0.03, -0.04],
+                mass: 0.6,
+                full: [0.01, 0.012, 0.015, 0.001, 0.0005, -0.001],
+                kind: JointKind::Slide {
+                    axis: unit([0.2, 0.9, -0.4]),
+                },
+                at: [0.01, 0.0, 0.02],
+                passive: [40.0, -0.05, 0.7, 0.1],
+            },
+        ],
+    );
+    let mut q = vec![0.4];
+    q.extend(unit_quat([0.8, 0.3, -0.4, 0.33]));
+    q.push(0.1);
+    let (acc, pose) = check_against_mujoco(
+        &chain,
+        &q,
+        &[1.0, -2.0, 1.5, 2.5, 0.5],
+        &[0.3, -0.2, 0.1, 0.4, -0.5],
+        &[
+            -1.2266573282233388,
+            -1.5919116995010079,
+            -12.389879122371765,
+            28.970235430462168,
+            -19.904355925038207,
+        ],
+        &[
+            [0.11095516688065628, -0.042680354340295906, 0.2054066645394606],
+            [0.347136297235392, 0.500527101430573, 0.16928835372114406],
+            [0.3724842837303934, 0.8348769585035847, 0.044671736718110804],
+        ],
+        &[
+            [
+                0.8349684409637033,
+                0.12731968716847028,
+                -0.3984310479187898,
+                0.35758928942055945,
+            ],
+            [
+                0.7030443747810546,
+                0.15743733219534345,
+                -0.08185110252017508,
+                0.6886526632026921,
+            ],
+            [
+                0.7528766213416573,
+                0.382485578538307,
+                0.34523198740261396,
+                0.4095075702858594,
+            ],
+        ],
+    );
+    println!("hinge-ball-slide chain vs MuJoCo: qacc {acc:.2e} (relative), xpos/xquat {pose:.2e}");
+    assert!(acc < 1e-12 && pose < 1e-14, "{acc:e} {pose:e}");
+
+    let base = from_specs(
+        "mujoco floating base",
+        &[
+            Spec {
+                parent: None,
+                pos: [0.2, 0.3, 1.0],
+                quat: [0.6, 0.2, -0.5, 0.3],
+                com: [0.04, -0.03, 0.02],
+                mass: 1.5,
+                full: [0.06, 0.05, 0.04, 0.005, -0.003, 0.002],
+                kind: JointKind::Free,
+                at: [0.0; 3],
+                passive: none,
+            },
+            Spec {
+                parent: Some(0),
+                pos: [0.3, 0.0, 0.1],
+                quat: [0.9, 0.0, 0.3, 0.1],
+                com: [0.1, 0.01, -0.02],
+                mass: 0.7,
+                full: [0.01, 0.02, 0.025, 0.001, -0.002, 0.0015],
+                kind: JointKind::Hinge {
+                    axis: unit([0.0, 1.0, 0.2]),
+                },
+                at: [0.05, 0.0, 0.0],
+                passive: none,
+            },
+            Spec {
+                parent: Some(0),
+                pos: [-0.3, -0.1, -0.1],
+                quat: [1.0, 0.2, 0.2, 0.0],
+                com: [-0.05, 0.02, 0.03],
+                mass: 0.9,
+                full: [0.02, 0.015, 0.018, -0.002, 0.001, 0.001],
+                kind: JointKind::Hinge {
+                    axis: unit([1.0, 0.3, 0.0]),
+                },
+                at: [0.02, 0.03, 0.0],
+                passive: [1.5, 0.0, 0.2, 0.0],
+            },
+        ],
+    );
+    let mut q = vec![0.5, -0.2, 1.3];
+    q.extend(unit_quat([0.5, 0.5, -0.3, 0.6]));
+    q.extend([0.7, -0.4]);
+    let (acc, pose) = check_against_mujoco(
+        &base,
+        &q,
+        &[0.2, -0.1, 0.3, 3.0, -5.0, 4.0, 2.0, -3.0],
+        &[0.1, 0.2, -0.3, 0.05, -0.02, 0.04, 0.3, -0.1],
+        &[
+            -0.2843357550875608,
+            0.4037687799690698,
+            -11.495454115591075,
+            -11.91224228897877,
+            4.3490573974607445,
+            9.684977979909377,
+            -25.794956197923295,
+            67.88377640120821,
+        ],
+        &[
+            [0.5, -0.2, 1.3],
+            [0.5562468044686435, -0.2023200822696805, 1.645101788724936],
+            [0.5518496178253592, -0.18201922282417288, 0.9775851852833978],
+        ],
+        &[
+            [
+                0.5129891760425771,
+                0.5129891760425771,
+                -0.30779350562554625,
+                0.6155870112510925,
+            ],
+            [
+                0.49290556217595843,
+                -0.0374274803151875,
+                -0.015528460961181406,
+                0.8691387446164369,
+            ],
+            [
+                0.5307477420618993,
+                0.42084858844796813,
+                -0.24610751357962252,
+                0.6932707924449175,
+            ],
+        ],
+    );
+    println!("floating base vs MuJoCo: qacc {acc:.2e} (relative), xpos/xquat {pose:.2e}");
+    assert!(acc < 1e-12 && pose < 1e-14, "{acc:e} {pose:e}");
+}
