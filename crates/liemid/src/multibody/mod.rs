@@ -37,6 +37,7 @@
 
 pub mod constraints;
 pub mod forces;
+pub mod joint_space;
 pub mod method;
 pub mod mjcf;
 pub mod model;
@@ -49,6 +50,7 @@ mod xml;
 
 pub use constraints::{JointGeometry, JointRows, Row};
 pub use forces::ForceHook;
+pub use joint_space::JointSpaceModel;
 pub use method::{LimitState, MultibodyMethod, StepReport};
 pub use model::{Body, Joint, JointKind, Link, Model};
 pub use rattle::MultibodySystem;
