@@ -272,6 +272,16 @@ impl Poses for Maximal<'_> {
     }
 }
 
+/// The failure of a run stopped by a signal after `done` of `n` steps, keeping the partial
+/// trajectory.
+fn stopped((signal, code): (&str, u8), t: f64, done: u64, n: u64, writer: Option<TrajectoryWriter>) -> Failure {
+    let kept = writer.map(|w| format!("; {}", w.keep_partial())).unwrap_or_default();
+    Failure::Signal(
+        code,
+        format!("{signal}: stopped at t = {} after {done} of {n} steps{kept}", Num(t)),
+    )
+}
+
 fn finish_writer(writer: Option<TrajectoryWriter>) -> Result<Option<(String, u64)>, Failure> {
     writer.map(TrajectoryWriter::finish).transpose().map_err(Failure::Run)
 }
@@ -320,17 +330,9 @@ fn run_maximal(
     let mut max_energy: f64 = 0.0;
     let mut failure = None;
     for k in 1..=n {
-        if let Some((signal, code)) = interrupt.requested() {
+        if let Some(stop) = interrupt.requested() {
             bar.finish_and_clear();
-            let kept = writer.map(|w| format!("; {}", w.keep_partial())).unwrap_or_default();
-            return Err(Failure::Signal(
-                code,
-                format!(
-                    "{signal}: stopped at t = {} after {} of {n} steps{kept}",
-                    Num(state.t),
-                    k - 1
-                ),
-            ));
+            return Err(stopped(stop, state.t, k - 1, n, writer));
         }
         let t_next = if k == n { t_end } else { k as f64 * h };
         let h_k = t_next - state.t;
@@ -490,13 +492,9 @@ fn run_joint_space(
     let mut max_energy: f64 = 0.0;
     let mut t = 0.0;
     for k in 1..=n {
-        if let Some((signal, code)) = interrupt.requested() {
+        if let Some(stop) = interrupt.requested() {
             bar.finish_and_clear();
-            let kept = writer.map(|w| format!("; {}", w.keep_partial())).unwrap_or_default();
-            return Err(Failure::Signal(
-                code,
-                format!("{signal}: stopped at t = {} after {} of {n} steps{kept}", Num(t), k - 1),
-            ));
+            return Err(stopped(stop, t, k - 1, n, writer));
         }
         let t_next = if k == n { t_end } else { k as f64 * h };
         model
