@@ -7,7 +7,8 @@
 use liemid::multibody::{JointKind, JointSpaceModel, MultibodyState, MultibodySystem};
 use liemid::so3::Quaternion;
 use liemid_cli::multibody::scenario::{self, Method, MultibodyScenario};
-use numpy::IntoPyArray;
+use liemid_cli::multibody::view;
+use numpy::{IntoPyArray, PyReadonlyArray1};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -265,11 +266,72 @@ fn multibody_run<'py>(
     Ok(d)
 }
 
+/// The 3-D page of a run of `model`: `times` (n), `xpos` (n·bodies·3), `xquat`
+/// (n·bodies·4), the relative energy error at the same times; written to `path` (returns
+/// it) or returned as HTML.
+#[pyfunction]
+#[pyo3(signature = (model, times, xpos, xquat, energy_error, total_steps, path=None))]
+fn multibody_view(
+    model: &MultibodyModel,
+    times: PyReadonlyArray1<'_, f64>,
+    xpos: PyReadonlyArray1<'_, f64>,
+    xquat: PyReadonlyArray1<'_, f64>,
+    energy_error: PyReadonlyArray1<'_, f64>,
+    total_steps: u64,
+    path: Option<String>,
+) -> PyResult<String> {
+    let sc = &model.scenario;
+    let (times, xpos, xquat, energy) = (
+        times.as_slice()?,
+        xpos.as_slice()?,
+        xquat.as_slice()?,
+        energy_error.as_slice()?,
+    );
+    let bodies = sc.model.bodies.len();
+    let n = times.len();
+    if xpos.len() != 3 * bodies * n || xquat.len() != 4 * bodies * n || energy.len() != n {
+        return Err(PyValueError::new_err(format!(
+            "a run of {bodies} bodies at {n} times needs {} positions, {} quaternion numbers and {n} energies; found {}, {}, {}",
+            3 * bodies * n,
+            4 * bodies * n,
+            xpos.len(),
+            xquat.len(),
+            energy.len()
+        )));
+    }
+    let mut page = view::page(sc);
+    let mut frame = Vec::with_capacity(7 * bodies);
+    for k in 0..n {
+        frame.clear();
+        for (i, body) in sc.model.bodies.iter().enumerate() {
+            let at = k * bodies + i;
+            let x = [xpos[3 * at], xpos[3 * at + 1], xpos[3 * at + 2]];
+            let q = [xquat[4 * at], xquat[4 * at + 1], xquat[4 * at + 2], xquat[4 * at + 3]];
+            let c = view::centre(x, q, body.com);
+            frame.extend(c.iter().chain(&q).map(|&v| v as f32));
+        }
+        page.push_frame(times[k], &frame);
+        page.energy_error(times[k], energy[k]);
+    }
+    match path {
+        Some(p) => {
+            let mut plan = liemid_cli::shared::output::OutputPlan::new(&[]);
+            plan.add("view", std::path::Path::new(&p))
+                .map_err(PyValueError::new_err)?;
+            page.write(std::path::Path::new(&p), total_steps)
+                .map_err(PyValueError::new_err)?;
+            Ok(p)
+        }
+        None => Ok(page.html(total_steps)),
+    }
+}
+
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<MultibodyModel>()?;
     m.add_function(wrap_pyfunction!(multibody_load, m)?)?;
     m.add_function(wrap_pyfunction!(multibody_problem, m)?)?;
     m.add_function(wrap_pyfunction!(multibody_problems, m)?)?;
     m.add_function(wrap_pyfunction!(multibody_run, m)?)?;
+    m.add_function(wrap_pyfunction!(multibody_view, m)?)?;
     Ok(())
 }

@@ -5,4 +5,4 @@
 pub mod command;
 mod joint_run;
 pub mod scenario;
-mod view;
+pub mod view;

@@ -21,14 +21,14 @@ multipliers", SIGGRAPH 1996.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import List, Optional, Tuple, Union
+from typing import Any, List, Optional, Tuple, Union
 
 import numpy as np
 from numpy.typing import NDArray
 
-from . import _liemid
+from . import _liemid, _view
 
 __all__ = ["Model", "MultibodyRun", "load", "methods", "problem", "problems"]
 
@@ -53,6 +53,24 @@ class MultibodyRun:
     joint_names: List[str]
     max_position_constraint_violation: float
     max_velocity_constraint_violation: float
+    model: Any = field(default=None, repr=False, compare=False)
+
+    def view(self, path: Optional[str] = None) -> str:
+        """The run as a self-contained 3-D page (a box per body with its inertia's
+        proportions, a line per joint, the energy error): written to ``path`` (returns it),
+        or returned as HTML without a path."""
+
+        def flat(a: FloatArray) -> FloatArray:
+            return np.ascontiguousarray(np.asarray(a, dtype=np.float64).reshape(-1))
+
+        return str(
+            _liemid.multibody_view(
+                self.model, flat(self.t), flat(self.xpos), flat(self.xquat), flat(self.relative_energy_error), self.steps, path
+            )
+        )
+
+    def _repr_html_(self) -> str:
+        return _view.iframe(self.view())
 
     @property
     def relative_energy_error(self) -> FloatArray:
@@ -127,6 +145,7 @@ class Model:
             joint_names=names,
             max_position_constraint_violation=float(out["max_position_constraint_violation"]),
             max_velocity_constraint_violation=float(out["max_velocity_constraint_violation"]),
+            model=self._core,
         )
 
     def __repr__(self) -> str:
