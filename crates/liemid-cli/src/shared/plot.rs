@@ -572,7 +572,7 @@ fn draw_histories<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, h: &Historie
         .map_err(e)?;
     // Small or large values in scientific notation (the default prints 1e-5 as "0.0").
     let magnitude = y0.abs().max(y1.abs());
-    let scientific = magnitude < 1e-2 || magnitude >= 1e5;
+    let scientific = !(1e-2..1e5).contains(&magnitude);
     let y_label = move |v: &f64| {
         if v.abs() < 1e-9 * magnitude {
             "0".to_string()
