@@ -2,9 +2,6 @@
 //! orders, constraints at round-off, bounded energy, reversibility, momentum, the fast top
 //! against LIEMID[EA], closed loops with redundant rows, validation, no allocation.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
-
 use liemid::linalg::{Mat3, Vec3};
 use liemid::multibody::constraints::{JointGeometry, JointRows, Row};
 use liemid::multibody::problems;
@@ -12,32 +9,12 @@ use liemid::multibody::{JointKind, Link, Model, MultibodyMethod, MultibodyState,
 use liemid::random::Rng;
 use liemid::{so3, Error, LieMidpointAlternating, RotationIntegrator};
 
-struct Counting;
-
-thread_local! {
-    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.with(|c| c.set(c.get() + 1));
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.with(|c| c.set(c.get() + 1));
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
+#[path = "common/thread_counting.rs"]
+mod thread_counting;
+use thread_counting::allocations;
 
 #[global_allocator]
-static GLOBAL: Counting = Counting;
-
-fn allocations() -> u64 {
-    ALLOCATIONS.with(|c| c.get())
-}
+static GLOBAL: thread_counting::Counting = thread_counting::Counting;
 
 fn system(model: &Model, method: MultibodyMethod) -> (MultibodySystem, MultibodyState) {
     (

@@ -7,36 +7,14 @@ use liemid::multibody::joint_space::JointSpaceModel;
 use liemid::multibody::model::{Body, Joint, JointKind, Link, Model};
 use liemid::random::Rng;
 use liemid::{so3, Mat3, Vec3};
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 
 /// Counts this thread's allocations (tests run on separate threads).
-struct Counting;
-
-thread_local! {
-    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.with(|c| c.set(c.get() + 1));
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.with(|c| c.set(c.get() + 1));
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
+#[path = "common/thread_counting.rs"]
+mod thread_counting;
+use thread_counting::allocations;
 
 #[global_allocator]
-static GLOBAL: Counting = Counting;
-
-fn allocations() -> u64 {
-    ALLOCATIONS.with(Cell::get)
-}
+static GLOBAL: thread_counting::Counting = thread_counting::Counting;
 
 /// A physical full inertia tensor: principal moments obeying the triangle inequality,
 /// turned by a random rotation.
