@@ -301,7 +301,12 @@ fn generalised_forces(k: &ElementStiffness, d0: Vec3, ra: &Mat3, ca: &Mat3, rb: 
         hat_t.apply(M::c(r).tr_apply(m))
     };
     let zero = V([D::ZERO; 3]);
-    [g, body(ra, 3, zero.sub(tau_a)), zero.sub(g), body(rb, 6, zero.sub(tau_b))]
+    [
+        g,
+        body(ra, 3, zero.sub(tau_a)),
+        zero.sub(g),
+        body(rb, 6, zero.sub(tau_b)),
+    ]
 }
 
 /// The element's tangent stiffness `K = −∂Q/∂q` (12 x 12, row-major), rows and columns
