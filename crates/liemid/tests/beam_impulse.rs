@@ -97,6 +97,7 @@ fn slow_and_axial_forces_sum_to_the_element_forces() {
 }
 
 #[test]
+#[allow(clippy::needless_range_loop)]
 fn analytic_tangent_matches_central_differences() {
     let k = ElementStiffness {
         length: 0.7,

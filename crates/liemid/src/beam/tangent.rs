@@ -15,6 +15,9 @@
 //! A. Griewank, A. Walther, *Evaluating Derivatives*, 2nd ed., SIAM (2008), chapter 3;
 //! M. A. Crisfield, Comput. Methods Appl. Mech. Engrg. 81 (1990) (the element).
 
+// Dual arithmetic reads as the formulas with the derivative index spelled out.
+#![allow(clippy::needless_range_loop)]
+
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
 use super::element::ElementStiffness;
