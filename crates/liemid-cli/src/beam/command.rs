@@ -32,7 +32,8 @@ pub struct BeamArgs {
     /// Elements per member [default: the problem's or the file's].
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..100_000))]
     pub elements_per_member: Option<u64>,
-    /// liemid (order 2), liemid4 (order 4) or newmark [default: the file's, else liemid].
+    /// liemid (order 2), liemid4 (order 4), liemid-mts (order 2, axial forces in
+    /// substeps) or newmark [default: the file's, else liemid].
     #[arg(long)]
     pub method: Option<String>,
     /// Step [default: 0.9 of the critical step; 0.05 for newmark].

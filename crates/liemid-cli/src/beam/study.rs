@@ -328,7 +328,7 @@ pub fn work_precision(per_leg: usize, repetitions: usize) -> Result<(Vec<WorkPoi
             error: history_error(&r, &reference, elbow, sample),
         }))
     };
-    for m in [BeamMethod::Splitting, BeamMethod::Splitting4] {
+    for m in [BeamMethod::Splitting, BeamMethod::Splitting4, BeamMethod::Impulse] {
         let critical = scenario(BeamIntegrator::Explicit(m))?
             .problem
             .system()

@@ -157,6 +157,31 @@ pub fn strain_energy(k: &ElementStiffness, xa: Vec3, xb: Vec3, ta: &Mat3, tb: &M
 #[must_use]
 #[inline]
 pub fn end_forces(k: &ElementStiffness, xa: Vec3, xb: Vec3, ta: &Mat3, tb: &Mat3) -> EndForces {
+    end_forces_of::<true>(k, xa, xb, ta, tb)
+}
+
+/// The forces and moments `−∂V_b` of the bending and torsion energy alone,
+/// `V_b = V − EA/(2L₀) u²`: [`end_forces`] without the axial term `N e₁` of `g`. With
+/// [`axial_force`] they sum to [`end_forces`] (the slow and fast parts of the impulse
+/// method, [`super::impulse`]).
+#[must_use]
+#[inline]
+pub fn bending_end_forces(k: &ElementStiffness, xa: Vec3, xb: Vec3, ta: &Mat3, tb: &Mat3) -> EndForces {
+    end_forces_of::<false>(k, xa, xb, ta, tb)
+}
+
+/// The axial force on end a, `−∂V_a/∂x_a = EA/L₀ (l − L₀) e₁` of the axial energy
+/// `V_a = EA/(2L₀) (|x_b − x_a| − L₀)²` (end b gets its negative; no moments).
+#[must_use]
+#[inline]
+pub fn axial_force(k: &ElementStiffness, xa: Vec3, xb: Vec3) -> Vec3 {
+    let d = xb - xa;
+    let l = d.norm();
+    d * (k.axial * (l - k.length) / l)
+}
+
+#[inline]
+fn end_forces_of<const AXIAL: bool>(k: &ElementStiffness, xa: Vec3, xb: Vec3, ta: &Mat3, tb: &Mat3) -> EndForces {
     let s = local(k, xa, xb, ta, tb);
     let [e1, e2, e3] = s.e;
     let (ma, mb) = local_moments(k, s.theta_a, s.theta_b);
@@ -165,7 +190,7 @@ pub fn end_forces(k: &ElementStiffness, xa: Vec3, xb: Vec3, ta: &Mat3, tb: &Mat3
     let sum = sa + sb;
     let (s1, s2, s3) = (sum.dot(e1), sum.dot(e2), sum.dot(e3));
     let (q1, q2) = (s.q.dot(e1), s.q.dot(e2));
-    let axial = k.axial * s.stretch;
+    let axial = if AXIAL { k.axial * s.stretch } else { 0.0 };
     let g = e1 * axial + e3 * ((s2 + s1 * q1 / q2) / s.l) - e2 * (s3 / s.l);
     let c = s1 / (2.0 * q2);
     let tau_a = sa - ta.col(1).cross(e3) * c;
@@ -190,10 +215,19 @@ pub fn end_forces(k: &ElementStiffness, xa: Vec3, xb: Vec3, ta: &Mat3, tb: &Mat3
 /// *Nonlinear Finite Elements for Continua and Structures*, Wiley (2000), section 6.3.
 #[must_use]
 pub fn omega_squared_bound(k: &ElementStiffness, mass: f64, rotary: Vec3) -> f64 {
+    let (axial, rest) = omega_squared_bounds(k, mass, rotary);
+    axial.max(rest)
+}
+
+/// [`omega_squared_bound`] in two parts: the axial mode's `2(EA/L₀)/m`, and the largest of
+/// the torsion and bending modes' (the bound of the impulse method's outer step, whose
+/// axial forces are substepped).
+#[must_use]
+pub fn omega_squared_bounds(k: &ElementStiffness, mass: f64, rotary: Vec3) -> (f64, f64) {
     let l2 = k.length * k.length;
     let axial = 2.0 * k.axial / mass;
     let torsion = 2.0 * k.torsion / rotary.x;
     let bend2 = 24.0 * k.bending2 / (l2 * mass) + 6.0 * k.bending2 / rotary.y;
     let bend3 = 24.0 * k.bending3 / (l2 * mass) + 6.0 * k.bending3 / rotary.z;
-    axial.max(torsion).max(bend2).max(bend3)
+    (axial, torsion.max(bend2).max(bend3))
 }

@@ -37,14 +37,16 @@
 //! Wiley (1997), chapter 17.
 
 pub mod element;
+pub mod impulse;
 pub mod model;
 pub mod newmark;
 pub mod problems;
 pub mod stability;
+pub mod tangent;
 
 pub use element::{ElementStiffness, EndForces};
 pub use model::{ElementSpec, Frame, History, NodalLoad, Section, Support};
-pub use newmark::Newmark;
+pub use newmark::{Newmark, Tangent};
 pub use stability::Stability;
 
 use std::sync::Mutex;
@@ -147,12 +149,34 @@ impl Structure {
     /// The element (internal) forces on every body: spatial forces and body-frame
     /// torques, no loads or gravity.
     pub fn internal_forces(&self, position: &[Vec3], rotation: &[Mat3], force: &mut [Vec3], torque: &mut [Vec3]) {
+        self.internal_forces_of::<true>(position, rotation, force, torque);
+    }
+
+    /// The element forces without their axial part ([`element::bending_end_forces`]):
+    /// the impulse method's slow internal forces.
+    pub fn bending_forces(&self, position: &[Vec3], rotation: &[Mat3], force: &mut [Vec3], torque: &mut [Vec3]) {
+        self.internal_forces_of::<false>(position, rotation, force, torque);
+    }
+
+    fn internal_forces_of<const AXIAL: bool>(
+        &self,
+        position: &[Vec3],
+        rotation: &[Mat3],
+        force: &mut [Vec3],
+        torque: &mut [Vec3],
+    ) {
         let mut scratch = self.scratch.lock().expect("not poisoned");
         // Every element's end forces, independently.
         let per_element = |k: usize, out: &mut [EndForces]| {
             let first = k * ELEMENT_CHUNK;
             for (o, e) in out.iter_mut().zip(&self.elements[first..]) {
-                *o = self.element_forces(e, position, rotation);
+                *o = if AXIAL {
+                    self.element_forces(e, position, rotation)
+                } else {
+                    let (xa, ra) = self.pose(position, rotation, e.ends[0]);
+                    let (xb, rb) = self.pose(position, rotation, e.ends[1]);
+                    element::bending_end_forces(&e.stiffness, xa, xb, &(ra * e.axes[0]), &(rb * e.axes[1]))
+                };
             }
         };
         // One chunk runs on the calling thread: a small structure pays no hand-off.
@@ -221,7 +245,7 @@ impl Structure {
     }
 
     /// The loads and gravity at time `t` added to `force` and `torque` (in load order).
-    fn add_loads(&self, config: &Configuration<'_>, force: &mut [Vec3], torque: &mut [Vec3]) {
+    pub(crate) fn add_loads(&self, config: &Configuration<'_>, force: &mut [Vec3], torque: &mut [Vec3]) {
         if self.gravity != Vec3::ZERO {
             for (i, f) in force.iter_mut().enumerate() {
                 if config.free[i] {
@@ -291,6 +315,8 @@ pub struct BeamSystem {
     pub body_node: Vec<usize>,
     /// Each body's initial attitude (its principal axes).
     body_axes: Vec<Mat3>,
+    /// The impulse method's force arrays.
+    impulse: impulse::Scratch,
 }
 
 /// The explicit beam integrators.
@@ -300,11 +326,14 @@ pub enum BeamMethod {
     Splitting,
     /// Suzuki's 5-stage composition of the splitting: order 4.
     Splitting4,
+    /// The impulse method (multiple time stepping): the bending, torsion and load forces
+    /// at the outer step, the axial forces in Verlet substeps ([`impulse`]): order 2.
+    Impulse,
 }
 
 impl BeamMethod {
     /// Every method.
-    pub const ALL: [BeamMethod; 2] = [BeamMethod::Splitting, BeamMethod::Splitting4];
+    pub const ALL: [BeamMethod; 3] = [BeamMethod::Splitting, BeamMethod::Splitting4, BeamMethod::Impulse];
 
     /// The name in files and on the command line.
     #[must_use]
@@ -312,6 +341,7 @@ impl BeamMethod {
         match self {
             BeamMethod::Splitting => "liemid",
             BeamMethod::Splitting4 => "liemid4",
+            BeamMethod::Impulse => "liemid-mts",
         }
     }
 
@@ -325,7 +355,7 @@ impl BeamMethod {
     #[must_use]
     pub fn scheme(self) -> Option<&'static Scheme> {
         match self {
-            BeamMethod::Splitting => None,
+            BeamMethod::Splitting | BeamMethod::Impulse => None,
             BeamMethod::Splitting4 => Some(&Scheme::SUZUKI4),
         }
     }
@@ -334,7 +364,7 @@ impl BeamMethod {
     #[must_use]
     pub fn order(self) -> u32 {
         match self {
-            BeamMethod::Splitting => 2,
+            BeamMethod::Splitting | BeamMethod::Impulse => 2,
             BeamMethod::Splitting4 => 4,
         }
     }
@@ -510,7 +540,9 @@ impl Frame {
             gravity: self.gravity,
             body_axes: body_axes.clone(),
         };
+        let impulse = impulse::Scratch::new(bodies.len());
         let mut system = BeamSystem {
+            impulse,
             bodies,
             structure,
             nodes,
@@ -519,6 +551,7 @@ impl Frame {
             body_axes,
         };
         system.bodies.evaluate(&system.structure);
+        system.impulse.omega_axial = system.stability(0).omega_axial_bound;
         Ok(system)
     }
 }
@@ -568,6 +601,7 @@ impl BeamSystem {
             }
             self.bodies.rotation[i] = rotation * self.body_axes[i];
             self.bodies.evaluate(&self.structure);
+            self.impulse.valid = false;
         }
     }
 
@@ -576,6 +610,7 @@ impl BeamSystem {
     /// # Errors
     /// A bad step or a failing midpoint solve (the system is then left mid-step).
     pub fn step(&mut self, h: f64) -> Result<()> {
+        self.impulse.valid = false;
         self.bodies.step(&self.structure, h)
     }
 
@@ -584,6 +619,7 @@ impl BeamSystem {
     /// # Errors
     /// As [`BeamSystem::step`].
     pub fn step_composed(&mut self, h: f64, scheme: &Scheme) -> Result<()> {
+        self.impulse.valid = false;
         self.bodies.step_composed(&self.structure, h, scheme)
     }
 
@@ -592,9 +628,10 @@ impl BeamSystem {
     /// # Errors
     /// As [`BeamSystem::step`].
     pub fn step_with(&mut self, method: BeamMethod, h: f64) -> Result<()> {
-        match method.scheme() {
-            None => self.step(h),
-            Some(s) => self.step_composed(h, s),
+        match (method, method.scheme()) {
+            (BeamMethod::Impulse, _) => self.step_impulse(h),
+            (_, None) => self.step(h),
+            (_, Some(s)) => self.step_composed(h, s),
         }
     }
 

@@ -12,8 +12,9 @@
 //! m a_{n+1} = F(x_{n+1}, R_{n+1}, t_{n+1}),   J A_{n+1} + W_{n+1} × J W_{n+1} = T(…)
 //! ```
 //!
-//! Each Newton iteration assembles `4M/h² + K` (banded, `K` by central differences of the
-//! element forces, element by element) and corrects `x ← x + δx`, `R ← R exp(δθ)` until
+//! Each Newton iteration assembles `4M/h² + K` (banded, `K` the exact derivative of the
+//! element forces by dual numbers, [`super::tangent`], or by central differences,
+//! [`Tangent`], element by element) and corrects `x ← x + δx`, `R ← R exp(δθ)` until
 //! the largest correction is below `1e-10` of the structure's size. Second order; the
 //! average-acceleration rule keeps the energy of linear problems but neither it nor the
 //! momenta of nonlinear ones exactly.
@@ -103,6 +104,8 @@ pub struct Newmark {
     force: Vec<Vec3>,
     torque: Vec<Vec3>,
     scale: f64,
+    /// How the element stiffness is formed.
+    tangent: Tangent,
     /// Newton iterations taken so far.
     pub iterations: u64,
     /// Steps taken so far.
@@ -175,9 +178,23 @@ impl Newmark {
             offset,
             dofs,
             scale: extent,
+            tangent: Tangent::Analytic,
             iterations: 0,
             steps: 0,
         }
+    }
+
+    /// Form the element stiffness by `tangent` (the default is [`Tangent::Analytic`]).
+    #[must_use]
+    pub fn with_tangent(mut self, tangent: Tangent) -> Self {
+        self.tangent = tangent;
+        self
+    }
+
+    /// How the element stiffness is formed.
+    #[must_use]
+    pub fn tangent(&self) -> Tangent {
+        self.tangent
     }
 
     /// The state as a [`BeamSystem`] (positions and attitudes current; momenta not kept).
@@ -329,6 +346,37 @@ impl Newmark {
             }
         }
         let structure = &self.system.structure;
+        if self.tangent == Tangent::Analytic {
+            for e in &structure.elements {
+                let mut columns: [(usize, usize); 4] = [(0, usize::MAX); 4];
+                let mut count = 0;
+                for (end, node) in e.ends.iter().enumerate() {
+                    if let NodeRef::Body(i) = *node {
+                        let mut k = self.offset[i];
+                        if b.free[i] {
+                            columns[count] = (6 * end, k);
+                            count += 1;
+                            k += 3;
+                        }
+                        columns[count] = (6 * end + 3, k);
+                        count += 1;
+                    }
+                }
+                let (xa, ra) = structure.pose(&b.position, &b.rotation, e.ends[0]);
+                let (xb, rb) = structure.pose(&b.position, &b.rotation, e.ends[1]);
+                let kt = super::tangent::element_tangent(&e.stiffness, xa, xb, &ra, &rb, &e.axes[0], &e.axes[1]);
+                for &(kc, col0) in &columns[..count] {
+                    for &(kr, row0) in &columns[..count] {
+                        for r in 0..3 {
+                            for d in 0..3 {
+                                *self.matrix.at(row0 + r, col0 + d) += kt[kr + r][kc + d];
+                            }
+                        }
+                    }
+                }
+            }
+            return;
+        }
         let eps_x = 1e-7 * self.scale;
         let eps_r = 1e-7;
         for e in &structure.elements {
@@ -396,6 +444,17 @@ impl Newmark {
     pub fn displacement(&self, node: usize) -> Vec3 {
         self.system.displacement(node)
     }
+}
+
+/// How Newmark's Newton iteration forms the element stiffness.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Tangent {
+    /// Exact derivatives of the element forces by dual numbers ([`super::tangent`]): one
+    /// evaluation in nine-direction duals per element.
+    #[default]
+    Analytic,
+    /// Central differences of the element forces: 24 evaluations per element.
+    FiniteDifference,
 }
 
 /// Newton iterations before a step is given up.
