@@ -159,6 +159,16 @@ fn view_page() {
     );
     let html = std::fs::read_to_string(dir.join("m.html")).unwrap();
     assert!(html.contains("\"articulated\"") && html.contains("51 frames of 500 steps"));
+    // A wrong page path is refused before the run, like every output.
+    std::fs::create_dir_all(dir.join("a-dir")).unwrap();
+    let model = examples().join("multibody").join("double_pendulum.xml");
+    let model = model.to_str().unwrap();
+    for wrong in ["a-dir", "/dev/null", model] {
+        let o = run_in(&dir, &["multibody", model, "--view", wrong]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "--view {wrong}: {err}");
+        assert!(err.contains("--view") && err.trim().lines().count() == 1, "{err}");
+    }
 }
 
 #[test]
