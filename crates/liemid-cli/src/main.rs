@@ -116,6 +116,7 @@ fn main() -> ExitCode {
             for name in rigid::scenario::PROBLEMS {
                 println!("{name:<11} {}", rigid::scenario::describe(name));
             }
+            println!("{:<11} {}", rigid::satellite::PROBLEM, rigid::satellite::DESCRIPTION);
             Ok(())
         }
     };

@@ -72,7 +72,10 @@ fn the_eccentric_satellite_needs_five_times_fewer_steps() {
             .collect();
         for target in [1e-2, 3e-3, 1.5e-3] {
             let ratio = steps_at(&fixed, target) / steps_at(&adaptive, target);
-            println!("{}: attitude error {target:e}: fixed/adaptive steps = {ratio:.2}", m.key());
+            println!(
+                "{}: attitude error {target:e}: fixed/adaptive steps = {ratio:.2}",
+                m.key()
+            );
             assert!(ratio >= 5.0, "{}: ratio {ratio} at {target:e}", m.key());
         }
     }
@@ -125,14 +128,24 @@ fn verlet_on_kepler_keeps_its_orders() {
         let state = Kepler::initial(e);
         let (end, steps) = if composed {
             let m = Composition::new(Verlet::default(), Scheme::SUZUKI4, "Verlet4");
-            let mut r = AdaptiveRun::new(VectorAdaptive::new(&system, m, CentralDensity::default()), state, t_end, eps)
-                .unwrap();
+            let mut r = AdaptiveRun::new(
+                VectorAdaptive::new(&system, m, CentralDensity::default()),
+                state,
+                t_end,
+                eps,
+            )
+            .unwrap();
             let s = r.run_to_end().unwrap();
             (r.state().clone(), s.steps)
         } else {
             let m = Verlet::default();
-            let mut r = AdaptiveRun::new(VectorAdaptive::new(&system, m, CentralDensity::default()), state, t_end, eps)
-                .unwrap();
+            let mut r = AdaptiveRun::new(
+                VectorAdaptive::new(&system, m, CentralDensity::default()),
+                state,
+                t_end,
+                eps,
+            )
+            .unwrap();
             let s = r.run_to_end().unwrap();
             (r.state().clone(), s.steps)
         };
@@ -295,13 +308,21 @@ fn invariants_stay_bounded_over_many_orbits() {
     }
     println!("energy, momentum errors per tenth: {tenths:?}");
     assert!(tenths[9].0 <= 1.2 * tenths[0].0, "energy drifts: {tenths:?}");
-    assert!(tenths[9].1 <= 1.2 * tenths[0].1.max(1e-13), "momentum drifts: {tenths:?}");
+    assert!(
+        tenths[9].1 <= 1.2 * tenths[0].1.max(1e-13),
+        "momentum drifts: {tenths:?}"
+    );
 }
 
 #[test]
 fn refuses_methods_that_are_not_symmetric_and_bad_parameters() {
     let top = problems::fast_top();
-    for m in [M::RungeKutta4, M::LieMidpointE1, M::LieMidpointE2, M::RungeKuttaMuntheKaas4] {
+    for m in [
+        M::RungeKutta4,
+        M::LieMidpointE1,
+        M::LieMidpointE2,
+        M::RungeKuttaMuntheKaas4,
+    ] {
         let e = RigidAdaptive::new(&top.system, m, AngularSpeed).unwrap_err();
         assert!(matches!(e, Error::NotReversible { .. }), "{e}");
         assert!(e.to_string().contains("not symmetric"), "{e}");

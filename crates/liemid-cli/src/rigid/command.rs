@@ -7,10 +7,13 @@ use std::time::Instant;
 
 use clap::Args;
 use liemid::error::Num;
-use liemid::{RotationMethod, Run, Vec3};
+use liemid::rigid::adaptive::{
+    AdaptiveRun, AdaptiveStats, AngularSpeed, ReversibleStepper, RigidAdaptive, RigidDensity, TorqueRate,
+};
+use liemid::{RotationMethod, Run, RunSummary, Vec3};
 use serde_json::json;
 
-use super::{converge, study as work_precision};
+use super::{converge, satellite, study as work_precision};
 use crate::rigid::scenario::{self, Conservation, Format, Scenario};
 use crate::shared::checkpoint::{Checkpoint, Settings, Source};
 use crate::shared::command::{check_positive, check_study_outputs, report, CmdResult, Failure};
@@ -80,6 +83,19 @@ pub struct RunArgs {
     /// Print the summary as one JSON object.
     #[arg(long)]
     json: bool,
+    /// Reversible adaptive steps (Hairer-Soderlind) with accuracy EPS: h = EPS / z, z the
+    /// step density rho carried by a symmetric recursion; symmetric methods only (the EA,
+    /// EX and FS families); replaces --step, the last step lands on t_end.
+    #[arg(long, value_name = "EPS", allow_negative_numbers = true, conflicts_with_all = ["step", "resume", "checkpoint"])]
+    adaptive: Option<f64>,
+    /// The step density of --adaptive: `omega` (|Omega|, the default) or `torque`
+    /// ((|Omega|^2 + |T|/I_min)^(1/2)); for eccentric-satellite `orbit` (the default,
+    /// (mu/r^3)^(1/2)), `omega` or `orbit+omega`.
+    #[arg(long, requires = "adaptive")]
+    rho: Option<String>,
+    /// Orbits to integrate (eccentric-satellite only) [default: 1].
+    #[arg(long, allow_negative_numbers = true, conflicts_with_all = ["t_end", "file", "resume"])]
+    orbits: Option<f64>,
 }
 
 fn format_key(f: Format) -> &'static str {
@@ -197,6 +213,29 @@ fn row(s: &liemid::RigidState, d: &liemid::Diagnostics) -> [f64; 17] {
 
 /// Run `liemid run`.
 pub fn run(args: RunArgs) -> CmdResult {
+    if args.file.is_none() && args.resume.is_none() && args.problem == satellite::PROBLEM {
+        let method = match &args.method {
+            Some(m) => parse_method(m)?,
+            None => RotationMethod::LieMidpointAlternating,
+        };
+        if let Some(eps) = args.adaptive {
+            check_positive("adaptive", eps)?;
+        }
+        return satellite::run(&satellite::RunRequest {
+            method,
+            adaptive: args.adaptive,
+            rho: args.rho.as_deref(),
+            step: args.step,
+            orbits: args.orbits.unwrap_or(1.0),
+            json: args.json,
+        });
+    }
+    if args.orbits.is_some() {
+        return Err(Failure::Input(format!(
+            "--orbits is for --problem {} only; give --t-end",
+            satellite::PROBLEM
+        )));
+    }
     let resumed = args
         .resume
         .as_ref()
@@ -209,6 +248,19 @@ pub fn run(args: RunArgs) -> CmdResult {
     };
     let method = RotationMethod::from_key(&settings.method)
         .ok_or_else(|| Failure::Input(format!("unknown method `{}` in the checkpoint", settings.method)))?;
+    if let Some(eps) = args.adaptive {
+        check_positive("adaptive", eps)?;
+        method
+            .check_reversible()
+            .map_err(|e| Failure::Input(format!("--adaptive: {e}")))?;
+        return match args.rho.as_deref().unwrap_or("omega") {
+            "omega" => run_adaptive(&args, &settings, &sc, method, eps, AngularSpeed),
+            "torque" => run_adaptive(&args, &settings, &sc, method, eps, TorqueRate),
+            other => Err(Failure::Input(format!(
+                "--rho {other}: unknown step density for a rigid body (known: omega, torque)"
+            ))),
+        };
+    }
     let steps = liemid::step_count(sc.initial.t, settings.t_end, settings.step).map_err(|e| {
         Failure::Input(format!(
             "--step {} and --t-end {}: {e}",
@@ -375,6 +427,130 @@ pub fn run(args: RunArgs) -> CmdResult {
         wall,
         trajectory,
         to_stdout,
+        None,
+    );
+    Ok(())
+}
+
+/// The largest errors of the diagnostics, as [`liemid::Run::step`] keeps them.
+fn track(p: &mut RunSummary, d: &liemid::Diagnostics) {
+    let e0 = p.initial.energy;
+    let de = (d.energy - e0).abs();
+    p.max_energy_error = p.max_energy_error.max(if e0 != 0.0 { de / e0.abs() } else { de });
+    let dm = d.spatial_momentum - p.initial.spatial_momentum;
+    let m = p.max_spatial_momentum_change;
+    p.max_spatial_momentum_change = Vec3::new(m.x.max(dm.x.abs()), m.y.max(dm.y.abs()), m.z.max(dm.z.abs()));
+    p.max_body_momentum_norm_change = p
+        .max_body_momentum_norm_change
+        .max((d.body_momentum_norm - p.initial.body_momentum_norm).abs());
+    p.max_orthogonality_defect = p.max_orthogonality_defect.max(d.orthogonality_defect);
+    p.last = *d;
+}
+
+/// `liemid run --adaptive EPS`: the reversible adaptive run of a rigid-body scenario, with
+/// the same trajectory rows (every `--every` steps, the first and the last) and summary.
+fn run_adaptive<D: RigidDensity>(
+    args: &RunArgs,
+    settings: &Settings,
+    sc: &Scenario,
+    method: RotationMethod,
+    eps: f64,
+    density: D,
+) -> CmdResult {
+    let system = &sc.system;
+    let conservation = system.conservation();
+    let mut plan = OutputPlan::new(&args.file.iter().map(PathBuf::as_path).collect::<Vec<_>>());
+    let format = match settings.output.as_ref().map(|(_, f)| f.as_str()) {
+        Some("npy") => Format::Npy,
+        _ => Format::Csv,
+    };
+    if let Some((path, _)) = &settings.output {
+        if path != "-" {
+            plan.add("--out", Path::new(path)).map_err(Failure::Input)?;
+        }
+    }
+    let stepper = RigidAdaptive::new(system, method, density).map_err(|e| Failure::Input(e.to_string()))?;
+    sc.initial
+        .check_valid()
+        .map_err(|e| Failure::Input(format!("{}: {e}", sc.name)))?;
+    let mut run = AdaptiveRun::new(stepper, sc.initial, settings.t_end, eps)
+        .map_err(|e| Failure::Input(format!("{}: {e}", sc.name)))?;
+    let first = liemid::Diagnostics::of(system, &sc.initial);
+    let mut progress = RunSummary {
+        state: sc.initial,
+        steps: 0,
+        initial: first,
+        last: first,
+        max_energy_error: 0.0,
+        max_spatial_momentum_change: Vec3::ZERO,
+        max_body_momentum_norm_change: 0.0,
+        max_orthogonality_defect: first.orthogonality_defect,
+    };
+    let mut writer = match &settings.output {
+        None => None,
+        Some((path, _)) => Some(TrajectoryWriter::create(Path::new(path), format, &COLUMNS).map_err(Failure::Input)?),
+    };
+    let to_stdout = settings.output.as_ref().is_some_and(|(p, _)| p == "-");
+    if let Some(w) = writer.as_mut() {
+        w.write_row(&row(&sc.initial, &first)).map_err(Failure::Run)?;
+    }
+    let mut max_conserved = 0.0f64;
+    let started = Instant::now();
+    let every = settings.every;
+    let failure = loop {
+        if run.is_done() {
+            break None;
+        }
+        if let Some(max) = args.max_steps {
+            if run.stats().steps >= max {
+                break Some(format!("the adaptive run reached --max-steps {max} before t_end"));
+            }
+        }
+        if let Err(e) = run.step() {
+            break Some(format!("{}: {e}", sc.name));
+        }
+        let state = *run.state();
+        let d = liemid::Diagnostics::of(system, &state);
+        track(&mut progress, &d);
+        if let Some(change) = conserved_change(conservation, first.spatial_momentum, d.spatial_momentum) {
+            max_conserved = max_conserved.max(change);
+        }
+        let k = run.stats().steps;
+        if k % every == 0 || run.is_done() {
+            if let Some(w) = writer.as_mut() {
+                if let Err(e) = w.write_row(&row(&state, &d)) {
+                    break Some(e);
+                }
+            }
+        }
+    };
+    let wall = started.elapsed().as_secs_f64();
+    if let Some(message) = failure {
+        let kept = writer.map(|w| format!("; {}", w.keep_partial())).unwrap_or_default();
+        return Err(Failure::Run(format!("{message}{kept}")));
+    }
+    let trajectory = writer.map(TrajectoryWriter::finish).transpose().map_err(Failure::Run)?;
+    let stats = run.stats();
+    progress.state = *run.state();
+    progress.steps = stats.steps;
+    let summary_run = Run {
+        t0: sc.initial.t,
+        t_end: settings.t_end,
+        h: stats.max_step,
+        total_steps: stats.steps,
+        progress,
+    };
+    print_summary(
+        args,
+        settings,
+        sc,
+        &summary_run,
+        method,
+        max_conserved,
+        wall,
+        trajectory,
+        to_stdout,
+        Some((stats, run.stepper.density_name())),
     );
     Ok(())
 }
@@ -392,12 +568,15 @@ fn print_summary(
     wall: f64,
     trajectory: Option<(String, u64)>,
     to_stdout: bool,
+    adaptive: Option<(AdaptiveStats, &str)>,
 ) {
     let summary = run.summary();
     let s = &summary.state;
     let conservation = sc.system.conservation();
     let n = run.total_steps;
-    let last_step = if n == 0 {
+    let last_step = if let Some((a, _)) = &adaptive {
+        a.last_step
+    } else if n == 0 {
         0.0
     } else {
         run.t_end - (run.t0 + (n - 1) as f64 * run.h)
@@ -414,7 +593,8 @@ fn print_summary(
         ),
         Conservation::Driven => "not conserved: the torque changes it".to_string(),
     };
-    let warn_energy = !matches!(conservation, Conservation::Driven) && summary.max_energy_error > 1e-2;
+    let warn_energy =
+        adaptive.is_none() && !matches!(conservation, Conservation::Driven) && summary.max_energy_error > 1e-2;
     if warn_energy {
         eprintln!(
             "liemid: warning: the relative energy error reached {:.3e}; the step h = {} is probably too \
@@ -424,7 +604,7 @@ fn print_summary(
         );
     }
     if args.json {
-        let out = json!({
+        let mut out = json!({
             "problem": sc.name,
             "method": method.key(),
             "step": settings.step,
@@ -450,6 +630,13 @@ fn print_summary(
                 "format": settings.output.as_ref().map(|(_, f)| f.as_str()),
             })),
         });
+        if let (Some((a, rho)), Some(map)) = (&adaptive, out.as_object_mut()) {
+            map.insert("step".into(), json!(null));
+            map.insert(
+                "adaptive".into(),
+                json!({"eps": a.eps, "rho": rho, "min_step": a.min_step, "max_step": a.max_step}),
+            );
+        }
         if to_stdout {
             eprintln!("{out}");
         } else {
@@ -464,7 +651,15 @@ fn print_summary(
     };
     let r = s.rotation.m;
     let dm = summary.max_spatial_momentum_change;
-    let step_text = if n == 1 && last_step < settings.step {
+    let step_text = if let Some((a, rho)) = &adaptive {
+        format!(
+            "adaptive steps, eps = {} (rho = {rho}), from {} to {} (the last {})",
+            Num(a.eps),
+            Num(a.min_step),
+            Num(a.max_step),
+            Num(a.last_step)
+        )
+    } else if n == 1 && last_step < settings.step {
         format!(
             "one step of {} (the given step {} is longer than the interval)",
             Num(last_step),
@@ -602,6 +797,22 @@ pub struct WorkPrecisionArgs {
     /// Write the study as JSON to FILE, or to standard output with `-`.
     #[arg(long)]
     pub json: Option<String>,
+    /// Add the reversible adaptive family (EA, EX and their compositions, density |Omega|);
+    /// with --problem eccentric-satellite, the satellite's own study (fixed and adaptive
+    /// EA/EX, the adaptive compositions, DOP853 on the full orbit + attitude ODE).
+    #[arg(long)]
+    pub adaptive: bool,
+    /// With --problem eccentric-satellite --adaptive: instead of the study, N orbits with
+    /// the adaptive --drift-method at --drift-eps against DOP853 at the same CPU time; the
+    /// energy and angular momentum errors per orbit go to --plot.
+    #[arg(long, requires = "adaptive")]
+    pub drift_orbits: Option<u32>,
+    /// The method of the drift run.
+    #[arg(long, default_value = "liemid-ea4", requires = "drift_orbits")]
+    pub drift_method: String,
+    /// The eps of the drift run.
+    #[arg(long, default_value_t = 0.05, requires = "drift_orbits")]
+    pub drift_eps: f64,
 }
 
 /// Print the rigid-body methods: order, torque evaluations a step, what they conserve.
@@ -683,8 +894,47 @@ fn study_end(sc: &Scenario, t_end: Option<f64>) -> Result<f64, Failure> {
 
 /// Run `liemid work-precision`.
 pub fn work_precision_cmd(args: WorkPrecisionArgs) -> CmdResult {
+    if args.scenario.is_none() && args.problem == satellite::PROBLEM {
+        if !args.adaptive {
+            return Err(Failure::Input(format!(
+                "--problem {} has its own study: give --adaptive",
+                satellite::PROBLEM
+            )));
+        }
+        check_study_outputs(
+            None,
+            &args.plot,
+            args.no_plot || args.drift_orbits.is_none(),
+            args.json.as_deref(),
+        )?;
+        if let Some(orbits) = args.drift_orbits {
+            let method = parse_method(&args.drift_method)?;
+            method.check_reversible().map_err(|e| Failure::Input(e.to_string()))?;
+            let eps = check_positive("drift-eps", args.drift_eps)?;
+            if orbits == 0 {
+                return Err(Failure::Input("--drift-orbits must be at least 1".into()));
+            }
+            return satellite::drift(orbits, method, eps, &args.plot, args.json.as_deref());
+        }
+        let study = satellite::study(args.repetitions as usize).map_err(Failure::Run)?;
+        let table = satellite::table(&study);
+        if args.json.as_deref() == Some("-") {
+            eprint!("{table}");
+        } else {
+            print!("{table}");
+        }
+        if let Some(target) = args.json.as_deref() {
+            crate::shared::command::write_json(target, &study)?;
+        }
+        return Ok(());
+    }
     let sc = load_scenario(args.scenario.as_deref(), &args.problem)?;
     let entries: Vec<work_precision::Entry> = match &args.methods {
+        None if args.adaptive => {
+            let mut v = work_precision::Entry::all();
+            v.extend(work_precision::Entry::adaptive());
+            v
+        }
         None => work_precision::Entry::all(),
         Some(list) => list
             .iter()
@@ -697,6 +947,19 @@ pub fn work_precision_cmd(args: WorkPrecisionArgs) -> CmdResult {
                 })
             })
             .collect::<Result<_, _>>()?,
+    };
+    let entries = if args.adaptive && args.methods.is_some() {
+        let mut v = entries.clone();
+        for e in &entries {
+            if let work_precision::Entry::Fixed(m) = e {
+                if m.check_reversible().is_ok() {
+                    v.push(work_precision::Entry::Adaptive(*m));
+                }
+            }
+        }
+        v
+    } else {
+        entries
     };
     let t_end = study_end(&sc, args.t_end)?;
     let options = work_precision::Options {

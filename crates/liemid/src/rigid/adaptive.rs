@@ -363,7 +363,10 @@ impl RigidDensity for TorqueRate {
             0.0
         };
         let rho2 = omega.norm_squared() + scale * tn;
-        (rho2.sqrt(), (2.0 * omega.dot(rate) + scale * torque_rate) / (2.0 * rho2))
+        (
+            rho2.sqrt(),
+            (2.0 * omega.dot(rate) + scale * torque_rate) / (2.0 * rho2),
+        )
     }
 }
 

@@ -109,7 +109,8 @@ impl Satellite {
         let k = 3.0 * self.mu * inv_r3 / r2;
         let iu = self.inertia.apply(u);
         let s = u.dot(iu);
-        let force = position * (-self.mu * self.mass * inv_r3 + k * (2.5 * s / r2 - 0.5 * self.trace)) - *rotation * iu * k;
+        let force =
+            position * (-self.mu * self.mass * inv_r3 + k * (2.5 * s / r2 - 0.5 * self.trace)) - *rotation * iu * k;
         (force, u.cross(iu) * k)
     }
 
