@@ -288,7 +288,7 @@ fn dop853(
         0.0,
         u32::MAX,
         1000,
-        if keep { OutputType::Sparse } else { OutputType::Dense },
+        OutputType::Sparse,
     );
     let stats = solver
         .integrate()
