@@ -307,6 +307,12 @@ fn dop853(
     Ok((out, u64::from(stats.num_eval)))
 }
 
+/// `(attitude error, fastest adaptive method, its seconds, DOP853 seconds)`.
+pub type TargetRow = (f64, Option<String>, Option<f64>, Option<f64>);
+
+/// A DOP853 run of the drift study: `(rtol, seconds, errors per orbit, evaluations)`.
+type DopRun = (f64, f64, Vec<(f64, f64)>, u64);
+
 /// One point of the satellite study.
 #[derive(Clone, Debug, Serialize)]
 pub struct SatPoint {
@@ -342,7 +348,7 @@ pub struct SatStudy {
     pub curves: Vec<SatCurve>,
     /// At attitude errors 1e-3, 1e-6, 1e-9: `(target, fastest adaptive, its seconds,
     /// DOP853 seconds)`, log-log interpolated.
-    pub targets: Vec<(f64, Option<String>, Option<f64>, Option<f64>)>,
+    pub targets: Vec<TargetRow>,
     /// For EA and EX: fixed steps / adaptive steps at equal attitude error 1e-3.
     pub step_ratios: Vec<(String, Option<f64>)>,
 }
@@ -589,7 +595,7 @@ pub fn drift(orbits: u32, method: RotationMethod, eps: f64, plot_path: &Path, js
     let our_seconds = started.elapsed().as_secs_f64();
     let our_steps = run.stats().steps;
     // DOP853: the tolerance whose run takes the closest CPU time (tried from loose to tight).
-    let mut best: Option<(f64, f64, Vec<(f64, f64)>, u64)> = None;
+    let mut best: Option<DopRun> = None;
     for k in 5..=12 {
         let rtol = 10f64.powi(-k);
         let start = Instant::now();

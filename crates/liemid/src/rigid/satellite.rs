@@ -346,7 +346,7 @@ impl SatelliteIntegrator {
     /// As [`SatelliteIntegrator::step`]; `steps = 0` or `t_end` not after the start.
     pub fn advance(&mut self, satellite: &Satellite, state: &mut SatelliteState, t_end: f64, steps: u64) -> Result<()> {
         let t0 = state.t;
-        if steps == 0 || !(t_end > t0) {
+        if steps == 0 || t_end.partial_cmp(&t0) != Some(std::cmp::Ordering::Greater) {
             return Err(Error::EndBeforeStart { t0, t_end });
         }
         let h = (t_end - t0) / steps as f64;
