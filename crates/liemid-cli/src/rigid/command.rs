@@ -7,19 +7,20 @@ use std::time::Instant;
 
 use clap::Args;
 use liemid::error::Num;
-use liemid::rigid::adaptive::{
-    AdaptiveRun, AdaptiveStats, AngularSpeed, ReversibleStepper, RigidAdaptive, RigidDensity, TorqueRate,
-};
-use liemid::{RotationMethod, Run, RunSummary, Vec3};
+use liemid::rigid::adaptive::{AdaptiveStats, AngularSpeed, TorqueRate};
+use liemid::{RotationMethod, Run, Vec3};
 use serde_json::json;
 
 use super::{converge, satellite, study as work_precision};
+
+mod adaptive_run;
 use crate::rigid::scenario::{self, Conservation, Format, Scenario};
 use crate::shared::checkpoint::{Checkpoint, Settings, Source};
 use crate::shared::command::{check_positive, check_study_outputs, report, CmdResult, Failure};
 use crate::shared::interrupt::{progress, Interrupt};
 use crate::shared::output::{plural, OutputPlan, TrajectoryWriter, COLUMNS};
 use crate::shared::plot;
+use adaptive_run::run_adaptive;
 
 /// The largest trajectory `run` writes unless `--allow-large-output` is given (bytes).
 pub const MAX_TRAJECTORY_BYTES: f64 = 4.0 * (1u64 << 30) as f64;
@@ -214,15 +215,8 @@ fn row(s: &liemid::RigidState, d: &liemid::Diagnostics) -> [f64; 17] {
 /// Run `liemid run`.
 pub fn run(args: RunArgs) -> CmdResult {
     if args.file.is_none() && args.resume.is_none() && args.problem == satellite::PROBLEM {
-        let method = match &args.method {
-            Some(m) => parse_method(m)?,
-            None => RotationMethod::LieMidpointAlternating,
-        };
-        if let Some(eps) = args.adaptive {
-            check_positive("adaptive", eps)?;
-        }
         return satellite::run(&satellite::RunRequest {
-            method,
+            method: args.method.as_deref(),
             adaptive: args.adaptive,
             rho: args.rho.as_deref(),
             step: args.step,
@@ -428,129 +422,6 @@ pub fn run(args: RunArgs) -> CmdResult {
         trajectory,
         to_stdout,
         None,
-    );
-    Ok(())
-}
-
-/// The largest errors of the diagnostics, as [`liemid::Run::step`] keeps them.
-fn track(p: &mut RunSummary, d: &liemid::Diagnostics) {
-    let e0 = p.initial.energy;
-    let de = (d.energy - e0).abs();
-    p.max_energy_error = p.max_energy_error.max(if e0 != 0.0 { de / e0.abs() } else { de });
-    let dm = d.spatial_momentum - p.initial.spatial_momentum;
-    let m = p.max_spatial_momentum_change;
-    p.max_spatial_momentum_change = Vec3::new(m.x.max(dm.x.abs()), m.y.max(dm.y.abs()), m.z.max(dm.z.abs()));
-    p.max_body_momentum_norm_change = p
-        .max_body_momentum_norm_change
-        .max((d.body_momentum_norm - p.initial.body_momentum_norm).abs());
-    p.max_orthogonality_defect = p.max_orthogonality_defect.max(d.orthogonality_defect);
-    p.last = *d;
-}
-
-/// `liemid run --adaptive EPS`: the reversible adaptive run of a rigid-body scenario, with
-/// the same trajectory rows (every `--every` steps, the first and the last) and summary.
-fn run_adaptive<D: RigidDensity>(
-    args: &RunArgs,
-    settings: &Settings,
-    sc: &Scenario,
-    method: RotationMethod,
-    eps: f64,
-    density: D,
-) -> CmdResult {
-    let system = &sc.system;
-    let conservation = system.conservation();
-    let mut plan = OutputPlan::new(&args.file.iter().map(PathBuf::as_path).collect::<Vec<_>>());
-    let format = match settings.output.as_ref().map(|(_, f)| f.as_str()) {
-        Some("npy") => Format::Npy,
-        _ => Format::Csv,
-    };
-    if let Some((path, _)) = &settings.output {
-        if path != "-" {
-            plan.add("--out", Path::new(path)).map_err(Failure::Input)?;
-        }
-    }
-    let stepper = RigidAdaptive::new(system, method, density).map_err(|e| Failure::Input(e.to_string()))?;
-    sc.initial
-        .check_valid()
-        .map_err(|e| Failure::Input(format!("{}: {e}", sc.name)))?;
-    let mut run = AdaptiveRun::new(stepper, sc.initial, settings.t_end, eps)
-        .map_err(|e| Failure::Input(format!("{}: {e}", sc.name)))?;
-    let first = liemid::Diagnostics::of(system, &sc.initial);
-    let mut progress = RunSummary {
-        state: sc.initial,
-        steps: 0,
-        initial: first,
-        last: first,
-        max_energy_error: 0.0,
-        max_spatial_momentum_change: Vec3::ZERO,
-        max_body_momentum_norm_change: 0.0,
-        max_orthogonality_defect: first.orthogonality_defect,
-    };
-    let mut writer = match &settings.output {
-        None => None,
-        Some((path, _)) => Some(TrajectoryWriter::create(Path::new(path), format, &COLUMNS).map_err(Failure::Input)?),
-    };
-    let to_stdout = settings.output.as_ref().is_some_and(|(p, _)| p == "-");
-    if let Some(w) = writer.as_mut() {
-        w.write_row(&row(&sc.initial, &first)).map_err(Failure::Run)?;
-    }
-    let mut max_conserved = 0.0f64;
-    let started = Instant::now();
-    let every = settings.every;
-    let failure = loop {
-        if run.is_done() {
-            break None;
-        }
-        if let Some(max) = args.max_steps {
-            if run.stats().steps >= max {
-                break Some(format!("the adaptive run reached --max-steps {max} before t_end"));
-            }
-        }
-        if let Err(e) = run.step() {
-            break Some(format!("{}: {e}", sc.name));
-        }
-        let state = *run.state();
-        let d = liemid::Diagnostics::of(system, &state);
-        track(&mut progress, &d);
-        if let Some(change) = conserved_change(conservation, first.spatial_momentum, d.spatial_momentum) {
-            max_conserved = max_conserved.max(change);
-        }
-        let k = run.stats().steps;
-        if k % every == 0 || run.is_done() {
-            if let Some(w) = writer.as_mut() {
-                if let Err(e) = w.write_row(&row(&state, &d)) {
-                    break Some(e);
-                }
-            }
-        }
-    };
-    let wall = started.elapsed().as_secs_f64();
-    if let Some(message) = failure {
-        let kept = writer.map(|w| format!("; {}", w.keep_partial())).unwrap_or_default();
-        return Err(Failure::Run(format!("{message}{kept}")));
-    }
-    let trajectory = writer.map(TrajectoryWriter::finish).transpose().map_err(Failure::Run)?;
-    let stats = run.stats();
-    progress.state = *run.state();
-    progress.steps = stats.steps;
-    let summary_run = Run {
-        t0: sc.initial.t,
-        t_end: settings.t_end,
-        h: stats.max_step,
-        total_steps: stats.steps,
-        progress,
-    };
-    print_summary(
-        args,
-        settings,
-        sc,
-        &summary_run,
-        method,
-        max_conserved,
-        wall,
-        trajectory,
-        to_stdout,
-        Some((stats, run.stepper.density_name())),
     );
     Ok(())
 }
@@ -895,38 +766,7 @@ fn study_end(sc: &Scenario, t_end: Option<f64>) -> Result<f64, Failure> {
 /// Run `liemid work-precision`.
 pub fn work_precision_cmd(args: WorkPrecisionArgs) -> CmdResult {
     if args.scenario.is_none() && args.problem == satellite::PROBLEM {
-        if !args.adaptive {
-            return Err(Failure::Input(format!(
-                "--problem {} has its own study: give --adaptive",
-                satellite::PROBLEM
-            )));
-        }
-        check_study_outputs(
-            None,
-            &args.plot,
-            args.no_plot || args.drift_orbits.is_none(),
-            args.json.as_deref(),
-        )?;
-        if let Some(orbits) = args.drift_orbits {
-            let method = parse_method(&args.drift_method)?;
-            method.check_reversible().map_err(|e| Failure::Input(e.to_string()))?;
-            let eps = check_positive("drift-eps", args.drift_eps)?;
-            if orbits == 0 {
-                return Err(Failure::Input("--drift-orbits must be at least 1".into()));
-            }
-            return satellite::drift(orbits, method, eps, &args.plot, args.json.as_deref());
-        }
-        let study = satellite::study(args.repetitions as usize).map_err(Failure::Run)?;
-        let table = satellite::table(&study);
-        if args.json.as_deref() == Some("-") {
-            eprint!("{table}");
-        } else {
-            print!("{table}");
-        }
-        if let Some(target) = args.json.as_deref() {
-            crate::shared::command::write_json(target, &study)?;
-        }
-        return Ok(());
+        return satellite::work_precision(&args);
     }
     let sc = load_scenario(args.scenario.as_deref(), &args.problem)?;
     let entries: Vec<work_precision::Entry> = match &args.methods {

@@ -19,7 +19,8 @@ use ode_solvers::{Dop853, OutputType, SVector, System};
 use serde::Serialize;
 use serde_json::json;
 
-use crate::shared::command::{write_json, CmdResult, Failure};
+use crate::rigid::command::{parse_method, WorkPrecisionArgs};
+use crate::shared::command::{check_positive, check_study_outputs, write_json, CmdResult, Failure};
 use crate::shared::plot;
 
 /// The problem's name.
@@ -34,8 +35,8 @@ pub const DEFAULT_STEP: f64 = 10.0;
 
 /// What `liemid run --problem eccentric-satellite` was asked for.
 pub struct RunRequest<'a> {
-    /// The method.
-    pub method: RotationMethod,
+    /// `--method` [default: liemid-ea].
+    pub method: Option<&'a str>,
     /// `--adaptive EPS`.
     pub adaptive: Option<f64>,
     /// `--rho NAME`.
@@ -92,6 +93,12 @@ impl Tracker {
 
 /// `liemid run --problem eccentric-satellite`: a fixed or an adaptive run, and its summary.
 pub fn run(req: &RunRequest) -> CmdResult {
+    let method = req
+        .method
+        .map_or(Ok(RotationMethod::LieMidpointAlternating), parse_method)?;
+    if let Some(eps) = req.adaptive {
+        check_positive("adaptive", eps)?;
+    }
     let p = eccentric_satellite();
     let sat = &p.satellite;
     if !(req.orbits.is_finite() && req.orbits > 0.0) {
@@ -106,7 +113,7 @@ pub fn run(req: &RunRequest) -> CmdResult {
     let (state, steps, step_info, adaptive) = match req.adaptive {
         Some(eps) => {
             let d = density(req.rho)?;
-            let stepper = SatelliteAdaptive::new(sat, req.method, d).map_err(|e| Failure::Input(e.to_string()))?;
+            let stepper = SatelliteAdaptive::new(sat, method, d).map_err(|e| Failure::Input(e.to_string()))?;
             let mut run = AdaptiveRun::new(stepper, p.initial, t_end, eps)
                 .map_err(|e| Failure::Input(format!("{PROBLEM}: {e}")))?;
             while !run.is_done() {
@@ -119,8 +126,7 @@ pub fn run(req: &RunRequest) -> CmdResult {
         None => {
             let h = req.step.unwrap_or(DEFAULT_STEP);
             let steps = liemid::step_count(0.0, t_end, h).map_err(|e| Failure::Input(format!("--step: {e}")))?;
-            let mut integrator =
-                SatelliteIntegrator::new(req.method, sat).map_err(|e| Failure::Input(e.to_string()))?;
+            let mut integrator = SatelliteIntegrator::new(method, sat).map_err(|e| Failure::Input(e.to_string()))?;
             let mut s = p.initial;
             for k in 1..=steps {
                 let target = if k == steps { t_end } else { k as f64 * h };
@@ -139,7 +145,7 @@ pub fn run(req: &RunRequest) -> CmdResult {
     if req.json {
         let out = json!({
             "problem": PROBLEM,
-            "method": req.method.key(),
+            "method": method.key(),
             "step": step_info,
             "steps": steps,
             "adaptive": adaptive.map(|(s, d)| json!({
@@ -174,7 +180,7 @@ pub fn run(req: &RunRequest) -> CmdResult {
     };
     println!(
         "{PROBLEM}: {} with {how} to t = {:.6e} s ({} orbits)",
-        req.method.name(),
+        method.name(),
         state.t,
         req.orbits
     );
@@ -668,6 +674,42 @@ pub fn drift(orbits: u32, method: RotationMethod, eps: f64, plot_path: &Path, js
     }
     if let Some(target) = json_target {
         write_json(target, &summary)?;
+    }
+    Ok(())
+}
+
+/// `liemid work-precision --problem eccentric-satellite --adaptive [--drift-orbits N]`.
+pub fn work_precision(args: &WorkPrecisionArgs) -> CmdResult {
+    if !args.adaptive {
+        return Err(Failure::Input(format!(
+            "--problem {} has its own study: give --adaptive",
+            PROBLEM
+        )));
+    }
+    check_study_outputs(
+        None,
+        &args.plot,
+        args.no_plot || args.drift_orbits.is_none(),
+        args.json.as_deref(),
+    )?;
+    if let Some(orbits) = args.drift_orbits {
+        let method = parse_method(&args.drift_method)?;
+        method.check_reversible().map_err(|e| Failure::Input(e.to_string()))?;
+        let eps = check_positive("drift-eps", args.drift_eps)?;
+        if orbits == 0 {
+            return Err(Failure::Input("--drift-orbits must be at least 1".into()));
+        }
+        return drift(orbits, method, eps, &args.plot, args.json.as_deref());
+    }
+    let study = study(args.repetitions as usize).map_err(Failure::Run)?;
+    let table = table(&study);
+    if args.json.as_deref() == Some("-") {
+        eprint!("{table}");
+    } else {
+        print!("{table}");
+    }
+    if let Some(target) = args.json.as_deref() {
+        crate::shared::command::write_json(target, &study)?;
     }
     Ok(())
 }
