@@ -7,6 +7,7 @@
 
 pub mod beam;
 pub mod many;
+pub mod multibody;
 pub mod rigid;
 pub mod shared;
 pub mod spin;

@@ -7,7 +7,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use liemid_cli::shared::command::Failure;
-use liemid_cli::{beam, many, rigid, spin};
+use liemid_cli::{beam, many, multibody, rigid, spin};
 
 const EXAMPLES: &str = "\
 Examples:
@@ -61,6 +61,9 @@ enum Command {
         liemid many --model dipoles --bodies 4000 --t-end 1 --threads 2 --json -"
     )]
     Many(many::command::ManyArgs),
+    /// Jointed rigid bodies from MJCF, URDF or a built-in problem (RATTLE on the explicit
+    /// midpoint Lie step).
+    Multibody(multibody::command::MultibodyArgs),
     /// Atomistic spin dynamics on a lattice: run a scenario, or `spins work-precision`.
     #[command(after_help = "Examples:\n  liemid spins --problem square-64 --json -\n  \
         liemid spins examples/spins_square.toml --final final.npy --snapshot spins.png\n  \
@@ -102,6 +105,7 @@ fn main() -> ExitCode {
         Command::Converge(args) => rigid::command::converge_cmd(args),
         Command::WorkPrecision(args) => rigid::command::work_precision_cmd(args),
         Command::Many(args) => many::command::many(&args),
+        Command::Multibody(args) => multibody::command::multibody(&args),
         Command::Spins(args) => spin::command::spins(args),
         Command::Beam(args) => beam::command::beam(args),
         Command::Methods(args) => {

@@ -12,6 +12,7 @@ mod convert;
 mod many;
 mod rigid;
 mod spins;
+mod view;
 
 use pyo3::prelude::*;
 
@@ -22,5 +23,6 @@ fn _liemid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     many::register(m)?;
     spins::register(m)?;
     beam::register(m)?;
+    view::register(m)?;
     Ok(())
 }

@@ -180,6 +180,20 @@ pub enum Error {
         /// The accuracy parameter.
         eps: f64,
     },
+    /// A model file (MJCF, URDF) that cannot be loaded: not well-formed XML, a value that is
+    /// missing, malformed or out of range, or a structure the multibody model cannot
+    /// represent. `line` is 1-based (0 when the whole file is at fault, e.g. unreadable).
+    #[error("{}", model_file_message(file, *line, element, message))]
+    ModelFile {
+        /// The file's name (as given to the loader).
+        file: String,
+        /// The line of the offending element (1-based; 0 for the whole file).
+        line: u32,
+        /// The element, e.g. `body name="upper_arm"` (empty for the whole file).
+        element: String,
+        /// What is wrong.
+        message: String,
+    },
     /// The observer asked the driver to stop with an error of its own.
     #[error("observer stopped the run at t = {t}: {reason}")]
     ObserverFailed {
@@ -188,6 +202,14 @@ pub enum Error {
         /// The observer's message.
         reason: String,
     },
+}
+
+fn model_file_message(file: &str, line: u32, element: &str, message: &str) -> String {
+    if line == 0 {
+        format!("{file}: {message}")
+    } else {
+        format!("{file}:{line}: <{element}>: {message}")
+    }
 }
 
 /// A number in messages: as Rust prints it between 1e-4 and 1e6 (`0.8`, `1000`), in

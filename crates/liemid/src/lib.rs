@@ -13,6 +13,8 @@
 //!   parallel by the splitting integrator, identical for any thread count.
 //! - [`spin`]: atomistic spin lattices (the LLG equation) by an exact-flow splitting.
 //! - [`beam`]: flexible 3-D beam frames, nodes as rigid bodies.
+//! - [`multibody`]: rigid bodies joined by joints (RATTLE on EA's rotation), read from
+//!   MJCF and URDF files.
 //! - [`vector`]: symplectic Euler, its adjoint, Verlet and explicit Newmark on `ℝⁿ`, with
 //!   test problems in [`vector::problems`].
 //!
@@ -41,6 +43,7 @@ pub mod error;
 pub mod linalg;
 pub mod many;
 pub use many::interactions;
+pub mod multibody;
 pub mod random;
 pub mod rigid;
 pub mod so3;

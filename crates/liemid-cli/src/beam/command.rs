@@ -16,6 +16,7 @@ use crate::shared::interrupt::Interrupt;
 use crate::shared::output::Format;
 use crate::shared::output::{OutputPlan, TrajectoryWriter};
 use crate::shared::plot::{self, Histories};
+use crate::shared::view;
 
 /// Arguments of `liemid beam`.
 #[derive(clap::Args, Debug)]
@@ -66,6 +67,10 @@ pub struct BeamArgs {
     /// Write the summary as JSON to FILE, or to standard output with `-`.
     #[arg(long)]
     pub json: Option<String>,
+    /// Write a self-contained 3-D animation of the run (HTML) to FILE: the deformed centre
+    /// line and the section frames at every sample.
+    #[arg(long)]
+    pub view: Option<PathBuf>,
 }
 
 /// Subcommands of `liemid beam`.
@@ -137,6 +142,9 @@ pub fn beam(args: BeamArgs) -> CmdResult {
     if let Some(j) = args.json.as_deref().filter(|j| *j != "-") {
         plan.add("--json", Path::new(j)).map_err(input)?;
     }
+    if let Some(p) = &args.view {
+        plan.add("--view", p).map_err(input)?;
+    }
     if args.components.is_empty() || !args.components.chars().all(|c| "xyz".contains(c)) {
         return Err(input(format!("--components {}: use some of x, y, z", args.components)));
     }
@@ -151,14 +159,23 @@ pub fn beam(args: BeamArgs) -> CmdResult {
     let interrupt = Interrupt::install();
     let signal: Mutex<Option<u8>> = Mutex::new(None);
     let result = pool.install(|| {
-        study::run(&sc, t_end, sc.step, sample, args.force_step, &mut |t| {
-            interrupt.requested().map(|(name, code)| {
-                *signal.lock().expect("not poisoned") = Some(code);
-                format!("{name}: stopped at t = {t}; nothing was written")
-            })
-        })
+        let title = args.view.as_ref().map(|_| sc.name.as_str());
+        study::run_viewed(
+            &sc,
+            t_end,
+            sc.step,
+            sample,
+            args.force_step,
+            &mut |t| {
+                interrupt.requested().map(|(name, code)| {
+                    *signal.lock().expect("not poisoned") = Some(code);
+                    format!("{name}: stopped at t = {t}; nothing was written")
+                })
+            },
+            title,
+        )
     });
-    let run = match result {
+    let (run, page) = match result {
         Ok(r) => r,
         Err(RunFailure::Input(m)) => return Err(Failure::Input(m)),
         Err(RunFailure::Numerical(m)) => {
@@ -222,6 +239,14 @@ pub fn beam(args: BeamArgs) -> CmdResult {
             },
         )
         .map_err(Failure::Run)?;
+    }
+    if let (Some(p), Some(path)) = (&page, &args.view) {
+        let line = view::report(path, p.write(path, run.steps).map_err(Failure::Run)?, run.steps);
+        if args.json.as_deref() == Some("-") {
+            eprintln!("{line}");
+        } else {
+            println!("{line}");
+        }
     }
     let mut summary = run.json(&sc.name);
     summary["threads"] = json!(threads);

@@ -7,6 +7,7 @@ use liemid::beam::{BeamMethod, BeamSystem, Newmark};
 use serde_json::{json, Value};
 
 use crate::beam::scenario::{BeamIntegrator, BeamScenario};
+use crate::shared::view::{self, Scene, ViewPage};
 
 /// Why a run failed: bad input (a step above the critical one, a bad step) or a failure
 /// of the integration itself.
@@ -92,6 +93,20 @@ pub fn run(
     force_step: bool,
     stop: &mut dyn FnMut(f64) -> Option<String>,
 ) -> Result<BeamRun, RunFailure> {
+    run_viewed(scenario, t_end, step, sample, force_step, stop, None).map(|(run, _)| run)
+}
+
+/// [`run`], and with `view = Some(title)` the 3-D page of the run: the deformed centre
+/// line and the nodes' section frames at every sample, and the energy (explicit methods).
+pub fn run_viewed(
+    scenario: &BeamScenario,
+    t_end: f64,
+    step: Option<f64>,
+    sample: f64,
+    force_step: bool,
+    stop: &mut dyn FnMut(f64) -> Option<String>,
+    view: Option<&str>,
+) -> Result<(BeamRun, Option<ViewPage>), RunFailure> {
     let input = RunFailure::Input;
     if !(t_end.is_finite() && t_end > 0.0) {
         return Err(input(format!("t_end must be positive and finite, found {t_end}")));
@@ -140,7 +155,33 @@ pub fn run(
         newton_iterations: None,
         momenta: None,
     };
-    let record = |out: &mut BeamRun, s: &BeamSystem, t: f64, energy: Option<f64>| {
+    let mut page = view.map(|title| {
+        let scene = Scene::Beam {
+            nodes: system.frame.nodes.len(),
+            elements: system
+                .frame
+                .elements
+                .iter()
+                .map(|e| e.nodes.map(|i| i as u32))
+                .collect(),
+        };
+        let mut page = ViewPage::new(scene, title);
+        page.set_energy_label("total energy (it changes while the loads act)");
+        page
+    });
+    let mut record = |out: &mut BeamRun, s: &BeamSystem, t: f64, energy: Option<f64>| {
+        if let Some(p) = page.as_mut() {
+            let frame: Vec<f32> = (0..s.frame.nodes.len())
+                .flat_map(|i| {
+                    let (x, q) = (s.position(i), view::quaternion(&s.rotation(i).m));
+                    [x.x as f32, x.y as f32, x.z as f32, q[0], q[1], q[2], q[3]]
+                })
+                .collect();
+            p.push_frame(t, &frame);
+            if let Some(e) = energy {
+                p.energy_error(t, e);
+            }
+        }
         out.t.push(t);
         for (k, (_, node)) in names.iter().enumerate() {
             out.tracked[k].1.push(s.displacement(*node).to_array());
@@ -196,7 +237,7 @@ pub fn run(
             end.angular_momentum.to_array(),
         ]);
     }
-    Ok(out)
+    Ok((out, page))
 }
 
 /// One point of the work-precision study.

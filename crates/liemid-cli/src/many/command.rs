@@ -14,6 +14,7 @@ use crate::shared::command::{CmdResult, Failure};
 use crate::shared::interrupt::{progress, Interrupt};
 use crate::shared::output::Format;
 use crate::shared::output::{plural, OutputPlan, TrajectoryWriter};
+use crate::shared::view::{self, Scene, ViewPage};
 
 /// The densest dipolar fluid accepted: the WCA spheres have diameter 1 and the bodies start
 /// on a simple cubic lattice, so above 1.2 (lattice spacing 0.94) neighbours start deep in
@@ -114,6 +115,10 @@ pub struct ManyArgs {
     /// `--every` steps: NAME writes NAME.csv and NAME.png (at most 20,000 bodies).
     #[arg(long)]
     pub rdf: Option<PathBuf>,
+    /// Write a self-contained 3-D animation of the run (HTML) to FILE, sampled every
+    /// `--every` steps (frames subsampled to the page's byte budget).
+    #[arg(long)]
+    pub view: Option<PathBuf>,
 }
 
 /// Bodies above which `--rdf` is refused (its pair count grows as N²).
@@ -124,6 +129,7 @@ struct Observers {
     trajectory: Option<(PathBuf, u64)>,
     rdf: Option<liemid::many::observables::PairHistogram>,
     box_length: Option<f64>,
+    view: Option<ViewPage>,
 }
 
 fn settings(args: &ManyArgs) -> Result<Settings, String> {
@@ -192,6 +198,7 @@ struct Outcome {
     max_energy_error: f64,
     rdf: Option<liemid::many::observables::PairHistogram>,
     frames: Option<u64>,
+    view: Option<ViewPage>,
 }
 
 /// Step `bodies` to `t_end` (the last step lands on it), writing the totals every
@@ -225,16 +232,28 @@ fn run_model<I: Interaction>(
         None => None,
     };
     let mut max_de = 0.0f64;
-    let mut write = |b: &Bodies, out: &mut Option<TrajectoryWriter>| -> Result<(), String> {
-        let tot = b.totals(model);
-        let de = ((tot.energy - first.energy) / first.energy).abs();
-        max_de = max_de.max(de);
-        if let Some(w) = out.as_mut() {
-            let (p, l) = (tot.linear_momentum, tot.angular_momentum);
-            w.write_row(&[b.t, tot.energy, p.x, p.y, p.z, l.x, l.y, l.z])?;
-        }
-        Ok(())
-    };
+    let mut page = observers.view.take();
+    let mut write =
+        |b: &Bodies, out: &mut Option<TrajectoryWriter>, page: &mut Option<ViewPage>| -> Result<(), String> {
+            let tot = b.totals(model);
+            let de = ((tot.energy - first.energy) / first.energy).abs();
+            max_de = max_de.max(de);
+            if let Some(p) = page.as_mut() {
+                p.energy_error(b.t, (tot.energy - first.energy) / first.energy.abs());
+                let frame: Vec<f32> = (0..b.len())
+                    .flat_map(|i| {
+                        let (x, q) = (b.position[i], view::quaternion(&b.rotation[i].m));
+                        [x.x as f32, x.y as f32, x.z as f32, q[0], q[1], q[2], q[3]]
+                    })
+                    .collect();
+                p.push_frame(b.t, &frame);
+            }
+            if let Some(w) = out.as_mut() {
+                let (p, l) = (tot.linear_momentum, tot.angular_momentum);
+                w.write_row(&[b.t, tot.energy, p.x, p.y, p.z, l.x, l.y, l.z])?;
+            }
+            Ok(())
+        };
     let keep = |out: Option<TrajectoryWriter>, frames: Option<crate::shared::xyz::FrameWriter>| {
         out.map(|w| format!("; {}", w.keep_partial())).unwrap_or_default()
             + &frames.map(|w| format!("; {}", w.keep_partial())).unwrap_or_default()
@@ -255,7 +274,7 @@ fn run_model<I: Interaction>(
             }
             Ok(())
         };
-    if let Err(e) = write(&bodies, &mut out).and_then(|()| observe(&bodies, &mut frames, 0)) {
+    if let Err(e) = write(&bodies, &mut out, &mut page).and_then(|()| observe(&bodies, &mut frames, 0)) {
         return Err(Failure::Run(format!("{e}{}", keep(out, frames))));
     }
     let bar = progress(steps, "steps", steps as f64 * bodies.len() as f64 >= 2e7);
@@ -312,7 +331,7 @@ fn run_model<I: Interaction>(
         bodies.t = if end == steps { t_end } else { t0 + end as f64 * h };
         k = end;
         if k % args.every == 0 || k == steps {
-            if let Err(e) = write(&bodies, &mut out) {
+            if let Err(e) = write(&bodies, &mut out, &mut page) {
                 return Err(Failure::Run(format!("{e}{}", keep(out, frames))));
             }
         }
@@ -338,6 +357,7 @@ fn run_model<I: Interaction>(
         max_energy_error: max_de,
         rdf: observers.rdf,
         frames,
+        view: page,
     })
 }
 
@@ -431,6 +451,9 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
     if let Some(p) = &cli.trajectory {
         plan.add("--trajectory", p).map_err(input)?;
     }
+    if let Some(p) = &cli.view {
+        plan.add("--view", p).map_err(input)?;
+    }
     let rdf_paths = cli.rdf.as_ref().map(|base| {
         let with = |ext: &str| {
             let mut s = base.as_os_str().to_owned();
@@ -450,7 +473,7 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
         plan.add("--rdf", csv).map_err(input)?;
         plan.add("--rdf", png).map_err(input)?;
     }
-    let observers = |box_length: Option<f64>| {
+    let observers = |box_length: Option<f64>, axis: liemid::Vec3, length: f64| {
         let r_max = box_length.map_or(5.0, |l| (0.5 * l).min(5.0));
         Observers {
             trajectory: cli
@@ -461,6 +484,15 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
                 .as_ref()
                 .map(|_| liemid::many::observables::PairHistogram::new(r_max, 100)),
             box_length,
+            view: cli.view.as_ref().map(|_| {
+                let scene = Scene::Bodies {
+                    count: n,
+                    box_length: box_length.map(|l| l as f32),
+                    axis: axis.to_array().map(|v| v as f32),
+                    length: length as f32,
+                };
+                ViewPage::new(scene, &format!("{} ({n} bodies)", args.model.key()))
+            }),
         }
     };
     // The body-frame direction whose order is reported: the dipole, or the top's axis.
@@ -472,11 +504,11 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
     let outcome = pool.install(|| match args.model {
         Model::Independent => {
             let (b, m) = problems::top_ensemble(n, args.seed);
-            run_model(args, b, &m, run, &interrupt, observers(None))
+            run_model(args, b, &m, run, &interrupt, observers(None, axis, 1.0))
         }
         Model::TorqueFree => {
             let (b, m) = problems::torque_free_ensemble(n, args.seed);
-            run_model(args, b, &m, run, &interrupt, observers(None))
+            run_model(args, b, &m, run, &interrupt, observers(None, axis, 1.0))
         }
         Model::Dipoles => {
             // A bad density, cutoff or switch is bad input (exit 2), not a failed run.
@@ -495,7 +527,7 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
             }
             m.cutoff_form = args.cutoff_form;
             axis = m.moment;
-            run_model(args, b, &m, run, &interrupt, observers(m.box_length)).map_err(|f| match f {
+            run_model(args, b, &m, run, &interrupt, observers(m.box_length, axis, 0.9)).map_err(|f| match f {
                 Failure::Run(m) => Failure::Run(format!("{m} (density {}, step {})", Num(args.density), Num(h))),
                 other => other,
             })
@@ -509,7 +541,12 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
         max_energy_error: max_de,
         rdf,
         frames,
+        view: page,
     } = outcome;
+    let viewed = match (&page, &cli.view) {
+        (Some(p), Some(path)) => Some(view::report(path, p.write(path, steps).map_err(Failure::Run)?, steps)),
+        _ => None,
+    };
     let (polar, nematic) = liemid::many::observables::orientational_order(&bodies.rotation, axis);
     if let (Some(h), Some((csv, png))) = (&rdf, &rdf_paths) {
         let g = h.g();
@@ -609,6 +646,13 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
             "state memory                      {} bytes per body",
             bodies.bytes_per_body()
         );
+    }
+    if let Some(line) = viewed {
+        if cli.json.as_deref() == Some("-") {
+            eprintln!("{line}");
+        } else {
+            println!("{line}");
+        }
     }
     Ok(())
 }

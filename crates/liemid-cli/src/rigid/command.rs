@@ -7,20 +7,22 @@ use std::time::Instant;
 
 use clap::Args;
 use liemid::error::Num;
-use liemid::rigid::adaptive::{AdaptiveStats, AngularSpeed, TorqueRate};
+use liemid::rigid::adaptive::{AngularSpeed, TorqueRate};
 use liemid::{RotationMethod, Run, Vec3};
-use serde_json::json;
 
 use super::{converge, satellite, study as work_precision};
 
 mod adaptive_run;
+mod summary;
 use crate::rigid::scenario::{self, Conservation, Format, Scenario};
 use crate::shared::checkpoint::{Checkpoint, Settings, Source};
 use crate::shared::command::{check_positive, check_study_outputs, report, CmdResult, Failure};
 use crate::shared::interrupt::{progress, Interrupt};
 use crate::shared::output::{plural, OutputPlan, TrajectoryWriter, COLUMNS};
 use crate::shared::plot;
+use crate::shared::view::{self, Scene, ViewPage};
 use adaptive_run::run_adaptive;
+use summary::print_summary;
 
 /// The largest trajectory `run` writes unless `--allow-large-output` is given (bytes).
 pub const MAX_TRAJECTORY_BYTES: f64 = 4.0 * (1u64 << 30) as f64;
@@ -97,6 +99,10 @@ pub struct RunArgs {
     /// Orbits to integrate (eccentric-satellite only) [default: 1].
     #[arg(long, allow_negative_numbers = true, conflicts_with_all = ["t_end", "file", "resume"])]
     orbits: Option<f64>,
+    /// Write a self-contained 3-D animation of the run (HTML) to FILE, sampled every
+    /// `--every` steps.
+    #[arg(long, conflicts_with = "resume")]
+    view: Option<PathBuf>,
 }
 
 fn format_key(f: Format) -> &'static str {
@@ -215,6 +221,13 @@ fn row(s: &liemid::RigidState, d: &liemid::Diagnostics) -> [f64; 17] {
 /// Run `liemid run`.
 pub fn run(args: RunArgs) -> CmdResult {
     if args.file.is_none() && args.resume.is_none() && args.problem == satellite::PROBLEM {
+        if args.view.is_some() {
+            return Err(Failure::Input(format!(
+                "--view is not available for --problem {}: its run reports the final attitude and \
+                 orbit only (a rigid-body scenario takes --view, with or without --adaptive)",
+                satellite::PROBLEM
+            )));
+        }
         return satellite::run(&satellite::RunRequest {
             method: args.method.as_deref(),
             adaptive: args.adaptive,
@@ -306,6 +319,9 @@ pub fn run(args: RunArgs) -> CmdResult {
     if let Some((path, _)) = &settings.checkpoint {
         plan.add("--checkpoint", Path::new(path)).map_err(Failure::Input)?;
     }
+    if let Some(path) = &args.view {
+        plan.add("--view", path).map_err(Failure::Input)?;
+    }
 
     let system = &sc.system;
     let conservation = system.conservation();
@@ -334,6 +350,14 @@ pub fn run(args: RunArgs) -> CmdResult {
         ),
     };
     let to_stdout = settings.output.as_ref().is_some_and(|(p, _)| p == "-");
+    let mut page = args.view.as_ref().map(|_| view_page(&sc));
+    let e0 = run.progress.initial.energy;
+    let sample = |page: &mut Option<ViewPage>, s: &liemid::RigidState, d: &liemid::Diagnostics| {
+        if let Some(p) = page.as_mut() {
+            view_frame(p, s, d, e0);
+        }
+    };
+    sample(&mut page, run.state(), &run.progress.initial);
     let checkpoint = |run: &Run, cache, max_conserved, writer: &mut Option<TrajectoryWriter>| -> Result<(), String> {
         let Some((path, _)) = &settings.checkpoint else {
             return Ok(());
@@ -389,6 +413,7 @@ pub fn run(args: RunArgs) -> CmdResult {
         }
         let k = run.progress.steps;
         if k % every == 0 || run.is_done() {
+            sample(&mut page, run.state(), &d);
             if let Some(w) = writer.as_mut() {
                 if let Err(e) = w.write_row(&row(run.state(), &d)) {
                     break Some(e);
@@ -411,6 +436,7 @@ pub fn run(args: RunArgs) -> CmdResult {
         return Err(Failure::Run(format!("{message}{kept}")));
     }
     let trajectory = writer.map(TrajectoryWriter::finish).transpose().map_err(Failure::Run)?;
+    let viewed = write_view(page.as_ref(), args.view.as_deref(), run.total_steps)?;
     print_summary(
         &args,
         &settings,
@@ -423,174 +449,52 @@ pub fn run(args: RunArgs) -> CmdResult {
         to_stdout,
         None,
     );
+    print_view_line(viewed, args.json || to_stdout);
     Ok(())
 }
 
-/// Print the summary (text, or one JSON object with `--json`), to standard error when the
-/// trajectory goes to standard output.
-#[allow(clippy::too_many_arguments)]
-fn print_summary(
-    args: &RunArgs,
-    settings: &Settings,
-    sc: &Scenario,
-    run: &Run,
-    method: RotationMethod,
-    max_conserved: f64,
-    wall: f64,
-    trajectory: Option<(String, u64)>,
-    to_stdout: bool,
-    adaptive: Option<(AdaptiveStats, &str)>,
-) {
-    let summary = run.summary();
-    let s = &summary.state;
-    let conservation = sc.system.conservation();
-    let n = run.total_steps;
-    let last_step = if let Some((a, _)) = &adaptive {
-        a.last_step
-    } else if n == 0 {
-        0.0
-    } else {
-        run.t_end - (run.t0 + (n - 1) as f64 * run.h)
+/// The page of `--view` for a rigid-body scenario: a box with the body's principal moments.
+fn view_page(sc: &Scenario) -> ViewPage {
+    let i = liemid::RigidBodySystem::inertia(&sc.system).matrix().m;
+    let scene = Scene::RigidBody {
+        half_extents: view::box_of_inertia([i[0][0], i[1][1], i[2][2]]),
     };
-    let energy_note = match conservation {
-        Conservation::Driven => "not conserved: the constant torque does work",
-        _ => "conserved by the dynamics: the error is the method's",
-    };
-    let momentum_note = match conservation {
-        Conservation::Free => "all components conserved (torque-free)".to_string(),
-        Conservation::Gravity(g) => format!(
-            "only the component along gravity [{:.3}, {:.3}, {:.3}] is conserved",
-            g.x, g.y, g.z
-        ),
-        Conservation::Driven => "not conserved: the torque changes it".to_string(),
-    };
-    let warn_energy =
-        adaptive.is_none() && !matches!(conservation, Conservation::Driven) && summary.max_energy_error > 1e-2;
-    if warn_energy {
-        eprintln!(
-            "liemid: warning: the relative energy error reached {:.3e}; the step h = {} is probably too \
-             large for this problem",
-            summary.max_energy_error,
-            Num(settings.step)
-        );
+    ViewPage::new(scene, &sc.name)
+}
+
+/// Offer the state `s` (its rotation and spatial momentum) and its relative energy error
+/// against `e0` to the page; the page keeps each frame's time, so unequal (adaptive) steps
+/// play back at the right pace.
+fn view_frame(page: &mut ViewPage, s: &liemid::RigidState, d: &liemid::Diagnostics, e0: f64) {
+    let r = row(s, d);
+    page.push_frame(
+        s.t,
+        &r[4..13].iter().chain(&r[14..17]).map(|&v| v as f32).collect::<Vec<_>>(),
+    );
+    page.energy_error(s.t, (d.energy - e0) / e0.abs().max(f64::MIN_POSITIVE));
+}
+
+/// Write the page of `--view` (if any) after a run of `steps` steps; the line to print.
+fn write_view(page: Option<&ViewPage>, path: Option<&Path>, steps: u64) -> Result<Option<String>, Failure> {
+    match (page, path) {
+        (Some(p), Some(path)) => Ok(Some(view::report(
+            path,
+            p.write(path, steps).map_err(Failure::Run)?,
+            steps,
+        ))),
+        _ => Ok(None),
     }
-    if args.json {
-        let mut out = json!({
-            "problem": sc.name,
-            "method": method.key(),
-            "step": settings.step,
-            "last_step": last_step,
-            "t": s.t,
-            "pi": s.pi.to_array(),
-            "rotation": s.rotation.to_row_major(),
-            "steps": summary.steps,
-            "energy": [summary.initial.energy, summary.last.energy],
-            "energy_conserved": !matches!(conservation, Conservation::Driven),
-            "max_energy_error": summary.max_energy_error,
-            "max_spatial_momentum_change": summary.max_spatial_momentum_change.to_array(),
-            "conserved_momentum": momentum_note,
-            "max_conserved_momentum_change": match conservation {
-                Conservation::Driven => json!(null),
-                _ => json!(max_conserved),
-            },
-            "max_orthogonality_defect": summary.max_orthogonality_defect,
-            "wall_time_seconds": wall,
-            "trajectory": trajectory.as_ref().map(|(p, rows)| json!({
-                "path": p,
-                "rows": rows,
-                "format": settings.output.as_ref().map(|(_, f)| f.as_str()),
-            })),
-        });
-        if let (Some((a, rho)), Some(map)) = (&adaptive, out.as_object_mut()) {
-            map.insert("step".into(), json!(null));
-            map.insert(
-                "adaptive".into(),
-                json!({"eps": a.eps, "rho": rho, "min_step": a.min_step, "max_step": a.max_step}),
-            );
-        }
-        if to_stdout {
-            eprintln!("{out}");
+}
+
+/// Print the line of `--view` after the summary, to standard error when standard output
+/// carries JSON or the trajectory.
+fn print_view_line(line: Option<String>, to_stderr: bool) {
+    if let Some(line) = line {
+        if to_stderr {
+            eprintln!("{line}");
         } else {
-            println!("{out}");
+            println!("{line}");
         }
-        return;
-    }
-    let mut text = String::new();
-    let mut line = |l: String| {
-        text.push_str(&l);
-        text.push('\n');
-    };
-    let r = s.rotation.m;
-    let dm = summary.max_spatial_momentum_change;
-    let step_text = if let Some((a, rho)) = &adaptive {
-        format!(
-            "adaptive steps, eps = {} (rho = {rho}), from {} to {} (the last {})",
-            Num(a.eps),
-            Num(a.min_step),
-            Num(a.max_step),
-            Num(a.last_step)
-        )
-    } else if n == 1 && last_step < settings.step {
-        format!(
-            "one step of {} (the given step {} is longer than the interval)",
-            Num(last_step),
-            Num(settings.step)
-        )
-    } else if n > 1 && (last_step - settings.step).abs() > 1e-9 * settings.step {
-        format!("h = {} (the last step {})", Num(settings.step), Num(last_step))
-    } else {
-        format!("h = {}", Num(settings.step))
-    };
-    line(format!(
-        "{}: {} with {step_text} to t = {}",
-        sc.name,
-        method.name(),
-        Num(s.t)
-    ));
-    line(format!("steps                          {}", summary.steps));
-    line(format!(
-        "final Pi (kg m^2/s)            [{:.12e}, {:.12e}, {:.12e}]",
-        s.pi.x, s.pi.y, s.pi.z
-    ));
-    for (i, row) in r.iter().enumerate() {
-        let label = if i == 0 { "final R" } else { "" };
-        line(format!(
-            "{label:<30} [{:>19.12e}, {:>19.12e}, {:>19.12e}]",
-            row[0], row[1], row[2]
-        ));
-    }
-    line(format!(
-        "energy (J)                     {:.9e} at the start; {energy_note}",
-        summary.initial.energy
-    ));
-    let label = match conservation {
-        Conservation::Driven => "max relative energy change     ",
-        _ => "max relative energy error      ",
-    };
-    line(format!("{label}{:.3e}", summary.max_energy_error));
-    line(format!("spatial momentum pi            {momentum_note}"));
-    line(format!(
-        "max change of pi (kg m^2/s)    [{:.3e}, {:.3e}, {:.3e}]",
-        dm.x, dm.y, dm.z
-    ));
-    if let Conservation::Gravity(_) = conservation {
-        line(format!("max change of pi along gravity {max_conserved:.3e}"));
-    }
-    line(format!(
-        "max orthogonality defect       {:.3e}",
-        summary.max_orthogonality_defect
-    ));
-    line(format!("wall time                      {wall:.3} s"));
-    if let Some((p, rows)) = &trajectory {
-        line(format!(
-            "trajectory                     {p} ({rows} {})",
-            plural(*rows, "row", "rows")
-        ));
-    }
-    if to_stdout {
-        eprint!("{text}");
-    } else {
-        print!("{text}");
     }
 }
 

@@ -1,6 +1,7 @@
 //! Machinery every domain's command uses: how a command fails and reports a study
 //! (`command`), output paths and trajectory files (`output`), checkpoints, `.npy` and
-//! extended XYZ files, plots, and interrupts with the progress bar.
+//! extended XYZ files, plots, interrupts with the progress bar, and the 3-D page of a run
+//! (`view`).
 
 pub mod checkpoint;
 pub mod command;
@@ -9,4 +10,5 @@ pub mod npy;
 pub mod output;
 pub mod plot;
 pub mod toml_table;
+pub mod view;
 pub mod xyz;

@@ -14,6 +14,7 @@ use crate::shared::command::{CmdResult, Failure};
 use crate::shared::interrupt::{progress, Interrupt};
 use crate::shared::output::Format;
 use crate::shared::output::{plural, write_atomically, OutputPlan, TrajectoryWriter};
+use crate::shared::view::{self, Scene, ViewPage};
 use crate::spin::scenario::{self, SpinScenario};
 use crate::spin::study;
 
@@ -55,6 +56,10 @@ pub struct SpinsArgs {
     /// Refuse runs of more than N spin-steps (spins × steps; exit 2) before the first step.
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     pub max_spin_steps: Option<u64>,
+    /// Write a self-contained 3-D animation of the run (HTML) to FILE, sampled every
+    /// `--every` steps (frames subsampled to the page's byte budget).
+    #[arg(long)]
+    pub view: Option<PathBuf>,
 }
 
 /// Options shared by the run and the study.
@@ -195,6 +200,9 @@ pub fn spins(args: SpinsArgs) -> CmdResult {
     if let Some(j) = args.json.as_deref().filter(|j| *j != "-") {
         plan.add("--json", Path::new(j)).map_err(input)?;
     }
+    if let Some(p) = &args.view {
+        plan.add("--view", p).map_err(input)?;
+    }
     let format = match out.as_deref().and_then(|p| p.extension()).and_then(|x| x.to_str()) {
         Some("npy") => Format::Npy,
         _ => Format::Csv,
@@ -215,8 +223,21 @@ pub fn spins(args: SpinsArgs) -> CmdResult {
     let mut spins = sc.spins.clone();
     let mut integ = SpinIntegrator::new(sc.method);
     let (mut max_de, mut max_norm, mut max_sz) = (0.0f64, 0.0f64, 0.0f64);
+    let mut page = args.view.as_ref().map(|_| {
+        let sites = view::lattice_sites(&system.lattice);
+        let mut page = ViewPage::new(Scene::Spins { sites }, &format!("{} ({n} spins)", sc.name));
+        if system.damping > 0.0 {
+            page.set_energy_label("relative energy change (damped: not conserved)");
+        }
+        page
+    });
     let mut observe = |s: &[Vec3], t: f64, w: &mut Option<TrajectoryWriter>| -> Result<(), String> {
         let e = system.energy(s);
+        if let Some(p) = page.as_mut() {
+            p.energy_error(t, (e - e0) / scale);
+            let frame: Vec<f32> = s.iter().flat_map(|v| v.to_array().map(|x| x as f32)).collect();
+            p.push_frame(t, &frame);
+        }
         let m = system.total_spin(s) * (1.0 / n as f64);
         max_de = max_de.max(((e - e0) / scale).abs());
         max_norm = max_norm.max(s.iter().map(|v| (v.norm() - 1.0).abs()).fold(0.0, f64::max));
@@ -262,6 +283,10 @@ pub fn spins(args: SpinsArgs) -> CmdResult {
     if let Some(w) = writer {
         w.finish().map_err(Failure::Run)?;
     }
+    let viewed = match (&page, &args.view) {
+        (Some(p), Some(path)) => Some(view::report(path, p.write(path, steps).map_err(Failure::Run)?, steps)),
+        _ => None,
+    };
     if let Some(p) = &args.final_spins {
         let flat: Vec<f64> = spins.iter().flat_map(|s| s.to_array()).collect();
         write_atomically(p, &crate::shared::npy::matrix_bytes(n, 3, &flat))
@@ -335,6 +360,13 @@ pub fn spins(args: SpinsArgs) -> CmdResult {
             m.y,
             m.z
         );
+    }
+    if let Some(line) = viewed {
+        if args.json.as_deref() == Some("-") || out.as_deref() == Some(Path::new("-")) {
+            eprintln!("{line}");
+        } else {
+            println!("{line}");
+        }
     }
     Ok(())
 }

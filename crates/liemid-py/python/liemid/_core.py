@@ -13,7 +13,7 @@ from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from . import _liemid
+from . import _liemid, _view
 
 FloatArray = NDArray[np.float64]
 TorqueCallable = Callable[[FloatArray, float], ArrayLike]
@@ -287,6 +287,20 @@ class Solution:
     max_orthogonality_defect: float
     wall_time: float
     method: str
+    inertia: FloatArray = field(default_factory=lambda: np.ones(3))
+
+    def view(self, path: Optional[str] = None) -> str:
+        """The run as a self-contained 3-D page (the body as a box with its principal axes
+        and the angular momentum; the relative energy error beside it): written to ``path``
+        (returns it), or returned as HTML without a path."""
+        frames = np.concatenate([self.rotation.reshape(-1, 9), self.spatial_momentum.reshape(-1, 3)], axis=1)
+        e0 = float(self.energy[0])
+        error = (self.energy - e0) / (abs(e0) if e0 != 0.0 else 1.0)
+        scene = {"kind": "rigid_body", "half_extents": _view.box_of_inertia(self.inertia)}
+        return _view.page(scene, f"rigid body ({self.method})", self.t, frames, self.t, error, self.steps, path)
+
+    def _repr_html_(self) -> str:
+        return _view.iframe(self.view())
 
     def __repr__(self) -> str:
         return (
@@ -389,6 +403,7 @@ def integrate(
         max_orthogonality_defect=float(d["max_orthogonality_defect"]),
         wall_time=float(d["wall_time"]),
         method=str(d["method"]),
+        inertia=np.diag(body.inertia).copy(),
     )
 
 

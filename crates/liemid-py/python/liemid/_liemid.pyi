@@ -117,3 +117,13 @@ def beam_run(
 ) -> Dict[str, Any]: ...
 def beam_problems() -> List[Tuple[str, str]]: ...
 def beam_methods() -> List[Tuple[str, int]]: ...
+def view_page(
+    scene: str,
+    title: str,
+    times: NDArray[np.float64],
+    frames: NDArray[np.float64],
+    energy_t: NDArray[np.float64],
+    energy_e: NDArray[np.float64],
+    total_steps: int,
+    path: Optional[str] = None,
+) -> str: ...

@@ -18,7 +18,7 @@ from typing import Any, Optional, Tuple, Union
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import _liemid
+from . import _liemid, _view
 from ._core import FloatArray, _array, _broadcast, _number, _vec3
 
 __all__ = ["Dipoles", "Independent", "System", "Totals"]
@@ -171,9 +171,31 @@ class System:
     def __len__(self) -> int:
         return int(self._inner.len)
 
+    def view(self, path: Optional[str] = None, *, box_length: Optional[float] = None) -> str:
+        """The current state as a self-contained 3-D page (one frame: each body an arrow
+        along its body z axis, in the periodic box of edge ``box_length`` if given): written
+        to ``path`` (returns it), or returned as HTML without a path."""
+        x, _, r, _ = self.arrays()
+        frame = np.concatenate([x, _quaternions(r)], axis=1)
+        scene = {"kind": "bodies", "count": len(self), "box_length": box_length, "axis": [0.0, 0.0, 1.0], "length": 0.9}
+        e = self.totals().energy
+        return _view.page(scene, f"{len(self)} bodies at t = {self.t:g}", [self.t], frame, [self.t], [0.0 * e], 0, path)
+
+    def _repr_html_(self) -> str:
+        return _view.iframe(self.view())
+
     def arrays(self) -> Tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         """Copies of ``(positions (N, 3), momenta (N, 3), rotations (N, 3, 3),
         angular_momenta (N, 3))``."""
         x, p, r, pi = self._inner.arrays()
         n = len(self)
         return x.reshape(n, 3), p.reshape(n, 3), r.reshape(n, 3, 3), pi.reshape(n, 3)
+
+
+def _quaternions(r: FloatArray) -> FloatArray:
+    """Unit quaternions ``w, x, y, z`` of rotation matrices (N, 3, 3)."""
+    w = np.sqrt(np.maximum(0.0, 1.0 + r[:, 0, 0] + r[:, 1, 1] + r[:, 2, 2])) / 2
+    x = np.copysign(np.sqrt(np.maximum(0.0, 1.0 + r[:, 0, 0] - r[:, 1, 1] - r[:, 2, 2])) / 2, r[:, 2, 1] - r[:, 1, 2])
+    y = np.copysign(np.sqrt(np.maximum(0.0, 1.0 - r[:, 0, 0] + r[:, 1, 1] - r[:, 2, 2])) / 2, r[:, 0, 2] - r[:, 2, 0])
+    z = np.copysign(np.sqrt(np.maximum(0.0, 1.0 - r[:, 0, 0] - r[:, 1, 1] + r[:, 2, 2])) / 2, r[:, 1, 0] - r[:, 0, 1])
+    return np.stack([w, x, y, z], axis=1)

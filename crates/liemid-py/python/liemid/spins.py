@@ -15,12 +15,12 @@ True
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import List, Sequence, Tuple
+from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from . import _liemid
+from . import _liemid, _view
 from ._core import _array, _number
 
 __all__ = ["System", "SpinRun", "integrate", "methods", "near_z", "problem"]
@@ -107,6 +107,19 @@ class SpinRun:
     magnetisation: FloatArray
     final: FloatArray
     seconds: float
+
+    def view(self, system: System, path: Optional[str] = None) -> str:
+        """The final spins of the run on ``system``'s lattice as a self-contained 3-D page
+        (arrows coloured by S_z) with the relative energy error along the run: written to
+        ``path`` (returns it), or returned as HTML without a path."""
+        nx, ny, _ = system.size
+        n = len(system)
+        i = np.arange(n)
+        sites = np.stack([i % nx, (i // nx) % ny, i // (nx * ny)], axis=1).astype(float).tolist()
+        e0 = float(self.energy[0])
+        error = (self.energy - e0) / (abs(e0) if e0 != 0.0 else 1.0)
+        t = float(self.t[-1])
+        return _view.page({"kind": "spins", "sites": sites}, f"{n} spins at t = {t:g} ps", [t], self.final, self.t, error, 0, path)
 
     @property
     def max_relative_energy_error(self) -> float:

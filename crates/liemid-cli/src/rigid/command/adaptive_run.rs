@@ -1,6 +1,7 @@
 //! `liemid run --adaptive EPS` for a rigid-body scenario: the reversible adaptive run
 //! (`liemid::rigid::adaptive`) with the same trajectory rows and summary as the fixed-step
-//! run, which it leaves untouched.
+//! run, which it leaves untouched, and the same `--view` page (frames at the adaptive
+//! steps' times).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -8,7 +9,7 @@ use std::time::Instant;
 use liemid::rigid::adaptive::{AdaptiveRun, ReversibleStepper, RigidAdaptive, RigidDensity};
 use liemid::{RotationMethod, Run, RunSummary, Vec3};
 
-use super::{conserved_change, print_summary, row, RunArgs};
+use super::{conserved_change, print_summary, print_view_line, row, view_frame, view_page, write_view, RunArgs};
 use crate::rigid::scenario::{Format, Scenario};
 use crate::shared::checkpoint::Settings;
 use crate::shared::command::{CmdResult, Failure};
@@ -51,6 +52,9 @@ pub(super) fn run_adaptive<D: RigidDensity>(
             plan.add("--out", Path::new(path)).map_err(Failure::Input)?;
         }
     }
+    if let Some(path) = &args.view {
+        plan.add("--view", path).map_err(Failure::Input)?;
+    }
     let stepper = RigidAdaptive::new(system, method, density).map_err(|e| Failure::Input(e.to_string()))?;
     sc.initial
         .check_valid()
@@ -76,6 +80,10 @@ pub(super) fn run_adaptive<D: RigidDensity>(
     if let Some(w) = writer.as_mut() {
         w.write_row(&row(&sc.initial, &first)).map_err(Failure::Run)?;
     }
+    let mut page = args.view.as_ref().map(|_| view_page(sc));
+    if let Some(p) = page.as_mut() {
+        view_frame(p, &sc.initial, &first, first.energy);
+    }
     let mut max_conserved = 0.0f64;
     let started = Instant::now();
     let every = settings.every;
@@ -99,6 +107,9 @@ pub(super) fn run_adaptive<D: RigidDensity>(
         }
         let k = run.stats().steps;
         if k % every == 0 || run.is_done() {
+            if let Some(p) = page.as_mut() {
+                view_frame(p, &state, &d, first.energy);
+            }
             if let Some(w) = writer.as_mut() {
                 if let Err(e) = w.write_row(&row(&state, &d)) {
                     break Some(e);
@@ -122,6 +133,7 @@ pub(super) fn run_adaptive<D: RigidDensity>(
         total_steps: stats.steps,
         progress,
     };
+    let viewed = write_view(page.as_ref(), args.view.as_deref(), stats.steps)?;
     print_summary(
         args,
         settings,
@@ -134,5 +146,6 @@ pub(super) fn run_adaptive<D: RigidDensity>(
         to_stdout,
         Some((stats, run.stepper.density_name())),
     );
+    print_view_line(viewed, args.json || to_stdout);
     Ok(())
 }

@@ -1,0 +1,91 @@
+//! The method choices and per-step reports of the multibody step.
+//!
+//! Reference: E. Hairer, C. Lubich, G. Wanner, *Geometric Numerical Integration*, 2nd
+//! ed., V.3 (compositions), VII.1 (RATTLE).
+
+use crate::composition::Scheme;
+
+/// The integration method: the RATTLE/EA step or a symmetric composition of it.
+///
+/// Reference: E. Hairer, C. Lubich, G. Wanner, *Geometric Numerical Integration*, V.3.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MultibodyMethod {
+    /// The second-order step.
+    Liemid,
+    /// Suzuki's 5-stage composition, order 4.
+    Liemid4,
+    /// Kahan-Li 9-stage composition, order 6.
+    Liemid6,
+    /// Kahan-Li 17-stage composition, order 8.
+    Liemid8,
+}
+
+impl MultibodyMethod {
+    /// All methods, lowest order first.
+    pub const ALL: [MultibodyMethod; 4] = [Self::Liemid, Self::Liemid4, Self::Liemid6, Self::Liemid8];
+
+    /// The name (`MB-LIEMID`, `MB-LIEMID4`, ...).
+    #[must_use]
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Liemid => "MB-LIEMID",
+            Self::Liemid4 => "MB-LIEMID4",
+            Self::Liemid6 => "MB-LIEMID6",
+            Self::Liemid8 => "MB-LIEMID8",
+        }
+    }
+
+    /// The composition scheme, `None` for the base step.
+    #[must_use]
+    pub fn scheme(&self) -> Option<Scheme> {
+        match self {
+            Self::Liemid => None,
+            Self::Liemid4 => Some(Scheme::SUZUKI4),
+            Self::Liemid6 => Some(Scheme::KAHAN_LI6),
+            Self::Liemid8 => Some(Scheme::KAHAN_LI8),
+        }
+    }
+
+    /// The order of accuracy.
+    #[must_use]
+    pub fn order(&self) -> u32 {
+        self.scheme().map_or(2, |s| s.order)
+    }
+}
+
+/// What a step did.
+///
+/// Reference: multibody spec section 5 (constraints at round-off every step).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StepReport {
+    /// Quasi-Newton iterations of the position solve, over all stages.
+    pub iterations: u32,
+    /// Factorizations of `G M⁻¹ Gᵀ`, over all stages.
+    pub factorizations: u32,
+    /// Largest `|g|` at the end (length rows divided by the model's length scale).
+    pub position_violation: f64,
+    /// Largest `|G (v, Ω)|` at the end, divided by `max_i (|v_i| + L |Ω_i|)` (at least
+    /// `√(|g| L)`, [`super::MultibodySystem::velocity_floor`]).
+    pub velocity_violation: f64,
+    /// Joint limits switched on or off.
+    pub limit_changes: u32,
+}
+
+/// State of one joint limit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LimitState {
+    /// Not touching.
+    Inactive,
+    /// Held at the lower bound.
+    Lower,
+    /// Held at the upper bound.
+    Upper,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct JointParams {
+    pub stiffness: f64,
+    pub spring_ref: f64,
+    pub damping: f64,
+    pub range: Option<(f64, f64)>,
+}

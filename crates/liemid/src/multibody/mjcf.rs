@@ -1,0 +1,783 @@
+//! MuJoCo MJCF loader.
+//!
+//! Reads, as published models (MuJoCo Menagerie) write them: `<mujoco model>`,
+//! `<compiler angle eulerseq autolimits inertiafromgeom>` (angles are in **degrees** unless
+//! `angle="radian"`, as in MuJoCo; this applies to `euler`, `axisangle` and hinge `range`,
+//! `ref`, `springref`), `<option gravity timestep>`, nested `<default class>` classes for
+//! `joint` and `geom` (a nested class inherits its parent's values; an element uses its
+//! own `class`, else the `childclass` of its nearest ancestor body that has one, else
+//! `main`), `<worldbody>` with nested `<body name pos quat|axisangle|euler|xyaxes|zaxis
+//! childclass>`, `<inertial pos quat… mass diaginertia|fullinertia>`, geoms for mass when
+//! a body has no inertial (sphere, capsule, cylinder, box, ellipsoid; `size`, `fromto`,
+//! `mass` or `density`, default 1000), `<joint type=hinge|slide|ball|free axis pos range
+//! limited ref springref stiffness damping armature>`, `<freejoint>` and the first
+//! `<keyframe><key qpos qvel>`.
+//!
+//! Decisions:
+//! - A body without a joint is welded to its parent (a `Weld` joint); if it has no mass
+//!   at all it is merged into its parent (or the world) instead, see [`Loaded::merged`].
+//! - Several joints in one body are refused, naming the body: MuJoCo composes them through
+//!   massless intermediate frames, which maximal coordinates cannot integrate.
+//! - Hinge and slide `ref`: MuJoCo's `qpos0 = ref`, i.e. the body pose in the file is the
+//!   pose at joint value `ref`. The model's reference is the body pose in the file at joint
+//!   coordinate 0, so the model's coordinate is MuJoCo's `qpos − ref`: `range`,
+//!   `springref` and keyframe `qpos` values of hinges and slides are shifted by `−ref`.
+//!   Without a keyframe the start is MuJoCo's `qpos0`, the reference pose (`qpos = None`).
+//!   Ball and free keyframe values are taken as they are (MuJoCo's layout is the model's).
+//! - Mesh, height-field and SDF geoms are fine when the body has an `<inertial>` (no file is
+//!   read); when their mass would be needed the body is refused, naming the mesh.
+//! - `<include>`, `<frame>`, `<composite>`, `<flexcomp>`, `<replicate>` and `<attach>` are
+//!   refused (they add or move bodies); actuators, tendons, sensors, equalities, contacts,
+//!   geom contact and visual properties, sites, cameras, lights, assets and the like are
+//!   listed in [`Loaded::ignored`].
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use roxmltree::Node;
+
+use super::model::Model;
+use super::xml::{
+    axis_angle, build, check_inertia, coordinate_rotation, parse_document, quat_matrix, read_bounded, rotation_to_z,
+    Ctx, Ignored, MassProps, Merge, RawBody, RawKind,
+};
+use crate::error::Result;
+use crate::linalg::{Mat3, Vec3};
+
+pub use super::xml::Loaded;
+
+/// Loads an MJCF file (at most 64 MiB). No other file (mesh, include) is read.
+pub fn load(path: &Path) -> Result<Loaded> {
+    let text = read_bounded(path)?;
+    parse(&text, &path.display().to_string())
+}
+
+/// Parses MJCF text; `name_for_errors` names the file in error messages.
+pub fn parse(text: &str, name_for_errors: &str) -> Result<Loaded> {
+    let doc = parse_document(text, name_for_errors)?;
+    let cx = Ctx {
+        file: name_for_errors,
+        doc: &doc,
+    };
+    let root = doc.root_element();
+    if root.tag_name().name() != "mujoco" {
+        return Err(cx.err(root, "an MJCF file's root element must be <mujoco>"));
+    }
+    let mut st = State {
+        cx,
+        compiler: Compiler::default(),
+        classes: HashMap::new(),
+        ignored: Ignored::default(),
+        raw: Vec::new(),
+        refs: Vec::new(),
+        body_names: HashMap::new(),
+        joint_names: HashMap::new(),
+    };
+    st.classes.insert("main", Class::default());
+    let elements: Vec<Node> = root.children().filter(Node::is_element).collect();
+    // The compiler and the defaults apply wherever they stand in the file.
+    for &node in &elements {
+        match node.tag_name().name() {
+            "compiler" => st.read_compiler(node)?,
+            "default" => st.read_default(node, None)?,
+            _ => {}
+        }
+    }
+    let mut gravity = Vec3::new(0.0, 0.0, -9.81);
+    let mut timestep = None;
+    let mut keys = Vec::new();
+    for &node in &elements {
+        match node.tag_name().name() {
+            "compiler" | "default" => {}
+            "option" => {
+                if let Some(g) = cx.array::<3>(node, "gravity")? {
+                    gravity = Vec3::from_array(g);
+                }
+                if let Some([h]) = cx.array::<1>(node, "timestep")? {
+                    if h <= 0.0 {
+                        return Err(cx.err(node, format!("timestep {h} must be positive")));
+                    }
+                    timestep = Some(h);
+                }
+                st.note_other_attributes(node, &["gravity", "timestep"]);
+                for c in node.children().filter(Node::is_element) {
+                    st.ignored.note(&format!("option {}", c.tag_name().name()));
+                }
+            }
+            "worldbody" => st.read_children(node, None, "main")?,
+            "keyframe" => keys.extend(node.children().filter(|c| c.has_tag_name("key"))),
+            "include" => return Err(cx.err(node, "<include> is not supported: the loader reads one file")),
+            other => st.ignored.note(other),
+        }
+    }
+    if keys.len() > 1 {
+        st.ignored.note("keyframes after the first");
+    }
+    let (qpos, qvel) = match keys.first() {
+        Some(&key) => st.read_key(key)?,
+        None => (None, None),
+    };
+    let built = build(cx.file, std::mem::take(&mut st.raw))?;
+    Ok(Loaded {
+        model: Model {
+            name: root.attribute("model").unwrap_or_default().to_string(),
+            bodies: built.bodies,
+            joints: built.joints,
+            gravity,
+            timestep,
+            qpos,
+            qvel,
+        },
+        ignored: st.ignored.into_vec(),
+        merged: built.merged,
+    })
+}
+
+/// A keyframe's `qpos` and `qvel`, each when given.
+type KeyState = (Option<Vec<f64>>, Option<Vec<f64>>);
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum FromGeom {
+    False,
+    True,
+    Auto,
+}
+
+struct Compiler {
+    degree: bool,
+    eulerseq: [u8; 3],
+    autolimits: bool,
+    from_geom: FromGeom,
+}
+
+impl Default for Compiler {
+    fn default() -> Self {
+        Compiler {
+            degree: true,
+            eulerseq: *b"xyz",
+            autolimits: true,
+            from_geom: FromGeom::Auto,
+        }
+    }
+}
+
+/// A default class: attribute values for joints and geoms.
+#[derive(Clone, Default)]
+struct Class<'a> {
+    joint: HashMap<&'a str, &'a str>,
+    geom: HashMap<&'a str, &'a str>,
+}
+
+struct State<'a, 'i> {
+    cx: Ctx<'a, 'i>,
+    compiler: Compiler,
+    classes: HashMap<&'a str, Class<'a>>,
+    ignored: Ignored,
+    raw: Vec<RawBody>,
+    /// Per raw body: its joint's kind and `ref` (model coordinate = MuJoCo's − ref).
+    refs: Vec<(RawKind, f64)>,
+    body_names: HashMap<String, Node<'a, 'i>>,
+    joint_names: HashMap<&'a str, Node<'a, 'i>>,
+}
+
+/// An element with its default class: attribute lookup falls back on the class.
+struct Elem<'a, 'i> {
+    node: Node<'a, 'i>,
+    defaults: HashMap<&'a str, &'a str>,
+}
+
+impl<'a> Elem<'a, '_> {
+    fn get(&self, attr: &str) -> Option<&'a str> {
+        self.node.attribute(attr).or_else(|| self.defaults.get(attr).copied())
+    }
+}
+
+fn parse_bool(cx: &Ctx, node: Node, attr: &str, value: &str) -> Result<bool> {
+    match value {
+        "true" => Ok(true),
+        "false" => Ok(false),
+        _ => Err(cx.err(node, format!("attribute {attr}=\"{value}\": expected true or false"))),
+    }
+}
+
+impl<'a, 'i> State<'a, 'i> {
+    fn angle(&self, v: f64) -> f64 {
+        if self.compiler.degree {
+            v.to_radians()
+        } else {
+            v
+        }
+    }
+
+    fn note_other_attributes(&mut self, node: Node, known: &[&str]) {
+        for a in node.attributes() {
+            if !known.contains(&a.name()) {
+                self.ignored.note(&format!("{} {}", node.tag_name().name(), a.name()));
+            }
+        }
+    }
+
+    fn read_compiler(&mut self, node: Node<'a, 'i>) -> Result<()> {
+        let cx = self.cx;
+        if let Some(a) = node.attribute("angle") {
+            self.compiler.degree = match a {
+                "degree" => true,
+                "radian" => false,
+                _ => return Err(cx.err(node, format!("angle=\"{a}\": expected degree or radian"))),
+            };
+        }
+        if let Some(s) = node.attribute("eulerseq") {
+            let b = s.as_bytes();
+            if b.len() != 3 || !b.iter().all(|c| b"xyzXYZ".contains(c)) {
+                return Err(cx.err(node, format!("eulerseq=\"{s}\": expected three of x y z X Y Z")));
+            }
+            self.compiler.eulerseq = [b[0], b[1], b[2]];
+        }
+        if let Some(v) = node.attribute("autolimits") {
+            self.compiler.autolimits = parse_bool(&cx, node, "autolimits", v)?;
+        }
+        if let Some(v) = node.attribute("inertiafromgeom") {
+            self.compiler.from_geom = match v {
+                "false" => FromGeom::False,
+                "true" => FromGeom::True,
+                "auto" => FromGeom::Auto,
+                _ => return Err(cx.err(node, format!("inertiafromgeom=\"{v}\": expected false, true or auto"))),
+            };
+        }
+        self.note_other_attributes(node, &["angle", "eulerseq", "autolimits", "inertiafromgeom"]);
+        Ok(())
+    }
+
+    /// A `<default>` element under `parent` (None: top level, the `main` class). Nesting
+    /// is bounded by the document's depth check.
+    fn read_default(&mut self, node: Node<'a, 'i>, parent: Option<&'a str>) -> Result<()> {
+        let cx = self.cx;
+        let name = match (node.attribute("class"), parent) {
+            (Some(c), _) => c,
+            (None, None) => "main",
+            (None, Some(_)) => return Err(cx.err(node, "a nested <default> needs a class attribute")),
+        };
+        let mut class = match parent {
+            Some(p) => self.classes[p].clone(),
+            None => self.classes.get(name).cloned().unwrap_or_default(),
+        };
+        if parent.is_some() && self.classes.contains_key(name) {
+            return Err(cx.err(node, format!("a second default class `{name}`")));
+        }
+        for c in node.children().filter(Node::is_element) {
+            let map = match c.tag_name().name() {
+                "joint" => &mut class.joint,
+                "geom" => &mut class.geom,
+                _ => continue,
+            };
+            for a in c.attributes() {
+                map.insert(a.name(), a.value());
+            }
+        }
+        self.classes.insert(name, class);
+        for c in node.children().filter(|c| c.has_tag_name("default")) {
+            self.read_default(c, Some(name))?;
+        }
+        Ok(())
+    }
+
+    /// The defaults for `kind` of the class an element uses.
+    fn class_of(&self, node: Node, childclass: &str) -> Result<&'a str> {
+        let name = node.attribute("class").unwrap_or(childclass);
+        match self.classes.get_key_value(name) {
+            Some((k, _)) => Ok(k),
+            None => Err(self.cx.err(node, format!("unknown default class `{name}`"))),
+        }
+    }
+
+    /// Position and attitude from `pos` and one of `quat`, `axisangle`, `euler`, `xyaxes`,
+    /// `zaxis` (through `get`, so defaults apply).
+    fn frame(&self, node: Node, get: &dyn Fn(&str) -> Option<&'a str>) -> Result<(Vec3, Mat3)> {
+        let cx = self.cx;
+        let pos = match get("pos") {
+            Some(v) => Vec3::from_array(cx.array_of::<3>(node, "pos", v)?),
+            None => Vec3::ZERO,
+        };
+        let given: Vec<&str> = ["quat", "axisangle", "euler", "xyaxes", "zaxis"]
+            .into_iter()
+            .filter(|a| get(a).is_some())
+            .collect();
+        if given.len() > 1 {
+            return Err(cx.err(node, format!("more than one orientation given: {}", given.join(", "))));
+        }
+        let rot = match given.first().copied() {
+            None => Mat3::IDENTITY,
+            Some(attr) => {
+                let v = get(attr).unwrap_or_default();
+                self.orientation(node, attr, v)?
+            }
+        };
+        Ok((pos, rot))
+    }
+
+    fn orientation(&self, node: Node, attr: &str, v: &str) -> Result<Mat3> {
+        let cx = self.cx;
+        Ok(match attr {
+            "quat" => quat_matrix(cx.array_of::<4>(node, attr, v)?)
+                .ok_or_else(|| cx.err(node, "quat: a zero quaternion is no rotation"))?,
+            "axisangle" => {
+                let a = cx.array_of::<4>(node, attr, v)?;
+                axis_angle(cx.unit(node, attr, [a[0], a[1], a[2]])?, self.angle(a[3]))
+            }
+            "euler" => {
+                let e = cx.array_of::<3>(node, attr, v)?;
+                let mut r = Mat3::IDENTITY;
+                for (k, &c) in self.compiler.eulerseq.iter().enumerate() {
+                    let step = coordinate_rotation((c.to_ascii_lowercase() - b'x') as usize, self.angle(e[k]));
+                    // Lower case: about the rotated (moving) axes; upper case: fixed axes.
+                    r = if c.is_ascii_lowercase() { r * step } else { step * r };
+                }
+                r
+            }
+            "xyaxes" => {
+                let a = cx.array_of::<6>(node, attr, v)?;
+                let x = cx.unit(node, attr, [a[0], a[1], a[2]])?;
+                let y = Vec3::new(a[3], a[4], a[5]);
+                let y = cx.unit(node, attr, (y - x * x.dot(y)).to_array())?;
+                let z = x.cross(y);
+                Mat3::from_rows([[x.x, y.x, z.x], [x.y, y.y, z.y], [x.z, y.z, z.z]])
+            }
+            _ => rotation_to_z(cx.unit(node, attr, cx.array_of::<3>(node, attr, v)?)?),
+        })
+    }
+
+    /// The bodies (and ignored elements) under `node` (a body or the worldbody).
+    fn read_children(&mut self, node: Node<'a, 'i>, parent: Option<usize>, childclass: &'a str) -> Result<()> {
+        let cx = self.cx;
+        for c in node.children().filter(Node::is_element) {
+            match c.tag_name().name() {
+                "body" => self.read_body(c, parent, childclass)?,
+                "joint" | "freejoint" | "inertial" if parent.is_some() => {}
+                "geom" => self.ignored.note("geom contacts"),
+                tag @ ("frame" | "composite" | "flexcomp" | "replicate" | "attach" | "include") => {
+                    return Err(cx.err(c, format!("<{tag}> is not supported by this loader")));
+                }
+                tag @ ("joint" | "freejoint" | "inertial") => {
+                    return Err(cx.err(c, format!("<{tag}> directly in <worldbody>: the world cannot move")));
+                }
+                other => self.ignored.note(other),
+            }
+        }
+        Ok(())
+    }
+
+    fn read_body(&mut self, node: Node<'a, 'i>, parent: Option<usize>, inherited: &'a str) -> Result<()> {
+        let cx = self.cx;
+        let index = self.raw.len();
+        let name = node
+            .attribute("name")
+            .map_or_else(|| format!("body{index}"), str::to_string);
+        if let Some(first) = self.body_names.insert(name.clone(), node) {
+            return Err(cx.err(
+                node,
+                format!("a second body named `{name}` (first on line {})", cx.line(first)),
+            ));
+        }
+        let childclass = match node.attribute("childclass") {
+            Some(c) => match self.classes.get_key_value(c) {
+                Some((k, _)) => *k,
+                None => return Err(cx.err(node, format!("unknown default class `{c}` in childclass"))),
+            },
+            None => inherited,
+        };
+        let (pos, rot) = self.frame(node, &|a| node.attribute(a))?;
+        self.note_other_attributes(
+            node,
+            &[
+                "name",
+                "childclass",
+                "pos",
+                "quat",
+                "axisangle",
+                "euler",
+                "xyaxes",
+                "zaxis",
+            ],
+        );
+        let joints: Vec<Node> = node
+            .children()
+            .filter(|c| c.has_tag_name("joint") || c.has_tag_name("freejoint"))
+            .collect();
+        if joints.len() > 1 {
+            return Err(cx.err(
+                node,
+                format!(
+                    "body `{name}` has {} joints; several joints in one body need massless intermediate bodies, \
+                     which maximal coordinates cannot integrate: use one joint per body (a ball joint for a \
+                     spherical pair)",
+                    joints.len()
+                ),
+            ));
+        }
+        let inertials: Vec<Node> = node.children().filter(|c| c.has_tag_name("inertial")).collect();
+        if inertials.len() > 1 {
+            return Err(cx.err(inertials[1], "a second <inertial> in one body"));
+        }
+        let mass = match (inertials.first(), self.compiler.from_geom) {
+            (Some(&i), FromGeom::Auto | FromGeom::False) => self.read_inertial(i)?,
+            (_, FromGeom::False) => MassProps::ZERO,
+            _ => {
+                let mut total = MassProps::ZERO;
+                for g in node.children().filter(|c| c.has_tag_name("geom")) {
+                    let class = self.class_of(g, childclass)?;
+                    let elem = Elem {
+                        node: g,
+                        defaults: self.classes[class].geom.clone(),
+                    };
+                    total = total.combine(&self.geom_mass(elem)?);
+                }
+                total
+            }
+        };
+        let mut body = RawBody {
+            name,
+            parent,
+            pos,
+            rot,
+            mass,
+            kind: RawKind::Weld,
+            joint_name: None,
+            anchor: Vec3::ZERO,
+            range: None,
+            stiffness: 0.0,
+            spring_ref: 0.0,
+            damping: 0.0,
+            armature: 0.0,
+            merge: Merge::IfMassless,
+            line: cx.line(node),
+            element: super::xml::describe(node),
+        };
+        let mut reference = 0.0;
+        if let Some(&j) = joints.first() {
+            body.merge = Merge::Never;
+            if let Some(n) = j.attribute("name") {
+                if let Some(first) = self.joint_names.insert(n, j) {
+                    return Err(cx.err(
+                        j,
+                        format!("a second joint named `{n}` (first on line {})", cx.line(first)),
+                    ));
+                }
+                body.joint_name = Some(n.to_string());
+            }
+            if j.has_tag_name("freejoint") {
+                body.kind = RawKind::Free;
+                self.note_other_attributes(j, &["name"]);
+            } else {
+                let class = self.class_of(j, childclass)?;
+                let defaults = self.classes[class].joint.clone();
+                reference = self.read_joint(Elem { node: j, defaults }, &mut body)?;
+            }
+        }
+        self.raw.push(body);
+        self.refs.push((self.raw[index].kind, reference));
+        self.read_children(node, Some(index), childclass)
+    }
+
+    fn read_inertial(&mut self, node: Node<'a, 'i>) -> Result<MassProps> {
+        let cx = self.cx;
+        let (pos, rot) = self.frame(node, &|a| node.attribute(a))?;
+        let [mass] = cx
+            .array::<1>(node, "mass")?
+            .ok_or_else(|| cx.err(node, "<inertial> needs a mass"))?;
+        if mass <= 0.0 {
+            return Err(cx.err(node, format!("mass {mass} must be positive")));
+        }
+        let full = cx.array::<6>(node, "fullinertia")?;
+        let diag = cx.array::<3>(node, "diaginertia")?;
+        let inertia = match (diag, full) {
+            (Some(d), None) => rot * Mat3::from_diagonal(Vec3::from_array(d)) * rot.transpose(),
+            (None, Some(f)) => {
+                if ["quat", "axisangle", "euler", "xyaxes", "zaxis"]
+                    .iter()
+                    .any(|a| node.has_attribute(*a))
+                {
+                    return Err(cx.err(node, "fullinertia and an orientation of the inertial frame both given"));
+                }
+                Mat3::from_rows([[f[0], f[3], f[4]], [f[3], f[1], f[5]], [f[4], f[5], f[2]]])
+            }
+            (Some(_), Some(_)) => return Err(cx.err(node, "both diaginertia and fullinertia given")),
+            (None, None) => return Err(cx.err(node, "<inertial> needs diaginertia or fullinertia")),
+        };
+        check_inertia(&inertia).map_err(|m| cx.err(node, m))?;
+        self.note_other_attributes(
+            node,
+            &[
+                "pos",
+                "quat",
+                "axisangle",
+                "euler",
+                "xyaxes",
+                "zaxis",
+                "mass",
+                "diaginertia",
+                "fullinertia",
+            ],
+        );
+        Ok(MassProps {
+            mass,
+            com: pos,
+            inertia,
+        })
+    }
+
+    /// Reads a `<joint>` into `body`; returns its `ref` (model coordinate = MuJoCo's − ref).
+    fn read_joint(&mut self, j: Elem<'a, 'i>, body: &mut RawBody) -> Result<f64> {
+        let cx = self.cx;
+        let node = j.node;
+        let num = |attr: &str| -> Result<Option<f64>> {
+            j.get(attr)
+                .map(|v| cx.array_of::<1>(node, attr, v).map(|a| a[0]))
+                .transpose()
+        };
+        let ty = j.get("type").unwrap_or("hinge");
+        let axis = match j.get("axis") {
+            Some(v) => cx.unit(node, "axis", cx.array_of::<3>(node, "axis", v)?)?,
+            None => Vec3::new(0.0, 0.0, 1.0),
+        };
+        let (kind, angular) = match ty {
+            "hinge" => (RawKind::Hinge(axis), true),
+            "slide" => (RawKind::Slide(axis), false),
+            "ball" => (RawKind::Ball, true),
+            "free" => (RawKind::Free, false),
+            other => return Err(cx.err(node, format!("unknown joint type `{other}`"))),
+        };
+        let degree = self.compiler.degree && angular;
+        let unit = |v: f64| if degree { v.to_radians() } else { v };
+        body.kind = kind;
+        if kind != RawKind::Free {
+            if let Some(v) = j.get("pos") {
+                body.anchor = Vec3::from_array(cx.array_of::<3>(node, "pos", v)?);
+            }
+        }
+        let reference = num("ref")?.map_or(0.0, unit);
+        let range = j.get("range").map(|v| cx.array_of::<2>(node, "range", v)).transpose()?;
+        let limited = match j.get("limited").unwrap_or("auto") {
+            "auto" => {
+                if range.is_some() && !self.compiler.autolimits {
+                    return Err(cx.err(node, "range given without limited while compiler autolimits is false"));
+                }
+                range.is_some()
+            }
+            v => parse_bool(&cx, node, "limited", v)?,
+        };
+        if limited {
+            let [lo, hi] = range.ok_or_else(|| cx.err(node, "limited joint without range"))?;
+            if lo > hi {
+                return Err(cx.err(node, format!("range lower bound {lo} above upper bound {hi}")));
+            }
+            match kind {
+                RawKind::Hinge(_) | RawKind::Slide(_) => {
+                    body.range = Some((unit(lo) - reference, unit(hi) - reference));
+                }
+                _ => self.ignored.note(&format!("{ty} joint range")),
+            }
+        }
+        body.stiffness = num("stiffness")?.unwrap_or(0.0);
+        body.damping = num("damping")?.unwrap_or(0.0);
+        body.armature = num("armature")?.unwrap_or(0.0);
+        for (what, v) in [
+            ("stiffness", body.stiffness),
+            ("damping", body.damping),
+            ("armature", body.armature),
+        ] {
+            if v < 0.0 {
+                return Err(cx.err(node, format!("negative {what} {v}")));
+            }
+        }
+        body.spring_ref = num("springref")?.map_or(0.0, unit) - reference;
+        if matches!(kind, RawKind::Ball | RawKind::Free) && (body.stiffness != 0.0 || body.damping != 0.0) {
+            self.ignored.note(&format!("{ty} joint stiffness and damping"));
+        }
+        if num("frictionloss")?.is_some_and(|f| f != 0.0) {
+            self.ignored.note("joint frictionloss");
+        }
+        let known = [
+            "name",
+            "class",
+            "type",
+            "pos",
+            "axis",
+            "range",
+            "limited",
+            "ref",
+            "springref",
+            "stiffness",
+            "damping",
+            "armature",
+            "frictionloss",
+        ];
+        let extra = node.attributes().map(|a| a.name()).chain(j.defaults.keys().copied());
+        for a in extra.filter(|a| !known.contains(a)).collect::<Vec<_>>() {
+            self.ignored.note(&format!("joint {a}"));
+        }
+        Ok(if matches!(kind, RawKind::Hinge(_) | RawKind::Slide(_)) {
+            reference
+        } else {
+            0.0
+        })
+    }
+
+    /// The mass properties of a geom in its body's frame (zero for a massless geom).
+    fn geom_mass(&mut self, g: Elem<'a, 'i>) -> Result<MassProps> {
+        let cx = self.cx;
+        let node = g.node;
+        self.ignored.note("geom contacts");
+        let ty = g.get("type").unwrap_or("sphere");
+        let mass_attr = g.get("mass").map(|v| cx.array_of::<1>(node, "mass", v)).transpose()?;
+        let density = g
+            .get("density")
+            .map(|v| cx.array_of::<1>(node, "density", v))
+            .transpose()?;
+        if let Some([m]) = mass_attr {
+            if m < 0.0 {
+                return Err(cx.err(node, format!("mass {m} is negative")));
+            }
+        }
+        if let Some([d]) = density {
+            if d < 0.0 {
+                return Err(cx.err(node, format!("density {d} is negative")));
+            }
+        }
+        if mass_attr == Some([0.0]) || (mass_attr.is_none() && density == Some([0.0])) {
+            return Ok(MassProps::ZERO);
+        }
+        match ty {
+            "sphere" | "capsule" | "cylinder" | "box" | "ellipsoid" => {}
+            "mesh" | "hfield" | "sdf" => {
+                let what = g.get("mesh").or(g.get("hfield")).unwrap_or("(unnamed)");
+                return Err(cx.err(
+                    node,
+                    format!(
+                        "the body has no <inertial>, so its mass would come from this {ty} geom `{what}`, whose \
+                         file is not read: give the body an <inertial>"
+                    ),
+                ));
+            }
+            "plane" => return Err(cx.err(node, "a plane has no finite mass: planes belong in <worldbody>")),
+            other => return Err(cx.err(node, format!("unknown geom type `{other}`"))),
+        }
+        let size = match g.get("size") {
+            Some(v) => cx.floats(node, "size", v, 1, 3)?,
+            None => Vec::new(),
+        };
+        let (mut pos, mut rot) = self.frame(node, &|a| g.get(a))?;
+        let mut half_length = None;
+        if let Some(v) = g.get("fromto") {
+            let f = cx.array_of::<6>(node, "fromto", v)?;
+            let (a, b) = (Vec3::new(f[0], f[1], f[2]), Vec3::new(f[3], f[4], f[5]));
+            let d = b - a;
+            rot = rotation_to_z(cx.unit(node, "fromto", d.to_array())?);
+            pos = (a + b) * 0.5;
+            half_length = Some(0.5 * d.norm());
+        }
+        let needed = match (ty, half_length) {
+            ("sphere", _) => 1,
+            ("capsule" | "cylinder", None) => 2,
+            ("capsule" | "cylinder", Some(_)) => 1,
+            (_, None) => 3,
+            (_, Some(_)) => 2,
+        };
+        if size.len() < needed || size[..needed].iter().any(|&s| s <= 0.0) {
+            return Err(cx.err(node, format!("a {ty} geom needs {needed} positive size values")));
+        }
+        let s = |k: usize| {
+            if k == needed && half_length.is_some() {
+                half_length.unwrap_or(0.0)
+            } else {
+                size[k]
+            }
+        };
+        use std::f64::consts::PI;
+        let (volume, unit_inertia): (f64, Box<dyn Fn(f64) -> Vec3>) = match ty {
+            "sphere" => {
+                let r = s(0);
+                (
+                    4.0 / 3.0 * PI * r.powi(3),
+                    Box::new(move |m| Vec3::new(1.0, 1.0, 1.0) * (0.4 * m * r * r)),
+                )
+            }
+            "box" | "ellipsoid" => {
+                let (a, b, c) = (s(0), s(1), s(2));
+                let (v, k) = if ty == "box" {
+                    (8.0 * a * b * c, 1.0 / 3.0)
+                } else {
+                    (4.0 / 3.0 * PI * a * b * c, 0.2)
+                };
+                (
+                    v,
+                    Box::new(move |m| Vec3::new(b * b + c * c, a * a + c * c, a * a + b * b) * (k * m)),
+                )
+            }
+            "cylinder" => {
+                let (r, h) = (s(0), 2.0 * s(1));
+                (
+                    PI * r * r * h,
+                    Box::new(move |m| {
+                        let t = m * (3.0 * r * r + h * h) / 12.0;
+                        Vec3::new(t, t, 0.5 * m * r * r)
+                    }),
+                )
+            }
+            _ => {
+                let (r, h) = (s(0), 2.0 * s(1));
+                let (v_cyl, v_sph) = (PI * r * r * h, 4.0 / 3.0 * PI * r.powi(3));
+                (
+                    v_cyl + v_sph,
+                    Box::new(move |m| {
+                        let (mc, ms) = (m * v_cyl / (v_cyl + v_sph), m * v_sph / (v_cyl + v_sph));
+                        let t = mc * (3.0 * r * r + h * h) / 12.0 + ms * (0.4 * r * r + 0.25 * h * h + 0.375 * h * r);
+                        Vec3::new(t, t, 0.5 * mc * r * r + 0.4 * ms * r * r)
+                    }),
+                )
+            }
+        };
+        let m = match mass_attr {
+            Some([m]) => m,
+            None => density.map_or(1000.0, |d| d[0]) * volume,
+        };
+        let local = MassProps {
+            mass: m,
+            com: Vec3::ZERO,
+            inertia: Mat3::from_diagonal(unit_inertia(m)),
+        };
+        Ok(local.transformed(pos, &rot))
+    }
+
+    /// The first keyframe's `qpos` and `qvel`, shifted by each hinge's and slide's `ref`.
+    fn read_key(&mut self, key: Node<'a, 'i>) -> Result<KeyState> {
+        let cx = self.cx;
+        let dims = |k: RawKind| match k {
+            RawKind::Weld => (0, 0),
+            RawKind::Free => (7, 6),
+            RawKind::Ball => (4, 3),
+            RawKind::Hinge(_) | RawKind::Slide(_) => (1, 1),
+        };
+        let nq: usize = self.refs.iter().map(|&(k, _)| dims(k).0).sum();
+        let nv: usize = self.refs.iter().map(|&(k, _)| dims(k).1).sum();
+        let qpos = match key.attribute("qpos") {
+            None => None,
+            Some(v) => {
+                let mut q = cx.floats(key, "qpos", v, nq, nq)?;
+                let mut at = 0;
+                for &(k, r) in &self.refs {
+                    if matches!(k, RawKind::Hinge(_) | RawKind::Slide(_)) {
+                        q[at] -= r;
+                    }
+                    at += dims(k).0;
+                }
+                Some(q)
+            }
+        };
+        let qvel = key
+            .attribute("qvel")
+            .map(|v| cx.floats(key, "qvel", v, nv, nv))
+            .transpose()?;
+        self.note_other_attributes(key, &["name", "qpos", "qvel", "time"]);
+        Ok((qpos, qvel))
+    }
+}

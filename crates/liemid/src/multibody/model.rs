@@ -1,0 +1,528 @@
+//! The multibody model: bodies, joints and the world, as a loader (MJCF, URDF, TOML) or
+//! code builds them. Plain data; `Model::validate` checks it, the multibody system is
+//! built from a validated model. All quantities in SI units, positions in metres, angles
+//! in radians. (SHARED CONTRACT between the core and the loaders: keep these types and
+//! field names; add methods freely.)
+
+use crate::linalg::{Mat3, Vec3};
+
+/// Which body a joint or an anchor belongs to: the fixed world or a body of the model.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Link {
+    /// The fixed world frame (`R = I`, origin at 0).
+    World,
+    /// `Model::bodies[i]`.
+    Body(usize),
+}
+
+/// One rigid body. Its frame is the model's body frame (MJCF `<body>`, URDF `<link>`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Body {
+    /// The name from the model file (unique within a model).
+    pub name: String,
+    /// Mass (kg), > 0.
+    pub mass: f64,
+    /// Centre of mass in body coordinates, `s` (m).
+    pub com: Vec3,
+    /// Inertia tensor about the centre of mass in body-frame axes (kg m²), full 3x3,
+    /// symmetric positive definite, principal moments obeying the triangle inequality.
+    pub inertia: Mat3,
+    /// The body frame's origin in world coordinates in the reference configuration (m).
+    pub position: Vec3,
+    /// The body frame's attitude (body to world) in the reference configuration.
+    pub rotation: Mat3,
+}
+
+/// The kind of a joint; axes are unit vectors in the **child** body's frame (MJCF and
+/// URDF both give them so).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum JointKind {
+    /// Three rotational degrees of freedom about the anchor (qpos: quaternion w,x,y,z;
+    /// qvel: angular velocity in the child frame).
+    Ball,
+    /// One rotation about `axis` through the anchor (qpos, qvel: angle, rate).
+    Hinge {
+        /// Unit axis in the child frame.
+        axis: Vec3,
+    },
+    /// One translation along `axis` (qpos, qvel: offset, rate).
+    Slide {
+        /// Unit axis in the child frame.
+        axis: Vec3,
+    },
+    /// No relative motion.
+    Weld,
+    /// Six degrees of freedom, no constraint rows (qpos: position of the child frame's
+    /// origin in the parent frame (world for a root), then quaternion w,x,y,z; qvel: linear
+    /// velocity in the parent frame, angular velocity in the child frame, as MuJoCo).
+    Free,
+}
+
+/// A joint between a parent (or the world) and a child body.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Joint {
+    /// The name from the model file (generated when the file gives none).
+    pub name: String,
+    /// Kind and axis.
+    pub kind: JointKind,
+    /// The parent (world for a root joint).
+    pub parent: Link,
+    /// The child body; in a tree each body is the child of exactly one joint. A joint
+    /// whose child already has a tree joint closes a loop (`Model::loop_joints`).
+    pub child: usize,
+    /// The joint's point in the parent's frame coordinates (from the frame origin, not the
+    /// centre of mass) (m).
+    pub anchor_parent: Vec3,
+    /// The same point in the child's frame coordinates (m).
+    pub anchor_child: Vec3,
+    /// Relative attitude of the child frame in the parent frame at the reference
+    /// configuration (zero joint coordinate): what weld, hinge and slide rows lock.
+    pub reference_rotation: Mat3,
+    /// Joint limit (rad or m) for hinge and slide, `None` when unlimited.
+    pub range: Option<(f64, f64)>,
+    /// Spring stiffness (N m/rad or N/m) towards `spring_ref`, hinge and slide only.
+    pub stiffness: f64,
+    /// The spring's rest coordinate (MJCF `springref`, default 0).
+    pub spring_ref: f64,
+    /// Viscous damping (N m s/rad or N s/m), hinge and slide only.
+    pub damping: f64,
+    /// MJCF `armature` (kg m² or kg); 0 when absent.
+    pub armature: f64,
+}
+
+/// A whole model: bodies, joints, gravity and the starting joint coordinates.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Model {
+    /// The model's name (MJCF `<mujoco model>`, URDF `<robot name>`).
+    pub name: String,
+    /// Bodies, parents before children (the world is not a body).
+    pub bodies: Vec<Body>,
+    /// Joints: the tree joints first (body order), loop-closing joints after.
+    pub joints: Vec<Joint>,
+    /// Gravity (m/s²), world frame; MJCF default (0, 0, -9.81).
+    pub gravity: Vec3,
+    /// The file's suggested step (MJCF `option timestep`), if any.
+    pub timestep: Option<f64>,
+    /// Starting joint coordinates in MuJoCo's layout over the tree joints in order
+    /// (free 7, ball 4, hinge 1, slide 1, weld 0); `None`: the reference pose.
+    pub qpos: Option<Vec<f64>>,
+    /// Starting joint velocities (free 6, ball 3, hinge 1, slide 1); `None`: at rest.
+    pub qvel: Option<Vec<f64>>,
+}
+
+use crate::error::{Error, Result};
+use crate::rigid::inertia::Inertia;
+use crate::so3::{self, Quaternion};
+
+use super::MultibodyState;
+
+/// Largest accepted `|‖u‖ − 1|` of a joint axis and `‖RᵀR − I‖_F` of a model rotation.
+pub const UNIT_TOLERANCE: f64 = 1e-9;
+
+impl JointKind {
+    /// Joint coordinates in MuJoCo's `qpos` layout: free 7, ball 4, hinge 1, slide 1,
+    /// weld 0 (MuJoCo documentation, "Joint").
+    #[must_use]
+    pub fn nq(&self) -> usize {
+        match self {
+            JointKind::Free => 7,
+            JointKind::Ball => 4,
+            JointKind::Hinge { .. } | JointKind::Slide { .. } => 1,
+            JointKind::Weld => 0,
+        }
+    }
+
+    /// Joint velocities in MuJoCo's `qvel` layout: free 6, ball 3, hinge 1, slide 1,
+    /// weld 0.
+    #[must_use]
+    pub fn nv(&self) -> usize {
+        match self {
+            JointKind::Free => 6,
+            JointKind::Ball => 3,
+            JointKind::Hinge { .. } | JointKind::Slide { .. } => 1,
+            JointKind::Weld => 0,
+        }
+    }
+
+    /// Holonomic constraint rows (multibody spec section 2): ball 3, hinge 5, slide 5,
+    /// weld 6, free 0; that is `6 − nv`.
+    #[must_use]
+    pub fn rows(&self) -> usize {
+        6 - self.nv()
+    }
+
+    /// The short kind name (`ball`, `hinge`, `slide`, `weld`, `free`).
+    #[must_use]
+    pub fn name(&self) -> &'static str {
+        match self {
+            JointKind::Free => "free",
+            JointKind::Ball => "ball",
+            JointKind::Hinge { .. } => "hinge",
+            JointKind::Slide { .. } => "slide",
+            JointKind::Weld => "weld",
+        }
+    }
+
+    /// The axis of a hinge or slide (child frame), `None` otherwise.
+    #[must_use]
+    pub fn axis(&self) -> Option<Vec3> {
+        match *self {
+            JointKind::Hinge { axis } | JointKind::Slide { axis } => Some(axis),
+            _ => None,
+        }
+    }
+}
+
+fn invalid(reason: String) -> Error {
+    Error::InvalidModel { reason }
+}
+
+fn check_rotation(what: &str, r: &Mat3) -> Result<()> {
+    let defect = so3::orthogonality_defect(r);
+    let det = r.determinant();
+    if !r.is_finite() || defect > UNIT_TOLERANCE || det <= 0.0 {
+        return Err(invalid(format!(
+            "{what} is not a rotation: |R^T R - I|_F = {defect:.3e} (at most {UNIT_TOLERANCE:e}), det = {det}"
+        )));
+    }
+    Ok(())
+}
+
+fn check_vec(what: &str, v: Vec3) -> Result<()> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(invalid(format!("{what} = {v:?} is not finite")))
+    }
+}
+
+impl Model {
+    /// The number of tree joints: one per body (`joints[j].child == j` for `j <
+    /// bodies.len()`); the joints after them close loops.
+    #[must_use]
+    pub fn tree_joint_count(&self) -> usize {
+        self.bodies.len()
+    }
+
+    /// The loop-closing joints (indices into `joints`).
+    #[must_use]
+    pub fn loop_joints(&self) -> core::ops::Range<usize> {
+        self.bodies.len().min(self.joints.len())..self.joints.len()
+    }
+
+    /// Length of `qpos` for the tree joints (MuJoCo layout).
+    #[must_use]
+    pub fn nq(&self) -> usize {
+        self.joints.iter().take(self.bodies.len()).map(|j| j.kind.nq()).sum()
+    }
+
+    /// Length of `qvel` for the tree joints (MuJoCo layout).
+    #[must_use]
+    pub fn nv(&self) -> usize {
+        self.joints.iter().take(self.bodies.len()).map(|j| j.kind.nv()).sum()
+    }
+
+    /// The body inertia tensor `I_i` (about the centre of mass, body axes), validated.
+    ///
+    /// # Errors
+    /// [`Error::InvalidModel`] naming the body when the tensor is not finite, not SPD or
+    /// breaks the triangle inequality.
+    pub fn inertia(&self, i: usize) -> Result<Inertia> {
+        let b = &self.bodies[i];
+        Inertia::from_matrix(b.inertia.m).map_err(|e| invalid(format!("body `{}` ({i}): {e}", b.name)))
+    }
+
+    /// A length scale of the model: the largest distance from a centre of mass to a joint
+    /// anchor (1 m when there is none). Position constraint violations are reported
+    /// relative to it.
+    #[must_use]
+    pub fn length_scale(&self) -> f64 {
+        let mut l: f64 = 0.0;
+        for j in &self.joints {
+            l = l.max((j.anchor_child - self.bodies.get(j.child).map_or(Vec3::ZERO, |b| b.com)).norm());
+            if let Link::Body(i) = j.parent {
+                if let Some(b) = self.bodies.get(i) {
+                    l = l.max((j.anchor_parent - b.com).norm());
+                }
+            }
+        }
+        if l > 0.0 && l.is_finite() {
+            l
+        } else {
+            1.0
+        }
+    }
+
+    /// Check everything the multibody system relies on: masses positive and finite; inertia
+    /// tensors SPD with the triangle inequality; finite centres, anchors and poses;
+    /// rotations orthogonal; unit finite axes; one tree joint per body in body order
+    /// (`joints[j].child == j`) with its parent a body before it (acyclic, parents before
+    /// children) or the world; loop joints between existing bodies and not free; ranges
+    /// ordered; stiffness, damping, armature non-negative; `qpos`/`qvel` lengths; finite
+    /// gravity. Errors name the body or joint.
+    ///
+    /// # Errors
+    /// [`Error::InvalidModel`] with the reason and the numbers.
+    pub fn validate(&self) -> Result<()> {
+        let nb = self.bodies.len();
+        if nb == 0 {
+            return Err(invalid(format!("model `{}` has no bodies", self.name)));
+        }
+        check_vec("gravity", self.gravity)?;
+        for (i, b) in self.bodies.iter().enumerate() {
+            if !(b.mass.is_finite() && b.mass > 0.0) {
+                return Err(invalid(format!(
+                    "body `{}` ({i}): mass {} must be finite and > 0",
+                    b.name, b.mass
+                )));
+            }
+            self.inertia(i)?;
+            check_vec(&format!("body `{}` ({i}) com", b.name), b.com)?;
+            check_vec(&format!("body `{}` ({i}) position", b.name), b.position)?;
+            check_rotation(&format!("body `{}` ({i}) rotation", b.name), &b.rotation)?;
+        }
+        if self.joints.len() < nb {
+            return Err(invalid(format!(
+                "{} joints for {nb} bodies: every body needs a tree joint (free for a floating body)",
+                self.joints.len()
+            )));
+        }
+        for (k, j) in self.joints.iter().enumerate() {
+            let name = format!("joint `{}` ({k})", j.name);
+            if j.child >= nb {
+                return Err(invalid(format!("{name}: child {} out of range ({nb} bodies)", j.child)));
+            }
+            if k < nb && j.child != k {
+                return Err(invalid(format!(
+                    "{name}: tree joints come in body order, so its child must be body {k}, not {} (body `{}` \
+                     would be the child of two tree joints or of none)",
+                    j.child, self.bodies[j.child].name
+                )));
+            }
+            if let Link::Body(p) = j.parent {
+                if p >= nb {
+                    return Err(invalid(format!("{name}: parent {p} out of range ({nb} bodies)")));
+                }
+                if k < nb && p >= k {
+                    return Err(invalid(format!(
+                        "{name}: parent body {p} does not come before its child {k} (the tree must list parents \
+                         first; a cycle is not a tree)"
+                    )));
+                }
+                if p == j.child {
+                    return Err(invalid(format!("{name}: joins body {p} to itself")));
+                }
+            }
+            if k >= nb && j.kind == JointKind::Free {
+                return Err(invalid(format!(
+                    "{name}: a free joint cannot close a loop (it has no rows)"
+                )));
+            }
+            if let Some(u) = j.kind.axis() {
+                if !u.is_finite() || (u.norm() - 1.0).abs() > UNIT_TOLERANCE {
+                    return Err(invalid(format!(
+                        "{name}: axis {u:?} is not a finite unit vector (|u| = {})",
+                        u.norm()
+                    )));
+                }
+            }
+            check_vec(&format!("{name} anchor_parent"), j.anchor_parent)?;
+            check_vec(&format!("{name} anchor_child"), j.anchor_child)?;
+            check_rotation(&format!("{name} reference_rotation"), &j.reference_rotation)?;
+            if let Some((lo, hi)) = j.range {
+                if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
+                    return Err(invalid(format!(
+                        "{name}: range ({lo}, {hi}) must be finite with lower <= upper"
+                    )));
+                }
+            }
+            for (what, v) in [
+                ("stiffness", j.stiffness),
+                ("damping", j.damping),
+                ("armature", j.armature),
+            ] {
+                if !(v.is_finite() && v >= 0.0) {
+                    return Err(invalid(format!("{name}: {what} = {v} must be finite and >= 0")));
+                }
+            }
+            if !j.spring_ref.is_finite() {
+                return Err(invalid(format!("{name}: spring_ref = {} is not finite", j.spring_ref)));
+            }
+        }
+        if let Some(q) = &self.qpos {
+            if q.len() != self.nq() {
+                return Err(invalid(format!(
+                    "qpos has {} entries, the tree joints need {}",
+                    q.len(),
+                    self.nq()
+                )));
+            }
+            if let Some(k) = q.iter().position(|x| !x.is_finite()) {
+                return Err(invalid(format!("qpos[{k}] = {} is not finite", q[k])));
+            }
+        }
+        if let Some(v) = &self.qvel {
+            if v.len() != self.nv() {
+                return Err(invalid(format!(
+                    "qvel has {} entries, the tree joints need {}",
+                    v.len(),
+                    self.nv()
+                )));
+            }
+            if let Some(k) = v.iter().position(|x| !x.is_finite()) {
+                return Err(invalid(format!("qvel[{k}] = {} is not finite", v[k])));
+            }
+        }
+        Ok(())
+    }
+
+    /// The joint coordinates of the reference configuration in MuJoCo's layout: hinge and
+    /// slide 0, ball the identity quaternion, free the child frame's origin in the parent
+    /// frame and the quaternion of `R_parentᵀ R_child` (MuJoCo's `qpos0`).
+    #[must_use]
+    pub fn reference_qpos(&self) -> Vec<f64> {
+        let mut q = Vec::with_capacity(self.nq());
+        for j in self.joints.iter().take(self.bodies.len()) {
+            match j.kind {
+                JointKind::Hinge { .. } | JointKind::Slide { .. } => q.push(0.0),
+                JointKind::Ball => q.extend([1.0, 0.0, 0.0, 0.0]),
+                JointKind::Weld => {}
+                JointKind::Free => {
+                    let child = &self.bodies[j.child];
+                    let (x, r) = match j.parent {
+                        Link::World => (Vec3::ZERO, Mat3::IDENTITY),
+                        Link::Body(p) => (self.bodies[p].position, self.bodies[p].rotation),
+                    };
+                    let pos = r.tr_mul_vec(child.position - x);
+                    let quat = Quaternion::from_matrix(&(r.transpose() * child.rotation));
+                    q.extend([pos.x, pos.y, pos.z, quat.w, quat.x, quat.y, quat.z]);
+                }
+            }
+        }
+        q
+    }
+
+    /// The bodies' state from the joint coordinates (forward kinematics over the tree,
+    /// parents first, MuJoCo's conventions):
+    ///
+    /// - attitudes: hinge `R_j = R_i Q exp(q u)`, ball `R_j = R_i Q R(quat)`, slide and weld
+    ///   `R_j = R_i Q`, free `R_j = R_i R(quat)` (`Q` the joint's reference rotation);
+    /// - frame origins: the anchor `A = x_i + R_i o_i` is shared, `x_j = A − R_j o_j`, plus
+    ///   `q R_j u` for a slide; a free joint puts `x_j = x_i + R_i pos`;
+    /// - velocities: `ω_j = ω_i + R_j u q̇` (hinge), `ω_i + R_j w` (ball, free; `w` in the
+    ///   child frame), `ω_i` (slide, weld); the anchor moves with the parent and the child's
+    ///   centre of mass with `v_A + ω_j × (c_j − A)`, plus `R_j u q̇` for a slide; a free
+    ///   joint's linear velocity is that of the child frame origin, in the parent frame.
+    ///
+    /// Then `c = x + R s`, `p = m v_c`, `Π = I Rᵀ ω`. Loop-closing joints are not used:
+    /// the coordinates must satisfy them; check with
+    /// [`super::MultibodySystem::constraint_violation`] and bring loop-violating velocities
+    /// onto the constraints with [`super::MultibodySystem::project_velocities`].
+    ///
+    /// # Errors
+    /// Whatever [`Model::validate`] reports, and a zero quaternion.
+    ///
+    /// Reference: E. Todorov et al., MuJoCo documentation, "Computation" (kinematics).
+    pub fn initial_state(&self) -> Result<MultibodyState> {
+        self.validate()?;
+        let nb = self.bodies.len();
+        let reference;
+        let qpos = match &self.qpos {
+            Some(q) => q.as_slice(),
+            None => {
+                reference = self.reference_qpos();
+                reference.as_slice()
+            }
+        };
+        let zeros;
+        let qvel = match &self.qvel {
+            Some(v) => v.as_slice(),
+            None => {
+                zeros = vec![0.0; self.nv()];
+                zeros.as_slice()
+            }
+        };
+        // Frame origin, attitude, velocity of the frame origin's point... we keep the com
+        // velocity and the spatial angular velocity per body.
+        let mut x = vec![Vec3::ZERO; nb];
+        let mut rot = vec![Mat3::IDENTITY; nb];
+        let mut vc = vec![Vec3::ZERO; nb];
+        let mut w = vec![Vec3::ZERO; nb];
+        let mut c = vec![Vec3::ZERO; nb];
+        let (mut iq, mut iv) = (0usize, 0usize);
+        let quat = |q: &[f64], name: &str| -> Result<Mat3> {
+            let qq = Quaternion::new(q[0], q[1], q[2], q[3]);
+            let n = qq.norm();
+            if n.is_nan() || n <= 0.0 {
+                return Err(invalid(format!("joint `{name}`: zero quaternion in qpos")));
+            }
+            Ok(qq.normalized().to_matrix())
+        };
+        for j in 0..nb {
+            let jt = &self.joints[j];
+            let (xi, ri, ci, vi, wi) = match jt.parent {
+                Link::World => (Vec3::ZERO, Mat3::IDENTITY, Vec3::ZERO, Vec3::ZERO, Vec3::ZERO),
+                Link::Body(p) => (x[p], rot[p], c[p], vc[p], w[p]),
+            };
+            let s = self.bodies[j].com;
+            // velocity of a point y moving with the parent
+            let v_at = |y: Vec3| vi + wi.cross(y - ci);
+            let anchor = xi + ri * jt.anchor_parent;
+            let q_ref = jt.reference_rotation;
+            let (rj, xj, wj, vcj);
+            match jt.kind {
+                JointKind::Hinge { axis } => {
+                    rj = ri * q_ref * so3::exp(axis * qpos[iq]);
+                    xj = anchor - rj * jt.anchor_child;
+                    wj = wi + rj * axis * qvel[iv];
+                    vcj = v_at(anchor) + wj.cross(xj + rj * s - anchor);
+                }
+                JointKind::Slide { axis } => {
+                    rj = ri * q_ref;
+                    xj = anchor - rj * jt.anchor_child + rj * axis * qpos[iq];
+                    wj = wi;
+                    vcj = v_at(xj + rj * s) + rj * axis * qvel[iv];
+                }
+                JointKind::Ball => {
+                    rj = ri * q_ref * quat(&qpos[iq..iq + 4], &jt.name)?;
+                    xj = anchor - rj * jt.anchor_child;
+                    wj = wi + rj * Vec3::new(qvel[iv], qvel[iv + 1], qvel[iv + 2]);
+                    vcj = v_at(anchor) + wj.cross(xj + rj * s - anchor);
+                }
+                JointKind::Weld => {
+                    rj = ri * q_ref;
+                    xj = anchor - rj * jt.anchor_child;
+                    wj = wi;
+                    vcj = v_at(xj + rj * s);
+                }
+                JointKind::Free => {
+                    rj = ri * quat(&qpos[iq + 3..iq + 7], &jt.name)?;
+                    xj = xi + ri * Vec3::new(qpos[iq], qpos[iq + 1], qpos[iq + 2]);
+                    wj = wi + rj * Vec3::new(qvel[iv + 3], qvel[iv + 4], qvel[iv + 5]);
+                    let v_origin = v_at(xj) + ri * Vec3::new(qvel[iv], qvel[iv + 1], qvel[iv + 2]);
+                    vcj = v_origin + wj.cross(rj * s);
+                }
+            }
+            iq += jt.kind.nq();
+            iv += jt.kind.nv();
+            x[j] = xj;
+            rot[j] = rj;
+            w[j] = wj;
+            vc[j] = vcj;
+            c[j] = xj + rj * s;
+        }
+        let mut state = MultibodyState {
+            t: 0.0,
+            c,
+            p: vec![Vec3::ZERO; nb],
+            rotation: rot,
+            pi: vec![Vec3::ZERO; nb],
+        };
+        for j in 0..nb {
+            let inertia = self.inertia(j)?;
+            state.p[j] = vc[j] * self.bodies[j].mass;
+            state.pi[j] = inertia.apply(state.rotation[j].tr_mul_vec(w[j]));
+        }
+        Ok(state)
+    }
+}

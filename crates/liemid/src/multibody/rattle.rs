@@ -1,0 +1,875 @@
+//! The multibody step: RATTLE with the rotation of LIEMID\[EA\] (multibody spec section 3).
+//!
+//! ```text
+//! 1. λ-kick  p½ = p + (h/2)(F(q) + G_c(q)ᵀλ),   P = Π + (h/2)(T(q) + G_θ(q)ᵀλ)
+//! 2. drift   c⁺ = c + h M⁻¹ p½;  (P, h/2) → Ψ₁, R_a = R exp(Ψ₁), Π_a = exp(−Ψ₁) P;
+//!            (Π_a, h/2) → Ψ₂, R⁺ = R_a exp(Ψ₂), Π' = exp(−Ψ₂) Π_a;   g(c⁺, R⁺) = 0 fixes λ
+//! 3. μ-kick  p⁺ = p½ + (h/2)(F(q⁺) + G_c(q⁺)ᵀμ),  Π⁺ = Π' + (h/2)(T(q⁺) + G_θ(q⁺)ᵀμ),
+//!            G(q⁺)(v⁺, Ω⁺) = 0 fixes μ
+//! ```
+//!
+//! λ comes from a quasi-Newton iteration on `g(q⁺(λ)) = 0` with the matrix
+//! `(h²/2) G(q⁺) M⁻¹ G(q)ᵀ` factored at the first iterate (refactored at the current one
+//! when the residual falls by less than 4x), started from the previous step's λ and run
+//! until the residual is at round-off; μ from one linear solve. The end forces are the next
+//! step's start forces. Symmetric and, for conservative forces, symplectic; keeps the total
+//! linear and angular momentum when the forces and joints do.
+//!
+//! **Dampers** (hinge and slide `damping`) are not conservative and make the step neither
+//! symplectic nor exactly reversible. The end damping force depends on the end velocity,
+//! so steps with dampers solve the μ-kick for it by two fixed-point passes (the same
+//! factorization), an error `O((h d/m)³)` per step that keeps second order.
+//!
+//! **Joint limits** are unilateral: a limit becomes an active equality row `q − bound = 0`
+//! in a step whose position solve would cross it, and the step is redone with it; an
+//! active row whose multiplier pulls (λ < 0 at a lower, > 0 at an upper bound) is released
+//! and the step redone. The velocity row of an active limit makes the contact plastic
+//! (zero rebound), so a step with a limit change loses the normal kinetic energy: the
+//! method is symplectic only away from those steps, and first order at the impact instant.
+//!
+//! **Armature** (rotor inertia added in joint space) has no exact counterpart in maximal
+//! coordinates: a model with non-zero armature is refused.
+//!
+//! Reference: E. Hairer, C. Lubich, G. Wanner, *Geometric Numerical Integration*, 2nd ed.,
+//! Springer 2006, VII.1; B. Leimkuhler, S. Reich, *Simulating Hamiltonian Dynamics*,
+//! Cambridge 2004, ch. 7-8; P. Krysl, Int. J. Numer. Meth. Engng 63 (2005) (LIEMID\[EA\]).
+
+use crate::error::{Error, Result};
+use crate::linalg::{Mat3, Vec3};
+use crate::rigid::inertia::Inertia;
+use crate::rigid::midpoint;
+use crate::rigid::rotation::newton_error;
+use crate::so3;
+
+use super::constraints::{JointGeometry, JointRows};
+use super::forces::ForceHook;
+use super::method::{JointParams, LimitState, MultibodyMethod, StepReport};
+use super::model::{JointKind, Model};
+use super::solver::TreeSolver;
+use super::MultibodyState;
+
+/// Iteration cap of the position (λ) solve.
+pub const MAX_ITERATIONS: u32 = 60;
+/// Most re-solves of one step for joint limits switching on or off.
+pub const MAX_LIMIT_PASSES: u32 = 8;
+
+/// A multibody system built from a validated [`Model`]: structure, mass properties,
+/// forces, the factorization and every scratch array, so that a step allocates nothing.
+///
+/// Reference: multibody spec sections 1-4.
+pub struct MultibodySystem {
+    pub(super) name: String,
+    pub(super) method: MultibodyMethod,
+    pub(super) mass: Vec<f64>,
+    pub(super) inertia: Vec<Inertia>,
+    pub(super) inertia_matrix: Vec<Mat3>,
+    pub(super) com: Vec<Vec3>,
+    pub(super) joints: Vec<JointGeometry>,
+    pub(super) pairs: Vec<(Option<usize>, usize)>,
+    pub(super) params: Vec<JointParams>,
+    pub(super) gravity: Vec3,
+    pub(super) length: f64,
+    pub(super) has_damping: bool,
+    pub(super) const_force: Vec<Vec3>,
+    pub(super) const_torque: Vec<Vec3>,
+    pub(super) hook: Option<Box<dyn ForceHook>>,
+    // Cached start-of-step quantities, valid for (cache_t, cache_c, cache_r).
+    pub(super) cache_valid: bool,
+    cache_t: f64,
+    cache_c: Vec<Vec3>,
+    cache_r: Vec<Mat3>,
+    force: Vec<Vec3>,
+    torque: Vec<Vec3>,
+    pub(super) rows0: Vec<JointRows>,
+    pub(super) rows1: Vec<JointRows>,
+    pub(super) limit: Vec<LimitState>,
+    lambda: Vec<[f64; 6]>,
+    delta: Vec<[f64; 6]>,
+    rhs: Vec<[f64; 6]>,
+    pb: Vec<Vec3>,
+    pib: Vec<Vec3>,
+    p_half: Vec<Vec3>,
+    big_p: Vec<Vec3>,
+    c_new: Vec<Vec3>,
+    r_new: Vec<Mat3>,
+    pi_new: Vec<Vec3>,
+    force1: Vec<Vec3>,
+    torque1: Vec<Vec3>,
+    pub(super) damp_f: Vec<Vec3>,
+    pub(super) damp_t: Vec<Vec3>,
+    pub(super) vel: Vec<Vec3>,
+    pub(super) omega: Vec<Vec3>,
+    solver: TreeSolver,
+    backup: MultibodyState,
+    // The drift's midpoint data per body (Ψ₁, Ψ₂, P, Π_a) and the effective inertia blocks
+    // `h (∂θ⁺/∂P)⁻¹` of the exact drift Jacobian.
+    psi1: Vec<Vec3>,
+    psi2: Vec<Vec3>,
+    pi_a: Vec<Vec3>,
+    effective: Vec<Mat3>,
+    profiling: bool,
+    solver_time: std::time::Duration,
+    step_time: std::time::Duration,
+}
+
+impl core::fmt::Debug for MultibodySystem {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("MultibodySystem")
+            .field("name", &self.name)
+            .field("method", &self.method)
+            .field("bodies", &self.mass.len())
+            .field("joints", &self.joints.len())
+            .finish_non_exhaustive()
+    }
+}
+
+impl MultibodySystem {
+    /// Build the system of a model: validate it, precompute the joint geometry, size every
+    /// scratch array and the tree factorization.
+    ///
+    /// # Errors
+    /// [`Model::validate`]'s errors; [`Error::InvalidModel`] for a joint with armature
+    /// (not representable exactly in maximal coordinates).
+    pub fn new(model: &Model, method: MultibodyMethod) -> Result<Self> {
+        model.validate()?;
+        let nb = model.bodies.len();
+        let nj = model.joints.len();
+        for (k, j) in model.joints.iter().enumerate() {
+            if j.armature != 0.0 {
+                return Err(Error::InvalidModel {
+                    reason: format!(
+                        "joint `{}` ({k}): armature = {} is not supported: a rotor inertia in joint space has no exact \
+                         counterpart in maximal coordinates (remove it or model the rotor as a body)",
+                        j.name, j.armature
+                    ),
+                });
+            }
+        }
+        let inertia = (0..nb).map(|i| model.inertia(i)).collect::<Result<Vec<_>>>()?;
+        let joints: Vec<JointGeometry> = (0..nj).map(|k| JointGeometry::new(model, k)).collect();
+        let pairs: Vec<_> = joints.iter().map(|g| (g.parent, g.child)).collect();
+        let params: Vec<_> = model
+            .joints
+            .iter()
+            .map(|j| {
+                let one_dof = matches!(j.kind, JointKind::Hinge { .. } | JointKind::Slide { .. });
+                JointParams {
+                    stiffness: if one_dof { j.stiffness } else { 0.0 },
+                    spring_ref: j.spring_ref,
+                    damping: if one_dof { j.damping } else { 0.0 },
+                    range: if one_dof { j.range } else { None },
+                }
+            })
+            .collect();
+        let tree_rows: Vec<bool> = joints[..nb].iter().map(|g| g.kind.rows() > 0).collect();
+        let parents: Vec<Option<usize>> = joints[..nb].iter().map(|g| g.parent).collect();
+        let loops: Vec<_> = (nb..nj).map(|k| (k, joints[k].parent, joints[k].child)).collect();
+        let z3 = vec![Vec3::ZERO; nb];
+        Ok(MultibodySystem {
+            name: model.name.clone(),
+            method,
+            mass: model.bodies.iter().map(|b| b.mass).collect(),
+            inertia_matrix: inertia.iter().map(|i| *i.matrix()).collect(),
+            inertia,
+            com: model.bodies.iter().map(|b| b.com).collect(),
+            has_damping: params.iter().any(|p| p.damping > 0.0),
+            params,
+            pairs,
+            joints,
+            gravity: model.gravity,
+            length: model.length_scale(),
+            const_force: z3.clone(),
+            const_torque: z3.clone(),
+            hook: None,
+            cache_valid: false,
+            cache_t: 0.0,
+            cache_c: z3.clone(),
+            cache_r: vec![Mat3::IDENTITY; nb],
+            force: z3.clone(),
+            torque: z3.clone(),
+            rows0: vec![JointRows::default(); nj],
+            rows1: vec![JointRows::default(); nj],
+            limit: vec![LimitState::Inactive; nj],
+            lambda: vec![[0.0; 6]; nj],
+            delta: vec![[0.0; 6]; nj],
+            rhs: vec![[0.0; 6]; nj],
+            pb: z3.clone(),
+            pib: z3.clone(),
+            p_half: z3.clone(),
+            big_p: z3.clone(),
+            c_new: z3.clone(),
+            r_new: vec![Mat3::IDENTITY; nb],
+            pi_new: z3.clone(),
+            force1: z3.clone(),
+            torque1: z3.clone(),
+            damp_f: z3.clone(),
+            damp_t: z3.clone(),
+            vel: z3.clone(),
+            omega: z3,
+            solver: TreeSolver::new(&parents, &tree_rows, &loops),
+            backup: MultibodyState::zeros(nb),
+            psi1: vec![Vec3::ZERO; nb],
+            psi2: vec![Vec3::ZERO; nb],
+            pi_a: vec![Vec3::ZERO; nb],
+            effective: vec![Mat3::IDENTITY; nb],
+            profiling: false,
+            solver_time: std::time::Duration::ZERO,
+            step_time: std::time::Duration::ZERO,
+        })
+    }
+
+    /// The method.
+    #[must_use]
+    pub fn method(&self) -> MultibodyMethod {
+        self.method
+    }
+
+    /// Choose the method (the caches stay valid: they depend on the state only).
+    pub fn set_method(&mut self, method: MultibodyMethod) {
+        self.method = method;
+    }
+
+    /// The model's length scale `L` (see [`Model::length_scale`]).
+    #[must_use]
+    pub fn length_scale(&self) -> f64 {
+        self.length
+    }
+
+    /// The floor `√(|g| L)` of the velocity scale of the relative velocity violation, so
+    /// that a body at rest (against a limit, at the bottom of a swing) does not divide a
+    /// round-off rate by a round-off speed.
+    #[must_use]
+    pub fn velocity_floor(&self) -> f64 {
+        (self.gravity.norm() * self.length).sqrt()
+    }
+
+    /// Number of bodies.
+    #[must_use]
+    pub fn body_count(&self) -> usize {
+        self.mass.len()
+    }
+
+    /// The numerical rank and the size of the loop Schur complement at the last
+    /// factorization (equal when the loop rows are independent; the four-bar of four
+    /// hinges gives `(2, 5)`).
+    #[must_use]
+    pub fn loop_rank(&self) -> (usize, usize) {
+        self.solver.loop_rank()
+    }
+
+    /// Project the velocities of `state` onto the velocity constraints `G (v, Ω) = 0` in
+    /// the kinetic-energy metric: `(G M⁻¹ Gᵀ) μ = −G (v, Ω)`, `p += G_cᵀ μ`,
+    /// `Π += G_θᵀ μ` (minimum-norm `μ` for redundant loop rows). For joint velocities that
+    /// do not respect loop-closing joints (a loader's `qvel` on a closed loop). Returns the
+    /// relative velocity violation before the projection.
+    ///
+    /// # Errors
+    /// [`Error::InvalidModel`] when the tree rows are dependent at this configuration.
+    ///
+    /// Reference: E. Hairer, C. Lubich, G. Wanner, *Geometric Numerical Integration*, VII.1
+    /// (the velocity projection of RATTLE).
+    pub fn project_velocities(&mut self, state: &mut MultibodyState) -> Result<f64> {
+        let (_, before) = self.constraint_violation(state);
+        Self::rows_at(
+            &self.joints,
+            &self.limit,
+            &self.params,
+            &state.c,
+            &state.rotation,
+            &mut self.rows1,
+        );
+        if self.rows1.iter().all(|r| r.n == 0) {
+            return Ok(before);
+        }
+        self.factor(false, false)?;
+        self.velocities(&state.p, &state.pi);
+        for (k, jr) in self.rows1.iter().enumerate() {
+            let g = &self.joints[k];
+            let (vi, wi) = g
+                .parent
+                .map_or((Vec3::ZERO, Vec3::ZERO), |p| (self.vel[p], self.omega[p]));
+            for r in 0..jr.n {
+                self.rhs[k][r] = -jr.grad[r].rate(vi, wi, self.vel[g.child], self.omega[g.child]);
+            }
+        }
+        self.timed_solve();
+        for (k, g) in self.joints.iter().enumerate() {
+            let rows = &self.rows1[k];
+            for r in 0..rows.n {
+                let m = self.delta[k][r];
+                let gr = &rows.grad[r];
+                if let Some(p) = g.parent {
+                    state.p[p] += gr.ci * m;
+                    state.pi[p] += gr.ti * m;
+                }
+                state.p[g.child] += gr.cj * m;
+                state.pi[g.child] += gr.tj * m;
+            }
+        }
+        self.cache_valid = false;
+        Ok(before)
+    }
+
+    /// Forget the cached forces, rows and multipliers (after editing a state by hand the
+    /// cache is detected as stale anyway).
+    pub fn reset(&mut self) {
+        self.cache_valid = false;
+        self.lambda.iter_mut().for_each(|l| *l = [0.0; 6]);
+    }
+
+    /// Switch timing on or off (and reset it): with it on, every step and every
+    /// factorization and solve of `G M⁻¹ Gᵀ` is timed with [`std::time::Instant`].
+    pub fn set_profiling(&mut self, on: bool) {
+        self.profiling = on;
+        self.solver_time = std::time::Duration::ZERO;
+        self.step_time = std::time::Duration::ZERO;
+    }
+
+    /// Time spent since [`MultibodySystem::set_profiling`] in the constraint solves
+    /// (factorizations and solves) and in whole steps.
+    #[must_use]
+    pub fn profile(&self) -> (std::time::Duration, std::time::Duration) {
+        (self.solver_time, self.step_time)
+    }
+
+    /// The current state of joint `k`'s limit.
+    #[must_use]
+    pub fn limit_state(&self, k: usize) -> Option<LimitState> {
+        self.limit.get(k).copied()
+    }
+
+    /// The rows (with active limit rows) of every joint at `(c, R)` into `out`.
+    pub(super) fn rows_at(
+        joints: &[JointGeometry],
+        limit: &[LimitState],
+        params: &[JointParams],
+        c: &[Vec3],
+        r: &[Mat3],
+        out: &mut [JointRows],
+    ) {
+        for (k, g) in joints.iter().enumerate() {
+            let (pi, pj) = pose(g, c, r);
+            g.rows(pi, pj, &mut out[k]);
+            if limit[k] != LimitState::Inactive {
+                if let (Some((q, grad)), Some((lo, hi))) = (g.coordinate(pi, pj), params[k].range) {
+                    let bound = if limit[k] == LimitState::Lower { lo } else { hi };
+                    let length = matches!(g.kind, JointKind::Slide { .. });
+                    out[k].push(q - bound, grad, length);
+                }
+            }
+        }
+    }
+
+    /// Make the start-of-step forces and rows current for `state`.
+    fn prepare(&mut self, state: &MultibodyState) {
+        let valid = self.cache_valid
+            && self.cache_t == state.t
+            && self.cache_c == state.c
+            && self.cache_r.iter().zip(&state.rotation).all(|(a, b)| a.bitwise_eq(b));
+        if valid {
+            return;
+        }
+        let (mut f, mut tq) = (core::mem::take(&mut self.force), core::mem::take(&mut self.torque));
+        self.forces(state.t, &state.c, &state.rotation, &mut f, &mut tq);
+        self.force = f;
+        self.torque = tq;
+        Self::rows_at(
+            &self.joints,
+            &self.limit,
+            &self.params,
+            &state.c,
+            &state.rotation,
+            &mut self.rows0,
+        );
+        self.remember(state);
+    }
+
+    /// Set the state's time to `t` (the driver's exact step times), keeping the cache.
+    pub(super) fn set_time(&mut self, state: &mut MultibodyState, t: f64) {
+        if self.cache_valid && self.cache_t == state.t {
+            self.cache_t = t;
+        }
+        state.t = t;
+    }
+
+    fn remember(&mut self, state: &MultibodyState) {
+        self.cache_t = state.t;
+        self.cache_c.copy_from_slice(&state.c);
+        self.cache_r.copy_from_slice(&state.rotation);
+        self.cache_valid = true;
+    }
+
+    /// One step of the method from `state` with step `h` (negative steps run backwards).
+    ///
+    /// # Errors
+    /// [`Error::InvalidStep`]; [`Error::NewtonDidNotConverge`] with the residual when the
+    /// position solve or a midpoint solve does not converge; [`Error::StepTooLarge`];
+    /// [`Error::InvalidModel`] when the tree rows become dependent; the state is unchanged
+    /// on error.
+    pub fn step(&mut self, state: &mut MultibodyState, h: f64) -> Result<StepReport> {
+        crate::rigid::rotation::check_step(h)?;
+        if state.c.len() != self.mass.len() {
+            return Err(Error::InvalidModel {
+                reason: format!("state has {} bodies, the system {}", state.c.len(), self.mass.len()),
+            });
+        }
+        let t0 = state.t;
+        let start = self.profiling.then(std::time::Instant::now);
+        let mut report = StepReport::default();
+        match self.method.scheme() {
+            None => self.stage(state, h, &mut report)?,
+            Some(s) => {
+                self.backup.copy_from(state);
+                for k in 0..s.stages() {
+                    if let Err(e) = self.stage(state, s.gamma(k) * h, &mut report) {
+                        state.copy_from(&self.backup);
+                        self.cache_valid = false;
+                        return Err(e);
+                    }
+                }
+                state.t = t0 + h;
+            }
+        }
+        if let Some(start) = start {
+            self.step_time += start.elapsed();
+        }
+        Ok(report)
+    }
+
+    /// One RATTLE/EA stage (the whole step of [`MultibodyMethod::Liemid`]).
+    fn stage(&mut self, state: &mut MultibodyState, h: f64, report: &mut StepReport) -> Result<()> {
+        self.prepare(state);
+        let nb = self.mass.len();
+        let hh = 0.5 * h;
+        let t = state.t;
+        if self.has_damping {
+            self.velocities(&state.p, &state.pi);
+            self.damping(&state.c, &state.rotation);
+        }
+        for i in 0..nb {
+            let (df, dt) = if self.has_damping {
+                (self.damp_f[i], self.damp_t[i])
+            } else {
+                (Vec3::ZERO, Vec3::ZERO)
+            };
+            self.pb[i] = state.p[i] + (self.force[i] + df) * hh;
+            self.pib[i] = state.pi[i] + (self.torque[i] + dt) * hh;
+        }
+        let mut passes = 0;
+        loop {
+            self.solve_positions(state, h, report)?;
+            if !self.update_limits_after_positions() {
+                break;
+            }
+            report.limit_changes += 1;
+            passes += 1;
+            if passes > MAX_LIMIT_PASSES {
+                break;
+            }
+            Self::rows_at(
+                &self.joints,
+                &self.limit,
+                &self.params,
+                &state.c,
+                &state.rotation,
+                &mut self.rows0,
+            );
+        }
+        // End forces (position-dependent: cached for the next step).
+        let t1 = t + h;
+        let (mut f1, mut t1q) = (core::mem::take(&mut self.force1), core::mem::take(&mut self.torque1));
+        let (cn, rn) = (core::mem::take(&mut self.c_new), core::mem::take(&mut self.r_new));
+        self.forces(t1, &cn, &rn, &mut f1, &mut t1q);
+        self.force1 = f1;
+        self.torque1 = t1q;
+        self.c_new = cn;
+        self.r_new = rn;
+        self.solve_velocities(h, report)?;
+        // Commit.
+        for i in 0..nb {
+            let ok = self.p_half[i].is_finite() && self.pi_new[i].is_finite() && self.r_new[i].is_finite();
+            if !ok {
+                return Err(Error::NonFiniteResult {
+                    method: self.method.name(),
+                    t,
+                    h,
+                });
+            }
+        }
+        state.t = t1;
+        state.c.copy_from_slice(&self.c_new);
+        state.rotation.copy_from_slice(&self.r_new);
+        state.p.copy_from_slice(&self.p_half);
+        state.pi.copy_from_slice(&self.pi_new);
+        core::mem::swap(&mut self.rows0, &mut self.rows1);
+        core::mem::swap(&mut self.force, &mut self.force1);
+        core::mem::swap(&mut self.torque, &mut self.torque1);
+        self.remember(state);
+        Ok(())
+    }
+
+    fn velocities(&mut self, p: &[Vec3], pi: &[Vec3]) {
+        for i in 0..self.mass.len() {
+            self.vel[i] = p[i] * (1.0 / self.mass[i]);
+            self.omega[i] = self.inertia[i].apply_inverse(pi[i]);
+        }
+    }
+
+    /// The drift with multipliers `self.lambda`: `p½`, `P`, then `c⁺`, `R⁺`, `Π'`.
+    fn drift(&mut self, state: &MultibodyState, h: f64) -> Result<()> {
+        let hh = 0.5 * h;
+        self.p_half.copy_from_slice(&self.pb);
+        self.big_p.copy_from_slice(&self.pib);
+        for (k, g) in self.joints.iter().enumerate() {
+            let rows = &self.rows0[k];
+            for r in 0..rows.n {
+                let l = self.lambda[k][r] * hh;
+                let gr = &rows.grad[r];
+                if let Some(p) = g.parent {
+                    self.p_half[p] += gr.ci * l;
+                    self.big_p[p] += gr.ti * l;
+                }
+                self.p_half[g.child] += gr.cj * l;
+                self.big_p[g.child] += gr.tj * l;
+            }
+        }
+        let name = self.method.name();
+        for i in 0..self.mass.len() {
+            self.c_new[i] = state.c[i] + self.p_half[i] * (h / self.mass[i]);
+            let inertia = &self.inertia[i];
+            let (inc1, _) = midpoint::solve_increment(inertia, self.big_p[i], hh)
+                .map_err(|e| newton_error(name, "midpoint equation (M)", state.t, h, e))?;
+            let pa = inc1.inverse_apply(self.big_p[i]);
+            let (inc2, _) = midpoint::solve_increment(inertia, pa, hh)
+                .map_err(|e| newton_error(name, "midpoint equation (M)", state.t, h, e))?;
+            self.psi1[i] = inc1.psi();
+            self.psi2[i] = inc2.psi();
+            self.pi_a[i] = pa;
+            self.r_new[i] = inc2.rotate(&inc1.rotate(&state.rotation[i]));
+            self.pi_new[i] = inc2.inverse_apply(pa);
+        }
+        Ok(())
+    }
+
+    /// Largest scaled `|g|` of `rows`.
+    fn residual(&self, rows: &[JointRows]) -> f64 {
+        let mut r: f64 = 0.0;
+        for jr in rows {
+            for k in 0..jr.n {
+                let v = jr.value[k].abs();
+                r = r.max(if jr.length[k] { v / self.length } else { v });
+            }
+        }
+        r
+    }
+
+    /// The exact Jacobian `D = ∂θ⁺/∂P` of the drift's rotation (body-frame increment of
+    /// `R⁺` per start impulse `δP`), from the last drift: with `J_k` the midpoint Jacobians,
+    /// `A₁ = J₁⁻¹ exp(−Ψ₁/2) h/2`, `B = exp(−Ψ₁)(1 + hat(P) Jr(−Ψ₁) A₁)`,
+    /// `A₂ = J₂⁻¹ exp(−Ψ₂/2) (h/2) B`, `D = exp(−Ψ₂) Jr(Ψ₁) A₁ + Jr(Ψ₂) A₂`; stored as
+    /// the effective inertia `h D⁻¹` (`= I` to leading order in `h`).
+    fn drift_jacobian(&mut self, h: f64) {
+        let hh = 0.5 * h;
+        for i in 0..self.mass.len() {
+            let (psi1, psi2) = (self.psi1[i], self.psi2[i]);
+            let inertia = &self.inertia[i];
+            let j1 = midpoint::jacobian(inertia, self.big_p[i], hh, psi1);
+            let j2 = midpoint::jacobian(inertia, self.pi_a[i], hh, psi2);
+            let (Some(j1i), Some(j2i)) = (j1.inverse(), j2.inverse()) else {
+                self.effective[i] = self.inertia_matrix[i];
+                continue;
+            };
+            let a1 = j1i * so3::exp(-psi1 * 0.5) * hh;
+            let e1 = so3::exp(-psi1);
+            let b = e1 + e1 * so3::hat(self.big_p[i]) * so3::right_jacobian(-psi1) * a1;
+            let a2 = j2i * so3::exp(-psi2 * 0.5) * b * hh;
+            let d = so3::exp(-psi2) * so3::right_jacobian(psi1) * a1 + so3::right_jacobian(psi2) * a2;
+            self.effective[i] = d.inverse().map_or(self.inertia_matrix[i], |m| m * h);
+        }
+    }
+
+    fn factor(&mut self, left_is_new: bool, exact: bool) -> Result<()> {
+        let (left, right) = if left_is_new {
+            (&self.rows1, &self.rows0)
+        } else {
+            (&self.rows1, &self.rows1)
+        };
+        let inertia = if exact { &self.effective } else { &self.inertia_matrix };
+        let start = self.profiling.then(std::time::Instant::now);
+        let result = self.solver.factor(&self.mass, inertia, &self.pairs, left, right);
+        if let Some(start) = start {
+            self.solver_time += start.elapsed();
+        }
+        result.map_err(|s| Error::InvalidModel {
+            reason: format!(
+                "dependent constraint rows at joint {:?} / body {:?}: relative pivot {:.3e} (a joint set with \
+                     redundant rows in the tree, or a singular configuration)",
+                s.joint, s.body, s.ratio
+            ),
+        })
+    }
+
+    fn timed_solve(&mut self) {
+        let start = self.profiling.then(std::time::Instant::now);
+        self.solver.solve(&self.pairs, &self.rhs, &mut self.delta);
+        if let Some(start) = start {
+            self.solver_time += start.elapsed();
+        }
+    }
+
+    /// The quasi-Newton iteration for λ.
+    fn solve_positions(&mut self, state: &MultibodyState, h: f64, report: &mut StepReport) -> Result<()> {
+        let any_rows = self.rows0.iter().any(|r| r.n > 0);
+        let mut prev = f64::INFINITY;
+        let mut factored = false;
+        let mut it = 0;
+        loop {
+            self.drift(state, h)?;
+            Self::rows_at(
+                &self.joints,
+                &self.limit,
+                &self.params,
+                &self.c_new,
+                &self.r_new,
+                &mut self.rows1,
+            );
+            if !any_rows {
+                return Ok(());
+            }
+            let r = self.residual(&self.rows1);
+            let extent = self.c_new.iter().fold(0.0f64, |m, c| m.max(c.max_abs()));
+            let floor = 16.0 * f64::EPSILON * (1.0 + extent / self.length);
+            if r <= floor || (r <= 1e-12 && r > 0.5 * prev) {
+                report.position_violation = report.position_violation.max(r);
+                return Ok(());
+            }
+            if it >= MAX_ITERATIONS || !r.is_finite() {
+                return Err(Error::NewtonDidNotConverge {
+                    method: self.method.name(),
+                    equation: "position constraints g(q+(lambda)) = 0",
+                    t: state.t,
+                    h,
+                    residual: r,
+                    iterations: it,
+                });
+            }
+            if !factored || r > 0.25 * prev {
+                // First the spec's matrix; when that converges slowly (fast spin about an axis
+                // of small inertia), the exact drift Jacobian at the current iterate.
+                if factored {
+                    self.drift_jacobian(h);
+                }
+                self.factor(true, factored)?;
+                factored = true;
+                report.factorizations += 1;
+            }
+            let s = -2.0 / (h * h);
+            for (k, jr) in self.rows1.iter().enumerate() {
+                for r in 0..jr.n {
+                    self.rhs[k][r] = jr.value[r] * s;
+                }
+            }
+            self.timed_solve();
+            for (k, jr) in self.rows1.iter().enumerate() {
+                for r in 0..jr.n {
+                    self.lambda[k][r] += self.delta[k][r];
+                }
+            }
+            prev = r;
+            it += 1;
+            report.iterations += 1;
+        }
+    }
+
+    /// Switch limits on where the end coordinate crossed a bound, off where the multiplier
+    /// pulls. Returns whether anything changed.
+    fn update_limits_after_positions(&mut self) -> bool {
+        let mut changed = false;
+        for k in 0..self.joints.len() {
+            let Some((lo, hi)) = self.params[k].range else { continue };
+            let base = self.joints[k].kind.rows();
+            match self.limit[k] {
+                LimitState::Inactive => {
+                    let g = &self.joints[k];
+                    let (pi, pj) = pose(g, &self.c_new, &self.r_new);
+                    if let Some((q, _)) = g.coordinate(pi, pj) {
+                        if q < lo || q > hi {
+                            self.limit[k] = if q < lo { LimitState::Lower } else { LimitState::Upper };
+                            self.lambda[k][base] = 0.0;
+                            changed = true;
+                        }
+                    }
+                }
+                LimitState::Lower | LimitState::Upper => {
+                    let l = self.lambda[k][base];
+                    let pulls = if self.limit[k] == LimitState::Lower {
+                        l < 0.0
+                    } else {
+                        l > 0.0
+                    };
+                    if pulls {
+                        self.limit[k] = LimitState::Inactive;
+                        self.lambda[k][base] = 0.0;
+                        changed = true;
+                    }
+                }
+            }
+        }
+        changed
+    }
+
+    /// The μ-kick: one linear solve so that `G(q⁺)(v⁺, Ω⁺) = 0` (two more with dampers).
+    fn solve_velocities(&mut self, h: f64, report: &mut StepReport) -> Result<()> {
+        let nb = self.mass.len();
+        let hh = 0.5 * h;
+        let any_rows = self.rows1.iter().any(|r| r.n > 0);
+        if any_rows {
+            self.factor(false, false)?;
+            report.factorizations += 1;
+        }
+        self.damp_f.iter_mut().for_each(|v| *v = Vec3::ZERO);
+        self.damp_t.iter_mut().for_each(|v| *v = Vec3::ZERO);
+        let passes = if self.has_damping { 3 } else { 1 };
+        let mut limit_pass = 0;
+        let mut pass = 0;
+        while pass < passes {
+            // w* = M⁻¹ (p' + (h/2)(F⁺ + D)).
+            for i in 0..nb {
+                self.vel[i] = (self.p_half[i] + (self.force1[i] + self.damp_f[i]) * hh) * (1.0 / self.mass[i]);
+                self.omega[i] = self.inertia[i].apply_inverse(self.pi_new[i] + (self.torque1[i] + self.damp_t[i]) * hh);
+            }
+            if any_rows {
+                let s = -2.0 / h;
+                for (k, jr) in self.rows1.iter().enumerate() {
+                    let g = &self.joints[k];
+                    let (vi, wi) = g
+                        .parent
+                        .map_or((Vec3::ZERO, Vec3::ZERO), |p| (self.vel[p], self.omega[p]));
+                    for r in 0..jr.n {
+                        self.rhs[k][r] = s * jr.grad[r].rate(vi, wi, self.vel[g.child], self.omega[g.child]);
+                    }
+                }
+                self.timed_solve();
+                // A plastic limit row whose μ pulls is released and the solve redone.
+                let mut released = false;
+                for k in 0..self.joints.len() {
+                    if self.limit[k] == LimitState::Inactive {
+                        continue;
+                    }
+                    let m = self.delta[k][self.joints[k].kind.rows()];
+                    if (self.limit[k] == LimitState::Lower && m < 0.0)
+                        || (self.limit[k] == LimitState::Upper && m > 0.0)
+                    {
+                        self.limit[k] = LimitState::Inactive;
+                        released = true;
+                    }
+                }
+                if released && limit_pass < MAX_LIMIT_PASSES {
+                    limit_pass += 1;
+                    report.limit_changes += 1;
+                    Self::rows_at(
+                        &self.joints,
+                        &self.limit,
+                        &self.params,
+                        &self.c_new,
+                        &self.r_new,
+                        &mut self.rows1,
+                    );
+                    self.factor(false, false)?;
+                    report.factorizations += 1;
+                    continue;
+                }
+            }
+            pass += 1;
+            if pass == passes {
+                break;
+            }
+            // Damping at the provisional end velocity (fixed point).
+            self.end_velocities(hh);
+            let (c, r) = (core::mem::take(&mut self.c_new), core::mem::take(&mut self.r_new));
+            self.damping(&c, &r);
+            self.c_new = c;
+            self.r_new = r;
+        }
+        // Apply the end kick into p_half / pi_new.
+        for i in 0..nb {
+            self.p_half[i] += (self.force1[i] + self.damp_f[i]) * hh;
+            self.pi_new[i] += (self.torque1[i] + self.damp_t[i]) * hh;
+        }
+        if any_rows {
+            for (k, g) in self.joints.iter().enumerate() {
+                let rows = &self.rows1[k];
+                for r in 0..rows.n {
+                    let m = self.delta[k][r] * hh;
+                    let gr = &rows.grad[r];
+                    if let Some(p) = g.parent {
+                        self.p_half[p] += gr.ci * m;
+                        self.pi_new[p] += gr.ti * m;
+                    }
+                    self.p_half[g.child] += gr.cj * m;
+                    self.pi_new[g.child] += gr.tj * m;
+                }
+            }
+        }
+        // Velocity violation of the result.
+        self.velocities_of_new();
+        let vscale = (0..nb).fold(self.velocity_floor(), |m, i| {
+            m.max(self.vel[i].norm() + self.length * self.omega[i].norm())
+        });
+        let mut worst: f64 = 0.0;
+        for (k, jr) in self.rows1.iter().enumerate() {
+            let g = &self.joints[k];
+            let (vi, wi) = g
+                .parent
+                .map_or((Vec3::ZERO, Vec3::ZERO), |p| (self.vel[p], self.omega[p]));
+            for r in 0..jr.n {
+                worst = worst.max(jr.grad[r].rate(vi, wi, self.vel[g.child], self.omega[g.child]).abs());
+            }
+        }
+        if vscale > 0.0 {
+            worst /= vscale;
+        }
+        report.velocity_violation = report.velocity_violation.max(worst);
+        Ok(())
+    }
+
+    /// Velocities after the provisional μ-kick (for the damping fixed point).
+    fn end_velocities(&mut self, hh: f64) {
+        for i in 0..self.mass.len() {
+            self.vel[i] = self.p_half[i] + (self.force1[i] + self.damp_f[i]) * hh;
+            self.omega[i] = self.pi_new[i] + (self.torque1[i] + self.damp_t[i]) * hh;
+        }
+        for (k, g) in self.joints.iter().enumerate() {
+            let rows = &self.rows1[k];
+            for r in 0..rows.n {
+                let m = self.delta[k][r] * hh;
+                let gr = &rows.grad[r];
+                if let Some(p) = g.parent {
+                    self.vel[p] += gr.ci * m;
+                    self.omega[p] += gr.ti * m;
+                }
+                self.vel[g.child] += gr.cj * m;
+                self.omega[g.child] += gr.tj * m;
+            }
+        }
+        for i in 0..self.mass.len() {
+            self.vel[i] = self.vel[i] * (1.0 / self.mass[i]);
+            self.omega[i] = self.inertia[i].apply_inverse(self.omega[i]);
+        }
+    }
+
+    fn velocities_of_new(&mut self) {
+        for i in 0..self.mass.len() {
+            self.vel[i] = self.p_half[i] * (1.0 / self.mass[i]);
+            self.omega[i] = self.inertia[i].apply_inverse(self.pi_new[i]);
+        }
+    }
+}
+
+/// The poses `(c_i, R_i)`, `(c_j, R_j)` of a joint's parent (world: 0, I) and child.
+#[inline]
+pub(super) fn pose<'a>(g: &JointGeometry, c: &'a [Vec3], r: &'a [Mat3]) -> ((Vec3, &'a Mat3), (Vec3, &'a Mat3)) {
+    const IDENTITY: &Mat3 = &Mat3::IDENTITY;
+    let pi = g.parent.map_or((Vec3::ZERO, IDENTITY), |p| (c[p], &r[p]));
+    (pi, (c[g.child], &r[g.child]))
+}

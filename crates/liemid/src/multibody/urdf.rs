@@ -1,0 +1,380 @@
+//! ROS URDF loader.
+//!
+//! Reads `<robot name>`, its `<link>`s (`<inertial>`: `<origin xyz rpy>`, `<mass value>`,
+//! `<inertia ixx ixy ixz iyy iyz izz>` in the inertial origin's frame, rotated here into
+//! the link frame) and `<joint>`s (`revolute`, `continuous`, `prismatic`, `fixed`,
+//! `floating`; `planar` is refused) with `<origin xyz rpy>` (`rpy` about fixed axes:
+//! `R = Rz(y) Ry(p) Rx(r)`), `<parent link>`, `<child link>`, `<axis xyz>` (default
+//! `1 0 0`, normalised; the joint frame is the child link's frame), `<limit lower upper>`
+//! and `<dynamics damping>`.
+//!
+//! Decisions:
+//! - The root link (the one that is no joint's child) is welded to the world, unless it is
+//!   named `world`: then it *is* the world and its joints attach their children to it (a
+//!   `floating` joint from `world` gives a free root).
+//! - Every `fixed` joint is lumped: the child link's mass joins the parent's (parallel-axis
+//!   theorem) and the child's children are re-posed on the parent, as MuJoCo's
+//!   `fusestatic` and Pinocchio do. [`Loaded::merged`] records each lumped link. A root
+//!   welded to the world without mass is merged into the world.
+//! - A link without `<inertial>` (or with `<mass value="0">`) is massless: fine when lumped,
+//!   refused (naming the link) when it would move.
+//! - A `revolute` or `prismatic` joint without `<limit lower/upper>` is taken as unlimited
+//!   (the specification requires the limit; this is noted in [`Loaded::ignored`]).
+//! - Visuals, collisions, materials, transmissions, Gazebo tags, joint friction, effort and
+//!   velocity limits, mimic, calibration and safety controllers are noted as ignored.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use roxmltree::Node;
+
+use super::model::Model;
+use super::xml::{
+    build, check_inertia, parse_document, read_bounded, rpy, Ctx, Ignored, MassProps, Merge, RawBody, RawKind,
+};
+use crate::error::Result;
+use crate::linalg::{Mat3, Vec3};
+
+pub use super::xml::Loaded;
+
+/// Loads a URDF file (at most 64 MiB).
+pub fn load(path: &Path) -> Result<Loaded> {
+    let text = read_bounded(path)?;
+    parse(&text, &path.display().to_string())
+}
+
+/// Parses URDF text; `name_for_errors` names the file in error messages.
+pub fn parse(text: &str, name_for_errors: &str) -> Result<Loaded> {
+    let doc = parse_document(text, name_for_errors)?;
+    let cx = Ctx {
+        file: name_for_errors,
+        doc: &doc,
+    };
+    let robot = doc.root_element();
+    if robot.tag_name().name() != "robot" {
+        return Err(cx.err(robot, "a URDF file's root element must be <robot>"));
+    }
+    let mut ignored = Ignored::default();
+    let mut links: Vec<LinkData> = Vec::new();
+    let mut link_index: HashMap<&str, usize> = HashMap::new();
+    let mut joints: Vec<JointData> = Vec::new();
+    let mut joint_names: HashMap<&str, Node> = HashMap::new();
+    for node in robot.children().filter(Node::is_element) {
+        match node.tag_name().name() {
+            "link" => {
+                let link = read_link(&cx, node, &mut ignored)?;
+                if link_index.insert(link.name, links.len()).is_some() {
+                    return Err(cx.err(node, format!("a second link named `{}`", link.name)));
+                }
+                links.push(link);
+            }
+            "joint" => {
+                let joint = read_joint(&cx, node, &mut ignored)?;
+                if joint_names.insert(joint.name, node).is_some() {
+                    return Err(cx.err(node, format!("a second joint named `{}`", joint.name)));
+                }
+                joints.push(joint);
+            }
+            other => ignored.note(other),
+        }
+    }
+    if links.is_empty() {
+        return Err(cx.err(robot, "the robot has no <link>"));
+    }
+    // The tree: each link is the child of at most one joint.
+    let mut parent_joint: Vec<Option<usize>> = vec![None; links.len()];
+    let mut child_joints: Vec<Vec<usize>> = vec![Vec::new(); links.len()];
+    for (j, joint) in joints.iter().enumerate() {
+        let find = |name: &str, role: &str| {
+            link_index
+                .get(name)
+                .copied()
+                .ok_or_else(|| cx.err(joint.node, format!("the {role} link `{name}` is not defined")))
+        };
+        let (p, c) = (find(joint.parent, "parent")?, find(joint.child, "child")?);
+        if let Some(first) = parent_joint[c] {
+            return Err(cx.err(
+                joint.node,
+                format!(
+                    "link `{}` has two parents: it is already the child of joint `{}` (line {})",
+                    joint.child,
+                    joints[first].name,
+                    cx.line(joints[first].node)
+                ),
+            ));
+        }
+        parent_joint[c] = Some(j);
+        child_joints[p].push(j);
+    }
+    let roots: Vec<usize> = (0..links.len()).filter(|&l| parent_joint[l].is_none()).collect();
+    let root = match roots.as_slice() {
+        [r] => *r,
+        [] => {
+            return Err(cx.err(
+                joints[0].node,
+                "the joints form a cycle: every link is some joint's child",
+            ));
+        }
+        [a, b, ..] => {
+            return Err(cx.err(
+                links[*b].node,
+                format!(
+                    "the links do not form one tree: `{}` and `{}` are both roots (no joint's child)",
+                    links[*a].name, links[*b].name
+                ),
+            ));
+        }
+    };
+    let world_root = links[root].name == "world";
+    if world_root && links[root].mass.mass > 0.0 {
+        ignored.note("inertial of the world link");
+    }
+    // Breadth-first from the root: parents before children.
+    let mut raw: Vec<RawBody> = Vec::new();
+    let mut raw_of_link: Vec<Option<usize>> = vec![None; links.len()];
+    let mut queue = std::collections::VecDeque::new();
+    if !world_root {
+        let l = &links[root];
+        raw_of_link[root] = Some(0);
+        raw.push(raw_body(
+            &cx,
+            l,
+            None,
+            Vec3::ZERO,
+            Mat3::IDENTITY,
+            RawKind::Weld,
+            Merge::IfMassless,
+        ));
+    }
+    let mut reached = vec![false; links.len()];
+    reached[root] = true;
+    queue.push_back(root);
+    while let Some(l) = queue.pop_front() {
+        for &j in &child_joints[l] {
+            let joint = &joints[j];
+            let c = link_index[joint.child];
+            reached[c] = true;
+            let parent = raw_of_link[l];
+            let merge = match (joint.kind, parent) {
+                (RawKind::Weld, Some(_)) => Merge::Always,
+                (RawKind::Weld, None) => Merge::IfMassless,
+                _ => Merge::Never,
+            };
+            let mut body = raw_body(&cx, &links[c], parent, joint.xyz, joint.rot, joint.kind, merge);
+            body.joint_name = Some(joint.name.to_string());
+            body.range = joint.range;
+            body.damping = joint.damping;
+            body.line = cx.line(joint.node);
+            body.element = format!("joint name=\"{}\"", joint.name);
+            raw_of_link[c] = Some(raw.len());
+            raw.push(body);
+            queue.push_back(c);
+        }
+    }
+    if let Some(c) = (0..links.len()).find(|&l| !reached[l]) {
+        let j = parent_joint[c].expect("an unreached link has a parent joint");
+        return Err(cx.err(
+            joints[j].node,
+            "the joints form a cycle (this joint's child link is not reached from the root)",
+        ));
+    }
+    let built = build(name_for_errors, raw)?;
+    Ok(Loaded {
+        model: Model {
+            name: robot.attribute("name").unwrap_or_default().to_string(),
+            bodies: built.bodies,
+            joints: built.joints,
+            gravity: Vec3::new(0.0, 0.0, -9.81),
+            timestep: None,
+            qpos: None,
+            qvel: None,
+        },
+        ignored: ignored.into_vec(),
+        merged: built.merged,
+    })
+}
+
+struct LinkData<'a, 'i> {
+    name: &'a str,
+    node: Node<'a, 'i>,
+    mass: MassProps,
+}
+
+struct JointData<'a, 'i> {
+    name: &'a str,
+    node: Node<'a, 'i>,
+    kind: RawKind,
+    parent: &'a str,
+    child: &'a str,
+    xyz: Vec3,
+    rot: Mat3,
+    range: Option<(f64, f64)>,
+    damping: f64,
+}
+
+fn raw_body(
+    cx: &Ctx,
+    link: &LinkData,
+    parent: Option<usize>,
+    pos: Vec3,
+    rot: Mat3,
+    kind: RawKind,
+    merge: Merge,
+) -> RawBody {
+    RawBody {
+        name: link.name.to_string(),
+        parent,
+        pos,
+        rot,
+        mass: link.mass,
+        kind,
+        joint_name: None,
+        anchor: Vec3::ZERO,
+        range: None,
+        stiffness: 0.0,
+        spring_ref: 0.0,
+        damping: 0.0,
+        armature: 0.0,
+        merge,
+        line: cx.line(link.node),
+        element: super::xml::describe(link.node),
+    }
+}
+
+fn required<'a>(cx: &Ctx, node: Node<'a, '_>, attr: &str) -> Result<&'a str> {
+    node.attribute(attr)
+        .ok_or_else(|| cx.err(node, format!("the attribute `{attr}` is required")))
+}
+
+fn child<'a, 'i>(node: Node<'a, 'i>, tag: &str) -> Option<Node<'a, 'i>> {
+    node.children().find(|c| c.has_tag_name(tag))
+}
+
+/// `<origin xyz rpy>` of `node`: position and rotation (identity when absent).
+fn origin(cx: &Ctx, node: Node) -> Result<(Vec3, Mat3)> {
+    let Some(o) = child(node, "origin") else {
+        return Ok((Vec3::ZERO, Mat3::IDENTITY));
+    };
+    let xyz = cx.array::<3>(o, "xyz")?.unwrap_or([0.0; 3]);
+    let r = cx.array::<3>(o, "rpy")?.unwrap_or([0.0; 3]);
+    Ok((Vec3::from_array(xyz), rpy(r)))
+}
+
+fn read_link<'a, 'i>(cx: &Ctx, node: Node<'a, 'i>, ignored: &mut Ignored) -> Result<LinkData<'a, 'i>> {
+    let name = required(cx, node, "name")?;
+    let mut mass = MassProps::ZERO;
+    for c in node.children().filter(Node::is_element) {
+        match c.tag_name().name() {
+            "inertial" => mass = read_inertial(cx, c)?,
+            other => ignored.note(other),
+        }
+    }
+    Ok(LinkData { name, node, mass })
+}
+
+fn read_inertial(cx: &Ctx, node: Node) -> Result<MassProps> {
+    let (pos, rot) = origin(cx, node)?;
+    let m_node = child(node, "mass").ok_or_else(|| cx.err(node, "<inertial> without <mass>"))?;
+    let m = cx.array_of::<1>(m_node, "value", required(cx, m_node, "value")?)?[0];
+    if m < 0.0 {
+        return Err(cx.err(m_node, format!("mass {m} is negative")));
+    }
+    if m == 0.0 {
+        return Ok(MassProps::ZERO);
+    }
+    let i_node = child(node, "inertia").ok_or_else(|| cx.err(node, "<inertial> without <inertia>"))?;
+    let mut v = [0.0; 6];
+    for (k, attr) in ["ixx", "iyy", "izz", "ixy", "ixz", "iyz"].into_iter().enumerate() {
+        v[k] = cx.array_of::<1>(i_node, attr, required(cx, i_node, attr)?)?[0];
+    }
+    let i = Mat3::from_rows([[v[0], v[3], v[4]], [v[3], v[1], v[5]], [v[4], v[5], v[2]]]);
+    check_inertia(&i).map_err(|msg| cx.err(i_node, msg))?;
+    Ok(MassProps {
+        mass: m,
+        com: pos,
+        inertia: rot * i * rot.transpose(),
+    })
+}
+
+fn read_joint<'a, 'i>(cx: &Ctx, node: Node<'a, 'i>, ignored: &mut Ignored) -> Result<JointData<'a, 'i>> {
+    let name = required(cx, node, "name")?;
+    let ty = required(cx, node, "type")?;
+    let link_of = |tag: &str| -> Result<&'a str> {
+        let c = child(node, tag).ok_or_else(|| cx.err(node, format!("the joint has no <{tag}>")))?;
+        required(cx, c, "link")
+    };
+    let (parent, child_link) = (link_of("parent")?, link_of("child")?);
+    let (xyz, rot) = origin(cx, node)?;
+    let axis = match child(node, "axis") {
+        Some(a) => cx.unit(a, "xyz", cx.array_of::<3>(a, "xyz", required(cx, a, "xyz")?)?)?,
+        None => Vec3::new(1.0, 0.0, 0.0),
+    };
+    let kind = match ty {
+        "revolute" | "continuous" => RawKind::Hinge(axis),
+        "prismatic" => RawKind::Slide(axis),
+        "fixed" => RawKind::Weld,
+        "floating" => RawKind::Free,
+        "planar" => {
+            return Err(cx.err(
+                node,
+                "planar joints are not supported (no such joint in the multibody model)",
+            ));
+        }
+        other => return Err(cx.err(node, format!("unknown joint type `{other}`"))),
+    };
+    let mut range = None;
+    let limit = child(node, "limit");
+    if let Some(l) = limit {
+        if l.has_attribute("effort") || l.has_attribute("velocity") {
+            ignored.note("joint effort and velocity limits");
+        }
+    }
+    if matches!(ty, "revolute" | "prismatic") {
+        let bound = |attr: &str| -> Result<Option<f64>> {
+            match limit {
+                Some(l) => Ok(cx.array::<1>(l, attr)?.map(|v| v[0])),
+                None => Ok(None),
+            }
+        };
+        let (lo, hi) = (bound("lower")?, bound("upper")?);
+        if lo.is_none() && hi.is_none() {
+            ignored.note("missing revolute/prismatic limit (taken as unlimited)");
+        } else {
+            let (lo, hi) = (lo.unwrap_or(0.0), hi.unwrap_or(0.0));
+            if lo > hi {
+                return Err(cx.err(
+                    limit.unwrap_or(node),
+                    format!("lower limit {lo} above upper limit {hi}"),
+                ));
+            }
+            range = Some((lo, hi));
+        }
+    }
+    let mut damping = 0.0;
+    if let Some(d) = child(node, "dynamics") {
+        damping = cx.array::<1>(d, "damping")?.map_or(0.0, |v| v[0]);
+        if damping < 0.0 {
+            return Err(cx.err(d, format!("negative damping {damping}")));
+        }
+        if cx.array::<1>(d, "friction")?.is_some_and(|f| f[0] != 0.0) {
+            ignored.note("joint friction");
+        }
+    }
+    for c in node.children().filter(Node::is_element) {
+        let tag = c.tag_name().name();
+        if !matches!(tag, "origin" | "parent" | "child" | "axis" | "limit" | "dynamics") {
+            ignored.note(&format!("joint {tag}"));
+        }
+    }
+    Ok(JointData {
+        name,
+        node,
+        kind,
+        parent,
+        child: child_link,
+        xyz,
+        rot,
+        range,
+        damping,
+    })
+}
