@@ -286,8 +286,9 @@ fn forward_negate_back_returns_to_the_start() {
     assert!(!check("even G", d, 11.0, 725.0), "the control should not be reversible");
 }
 
-/// Many orbits with the adaptive EA: the energy and the total angular momentum errors stay
-/// bounded (the largest over the last tenth at most 1.2 times the largest over the first).
+/// Many orbits with the adaptive EA: the energy error stays bounded (the largest over the
+/// last tenth at most 1.2 times the largest over the first) and the total angular momentum
+/// error at round-off.
 #[test]
 fn invariants_stay_bounded_over_many_orbits() {
     let p = eccentric_satellite();
@@ -308,10 +309,11 @@ fn invariants_stay_bounded_over_many_orbits() {
     }
     println!("energy, momentum errors per tenth: {tenths:?}");
     assert!(tenths[9].0 <= 1.2 * tenths[0].0, "energy drifts: {tenths:?}");
-    assert!(
-        tenths[9].1 <= 1.2 * tenths[0].1.max(1e-13),
-        "momentum drifts: {tenths:?}"
-    );
+    // The momentum error is round-off: with the orbit summed with compensation it is the
+    // random walk of the kicks' rounding, about u sqrt(n) |Δv|/|v| (here under 1e-15; without
+    // the compensation the sums' own rounding, u sqrt(n) ~ 2e-14 over these ~3.6e4 steps).
+    let momentum = tenths.iter().map(|t| t.1).fold(0.0, f64::max);
+    assert!(momentum <= 1e-14, "momentum error above round-off: {tenths:?}");
 }
 
 #[test]
