@@ -21,6 +21,7 @@ use serde_json::json;
 
 use crate::rigid::command::{parse_method, WorkPrecisionArgs};
 use crate::shared::command::{check_positive, check_study_outputs, write_json, CmdResult, Failure};
+use crate::shared::cpu_time::thread_seconds;
 use crate::shared::plot;
 
 /// The problem's name.
@@ -328,7 +329,7 @@ pub struct SatPoint {
     pub steps: u64,
     /// `‖R − R_ref‖_F` after one orbit.
     pub attitude_error: f64,
-    /// Median CPU (wall) time of the repetitions (s).
+    /// Median CPU time of the thread over the repetitions (s).
     pub seconds: f64,
 }
 
@@ -339,6 +340,26 @@ pub struct SatCurve {
     pub name: String,
     /// The runs.
     pub points: Vec<SatPoint>,
+    /// Force-and-torque evaluations per step (the stages; DOP853's `steps` are evaluations).
+    pub evaluations_per_step: u64,
+    /// Median over the runs of the CPU time per evaluation (ns).
+    pub ns_per_evaluation: f64,
+}
+
+impl SatCurve {
+    fn new(name: String, points: Vec<SatPoint>, evaluations_per_step: u64) -> Self {
+        let mut per: Vec<f64> = points
+            .iter()
+            .map(|q| q.seconds * 1e9 / (q.steps * evaluations_per_step).max(1) as f64)
+            .collect();
+        per.sort_by(f64::total_cmp);
+        SatCurve {
+            name,
+            ns_per_evaluation: per.get(per.len() / 2).copied().unwrap_or(f64::NAN),
+            points,
+            evaluations_per_step,
+        }
+    }
 }
 
 /// The satellite study as written by `--json`.
@@ -359,13 +380,14 @@ pub struct SatStudy {
     pub step_ratios: Vec<(String, Option<f64>)>,
 }
 
+/// The median CPU time of the thread over `reps` runs of `f` (after one untimed run).
 fn median_time(reps: usize, mut f: impl FnMut() -> Result<(), String>) -> Result<f64, String> {
     f()?;
     let mut times = Vec::with_capacity(reps);
     for _ in 0..reps {
-        let start = Instant::now();
+        let start = thread_seconds();
         f()?;
-        times.push(start.elapsed().as_secs_f64());
+        times.push(thread_seconds() - start);
     }
     times.sort_by(f64::total_cmp);
     Ok(times[times.len() / 2])
@@ -426,10 +448,7 @@ pub fn study(repetitions: usize) -> Result<SatStudy, String> {
                 seconds,
             });
         }
-        curves.push(SatCurve {
-            name: format!("{} fixed", m.key()),
-            points,
-        });
+        curves.push(SatCurve::new(format!("{} fixed", m.key()), points, 1));
     }
     let families: [(M, &[f64]); 8] = [
         (M::LieMidpointAlternating, &[0.04, 0.02, 0.01, 0.005, 0.0025, 0.00125]),
@@ -469,10 +488,10 @@ pub fn study(repetitions: usize) -> Result<SatStudy, String> {
                 seconds,
             });
         }
-        curves.push(SatCurve {
-            name: format!("{} adaptive", m.key()),
-            points,
-        });
+        let stages = SatelliteIntegrator::new(m, &p.satellite)
+            .map_err(|e| e.to_string())?
+            .stages();
+        curves.push(SatCurve::new(format!("{} adaptive", m.key()), points, stages));
     }
     let mut points = Vec::new();
     for k in 3..=12 {
@@ -490,10 +509,7 @@ pub fn study(repetitions: usize) -> Result<SatStudy, String> {
             seconds,
         });
     }
-    curves.push(SatCurve {
-        name: "dop853".into(),
-        points,
-    });
+    curves.push(SatCurve::new("dop853".into(), points, 1));
     let dop = curves.last().map(|c| c.points.clone()).unwrap_or_default();
     let targets = [1e-3, 1e-6, 1e-9]
         .iter()
@@ -560,13 +576,28 @@ pub fn table(s: &SatStudy) -> String {
             (Some(a), Some(d)) => format!(" (DOP853 / adaptive = {:.2})", d / a),
             _ => String::new(),
         };
+        let evaluations = |n: Option<&str>| {
+            s.curves
+                .iter()
+                .find(|c| Some(c.name.as_str()) == n)
+                .and_then(|c| at_error(&c.points, *target, |q| (q.steps * c.evaluations_per_step) as f64))
+                .map_or("-".to_string(), |e| format!("{e:.0}"))
+        };
         out.push_str(&format!(
-            "attitude error {target:.0e}: fastest adaptive {} {}; DOP853 {}{ratio}\n",
+            "attitude error {target:.0e}: fastest adaptive {} {} ({} evaluations); DOP853 {} ({} evaluations){ratio}\n",
             name.as_deref().unwrap_or("-"),
             f(secs),
-            f(dop)
+            evaluations(name.as_deref()),
+            f(dop),
+            evaluations(Some("dop853")),
         ));
     }
+    out.push_str("CPU time per force-and-torque evaluation (median over the runs):");
+    for c in &s.curves {
+        out.push_str(&format!(" {} {:.0} ns;", c.name, c.ns_per_evaluation));
+    }
+    out.pop();
+    out.push('\n');
     out
 }
 
@@ -586,7 +617,7 @@ pub fn drift(orbits: u32, method: RotationMethod, eps: f64, plot_path: &Path, js
         }
         out
     };
-    let started = Instant::now();
+    let started = thread_seconds();
     let stepper =
         SatelliteAdaptive::new(sat, method, SatelliteDensity::Orbit).map_err(|e| Failure::Input(e.to_string()))?;
     let mut run = AdaptiveRun::new(stepper, p.initial, t_end, eps).map_err(|e| Failure::Input(e.to_string()))?;
@@ -598,15 +629,15 @@ pub fn drift(orbits: u32, method: RotationMethod, eps: f64, plot_path: &Path, js
         let (e, l) = tracker.errors(sat, s);
         ours[k] = (ours[k].0.max(e), ours[k].1.max(l));
     }
-    let our_seconds = started.elapsed().as_secs_f64();
+    let our_seconds = thread_seconds() - started;
     let our_steps = run.stats().steps;
     // DOP853: the tolerance whose run takes the closest CPU time (tried from loose to tight).
     let mut best: Option<DopRun> = None;
     for k in 5..=12 {
         let rtol = 10f64.powi(-k);
-        let start = Instant::now();
+        let start = thread_seconds();
         let (out, evals) = dop853(&p, t_end, rtol, true).map_err(Failure::Run)?;
-        let secs = start.elapsed().as_secs_f64();
+        let secs = thread_seconds() - start;
         let closer = best
             .as_ref()
             .is_none_or(|b| (secs / our_seconds).ln().abs() < (b.1 / our_seconds).ln().abs());
