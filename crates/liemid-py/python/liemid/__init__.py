@@ -28,6 +28,7 @@ from __future__ import annotations
 
 from . import beam, many, problems, spins
 from ._core import (
+    AdaptiveSteps,
     CallableTorque,
     ConstantTorque,
     EnsembleState,
@@ -46,6 +47,7 @@ from ._errors import ConvergenceError
 __version__ = "0.1.0"
 
 __all__ = [
+    "AdaptiveSteps",
     "CallableTorque",
     "ConstantTorque",
     "ConvergenceError",
