@@ -214,6 +214,7 @@ def make_pages(liemid: Path, work: Path) -> List[Tuple[str, Path]]:
         "many": ["many", "--scenario", str(ex / "dipolar_fluid.toml"), "--bodies", "125", "--t-end", "3", "--out", str(work / "totals.csv")],
         "spins": ["spins", str(ex / "spins_square.toml")],
         "beam": ["beam", "--t-end", "10"],
+        "multibody": ["multibody", "--problem", "chain-10", "--t-end", "2", "--every", "20"],
     }
     pages = []
     for name, args in runs.items():
@@ -229,7 +230,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--liemid", type=Path, required=True, help="the liemid binary")
     parser.add_argument("--shots", type=Path, help="keep the screenshots in this folder")
-    parser.add_argument("pages", nargs="*", type=Path, help="check these pages instead of making the four")
+    parser.add_argument("pages", nargs="*", type=Path, help="check these pages instead of making one per domain")
     args = parser.parse_args()
     browser = chromium()
     if browser is None:

@@ -118,7 +118,11 @@ fn main() -> ExitCode {
         }
         Command::Problems => {
             for name in rigid::scenario::PROBLEMS {
-                println!("{name:<11} {}", rigid::scenario::describe(name));
+                println!("{name:<15} {}", rigid::scenario::describe(name));
+            }
+            println!("\nliemid multibody --problem NAME:");
+            for name in multibody::scenario::PROBLEMS {
+                println!("{name:<15} {}", multibody::scenario::describe(name));
             }
             println!("{:<11} {}", rigid::satellite::PROBLEM, rigid::satellite::DESCRIPTION);
             Ok(())

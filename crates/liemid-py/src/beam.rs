@@ -15,7 +15,7 @@ use pyo3::types::PyDict;
 /// Run a beam scenario; returns a dict of the run (arrays flat, `tracked` per node (n·3)).
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (problem, text, elements_per_member, method, step, t_end, sample, force_step))]
+#[pyo3(signature = (problem, text, elements_per_member, method, step, t_end, sample, force_step, view=false))]
 fn beam_run<'py>(
     py: Python<'py>,
     problem: Option<&str>,
@@ -26,6 +26,7 @@ fn beam_run<'py>(
     t_end: Option<f64>,
     sample: Option<f64>,
     force_step: bool,
+    view: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let mut sc = match (problem, text) {
         (Some(p), None) => scenario::builtin(p, elements_per_member),
@@ -41,8 +42,19 @@ fn beam_run<'py>(
     }
     let t_end = t_end.unwrap_or(sc.problem.t_end);
     let sample = sample.or(sc.sample).unwrap_or(t_end / 600.0);
-    let run = py
-        .detach(|| study::run(&sc, t_end, sc.step, sample, force_step, &mut |_| None))
+    let title = sc.name.clone();
+    let (run, page) = py
+        .detach(|| {
+            study::run_viewed(
+                &sc,
+                t_end,
+                sc.step,
+                sample,
+                force_step,
+                &mut |_| None,
+                view.then_some(title.as_str()),
+            )
+        })
         .map_err(|e| match e {
             RunFailure::Input(m) => PyValueError::new_err(m),
             RunFailure::Numerical(m) => {
@@ -58,6 +70,7 @@ fn beam_run<'py>(
         })?;
     let d = PyDict::new(py);
     d.set_item("method", run.method.key())?;
+    d.set_item("page", page.map(|p| p.html(run.steps)))?;
     d.set_item("t", run.t.clone().into_pyarray(py))?;
     let tracked: HashMap<String, Bound<'py, PyArray1<f64>>> = run
         .tracked

@@ -10,6 +10,7 @@
 mod beam;
 mod convert;
 mod many;
+mod multibody;
 mod rigid;
 mod spins;
 mod view;
@@ -23,6 +24,7 @@ fn _liemid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     many::register(m)?;
     spins::register(m)?;
     beam::register(m)?;
+    multibody::register(m)?;
     view::register(m)?;
     Ok(())
 }

@@ -6,6 +6,7 @@ import pathlib
 import re
 
 import numpy as np
+import pytest
 
 import liemid
 import liemid.many
@@ -41,3 +42,19 @@ def test_many_and_spins_views(tmp_path: pathlib.Path) -> None:
     run.view(spin_system, str(path))
     _self_contained(path.read_text())
     assert np.isfinite(run.energy).all()
+
+
+def test_beam_and_multibody_pages(tmp_path: pathlib.Path) -> None:
+    from liemid import beam, multibody
+
+    run = beam.run("right-angle-cantilever", elements_per_member=2, t_end=1.0, sample=0.1, view=True)
+    page = run.view()
+    assert page.startswith("<!DOCTYPE html>") and '"beam"' in page and "frames of" in page
+    assert run.view(str(tmp_path / "b.html")) == str(tmp_path / "b.html")
+    assert "<iframe" in (run._repr_html_() or "")
+    with pytest.raises(ValueError, match="view=True"):
+        beam.run("right-angle-cantilever", elements_per_member=2, t_end=0.5).view()
+    mb = multibody.problem("double-pendulum").run(step=1e-3, t_end=1.0, every=10)
+    html = mb.view()
+    assert '"articulated"' in html and "101 frames of 1000 steps" in html
+    assert "<iframe" in mb._repr_html_()

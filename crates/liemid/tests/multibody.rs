@@ -780,3 +780,45 @@ fn one_force_evaluation_per_step() {
     // One evaluation at the start of the run, then one at the end of each step.
     assert_eq!(calls.load(Ordering::Relaxed), 101);
 }
+
+// ---------------------------------------------------------------------------------------
+// Ensembles
+
+#[test]
+fn ensemble_is_bitwise_the_same_for_any_thread_count() {
+    let model = problems::chain(10);
+    // Each copy's last link gets its own push: the copies differ from the first step on.
+    let start = |k: usize, s: &mut MultibodyState| {
+        let last = s.len() - 1;
+        s.p[last] += Vec3::new(1e-3 * k as f64, -5e-4 * k as f64, 0.0);
+    };
+    let mut runs = Vec::new();
+    for threads in [1, 2, 3] {
+        let mut e = liemid::multibody::MultibodyEnsemble::new(&model, MultibodyMethod::Liemid, 7, start).unwrap();
+        assert_eq!((e.len(), e.bodies()), (7, 70));
+        e.advance(1e-3, 100, threads).unwrap();
+        runs.push(e.states().to_vec());
+    }
+    let bits = |s: &MultibodyState| -> Vec<u64> {
+        s.c.iter()
+            .chain(&s.p)
+            .chain(&s.pi)
+            .flat_map(|v| [v.x, v.y, v.z])
+            .chain(s.rotation.iter().flat_map(|r| r.m.into_iter().flatten()))
+            .map(f64::to_bits)
+            .collect()
+    };
+    for other in &runs[1..] {
+        for (a, b) in runs[0].iter().zip(other) {
+            assert_eq!(bits(a), bits(b));
+        }
+    }
+    // The copies did differ, and each kept its joints.
+    assert_ne!(bits(&runs[0][0]), bits(&runs[0][6]));
+    let e = liemid::multibody::MultibodyEnsemble::new(&model, MultibodyMethod::Liemid, 2, start).unwrap();
+    for (sys, s) in e.systems().iter().zip(&runs[0]) {
+        let (pos, vel) = sys.constraint_violation(s);
+        assert!(pos < 1e-12 && vel < 1e-12, "{pos:e} {vel:e}");
+    }
+    assert!(liemid::multibody::MultibodyEnsemble::new(&model, MultibodyMethod::Liemid, 0, start).is_err());
+}

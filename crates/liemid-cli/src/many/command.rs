@@ -241,6 +241,7 @@ fn run_model<I: Interaction>(
             if let Some(p) = page.as_mut() {
                 p.energy_error(b.t, (tot.energy - first.energy) / first.energy.abs());
                 let frame: Vec<f32> = (0..b.len())
+                    .step_by(view::body_stride(b.len()))
                     .flat_map(|i| {
                         let (x, q) = (b.position[i], view::quaternion(&b.rotation[i].m));
                         [x.x as f32, x.y as f32, x.z as f32, q[0], q[1], q[2], q[3]]
@@ -485,13 +486,19 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
                 .map(|_| liemid::many::observables::PairHistogram::new(r_max, 100)),
             box_length,
             view: cli.view.as_ref().map(|_| {
+                let stride = view::body_stride(n);
                 let scene = Scene::Bodies {
-                    count: n,
+                    count: n.div_ceil(stride),
                     box_length: box_length.map(|l| l as f32),
                     axis: axis.to_array().map(|v| v as f32),
                     length: length as f32,
                 };
-                ViewPage::new(scene, &format!("{} ({n} bodies)", args.model.key()))
+                let drawn = if stride > 1 {
+                    format!("; every {stride}th body drawn")
+                } else {
+                    String::new()
+                };
+                ViewPage::new(scene, &format!("{} ({n} bodies{drawn})", args.model.key()))
             }),
         }
     };

@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use clap::Args;
 use liemid::error::Num;
-use liemid::multibody::{JointSpaceModel, MultibodyState, MultibodySystem};
+use liemid::multibody::{MultibodyState, MultibodySystem};
 use serde_json::json;
 
 use super::scenario::{self, Method, MultibodyScenario};
@@ -15,6 +15,7 @@ use crate::shared::command::{check_positive, emit_json, CmdResult, Failure};
 use crate::shared::interrupt::{progress, Interrupt};
 use crate::shared::output::{Format, OutputPlan, TrajectoryWriter};
 use crate::shared::plot;
+use crate::shared::view::{self, ViewPage};
 
 /// Arguments of `liemid multibody`.
 #[derive(Args, Debug)]
@@ -27,7 +28,9 @@ pub struct MultibodyArgs {
     #[arg(long, conflicts_with = "model")]
     pub problem: Option<String>,
     /// liemid (RATTLE with EA's rotation, order 2), liemid4, liemid6, liemid8 (its symmetric
-    /// compositions) or rk4 (classical RK4 in joint coordinates) [default: liemid].
+    /// compositions), rk4 (classical RK4 in joint coordinates) or dop853 (Dormand-Prince
+    /// 8(5,3) with step control in joint coordinates, `--rtol`: the reference)
+    /// [default: liemid].
     #[arg(long)]
     pub method: Option<String>,
     /// Step (s) [default: the file's `timestep`, else 1e-3].
@@ -51,6 +54,13 @@ pub struct MultibodyArgs {
     /// NAME alone writes both).
     #[arg(long)]
     pub plot: Option<PathBuf>,
+    /// Write a self-contained 3-D animation page (HTML): a box per body, a line per joint,
+    /// and the energy error; frames every `--every` steps, subsampled to a byte budget.
+    #[arg(long)]
+    pub view: Option<PathBuf>,
+    /// dop853's relative tolerance (absolute: rtol / 1000) [default: 1e-12].
+    #[arg(long)]
+    pub rtol: Option<f64>,
 }
 
 /// Bodies whose poses the trajectory file holds at most (its rows stay below 7,000 numbers).
@@ -58,7 +68,7 @@ const MAX_TRAJECTORY_BODIES: usize = 1000;
 
 /// What the run records for its plot.
 #[derive(Default)]
-struct Record {
+pub(super) struct Record {
     t: Vec<f64>,
     energy_error: Vec<f64>,
     joints: Vec<Vec<f64>>,
@@ -97,6 +107,18 @@ pub fn multibody(args: &MultibodyArgs) -> CmdResult {
             plan.add("--plot", &p).map_err(input)?;
         }
     }
+    if let Some(p) = &args.view {
+        plan.add("--view", p).map_err(input)?;
+    }
+    let rtol = args.rtol.unwrap_or(1e-12);
+    if !(rtol.is_finite() && rtol > 0.0 && rtol < 1.0) {
+        return Err(input(format!("--rtol must be in (0, 1), found {rtol}")));
+    }
+    if args.rtol.is_some() && method != Method::Dop853 {
+        return Err(input(
+            "--rtol sets dop853's tolerance; this run's method has a fixed step (--step)".into(),
+        ));
+    }
     if matches!(method, Method::Liemid(_)) && sc.model.joints.iter().any(|j| j.armature != 0.0) {
         // A rotor inertia in joint space has no exact counterpart in maximal coordinates.
         for j in &mut sc.model.joints {
@@ -113,57 +135,38 @@ pub fn multibody(args: &MultibodyArgs) -> CmdResult {
         );
     }
     let n = liemid::rigid::driver::step_count(0.0, t_end, step).map_err(|e| input(e.to_string()))?;
-    let report = match method {
-        Method::Liemid(m) => run_maximal(&sc, m, step, t_end, every, out.as_deref(), n)?,
-        Method::Rk4 => run_joint_space(&sc, step, t_end, every, out.as_deref(), n)?,
+    let sink = Sink::new(&sc, out.as_deref(), args.view.is_some())?;
+    let (summary, sink) = match method {
+        Method::Liemid(m) => run_maximal(&sc, m, (step, t_end, every, n), sink)?,
+        Method::Rk4 => super::joint_run::rk4(&sc, (step, t_end, every, n), sink)?,
+        Method::Dop853 => super::joint_run::dop853(&sc, rtol, t_end, every, sink)?,
     };
+    let quiet = args.json.as_deref() == Some("-") || out.as_deref() == Some(Path::new("-"));
     if let Some(base) = &args.plot {
-        let names: Vec<String> = joint_names(&sc, &report.1);
-        let title = format!("{}: {} at h = {}", sc.name, method.key(), Num(step));
-        let coordinates: Vec<(String, Vec<(f64, f64)>)> = names
-            .iter()
-            .zip(&report.1.joints)
-            .map(|(name, q)| {
-                (
-                    name.clone(),
-                    report.1.t.iter().copied().zip(q.iter().copied()).collect(),
-                )
-            })
-            .collect();
-        let energy = vec![(
-            "(E - E0) / |E0|".to_string(),
-            report
-                .1
-                .t
-                .iter()
-                .copied()
-                .zip(report.1.energy_error.iter().copied())
-                .collect(),
-        )];
-        let panels = [
-            plot::Histories {
-                title: &title,
-                x_desc: "t (s)",
-                y_desc: "joint coordinate (rad or m)",
-                lines: &coordinates,
-                points: &[],
-            },
-            plot::Histories {
-                title: "relative energy error",
-                x_desc: "t (s)",
-                y_desc: "(E - E0) / |E0|",
-                lines: &energy,
-                points: &[],
-            },
-        ];
-        for p in plot::plot_paths(base) {
-            plot::stacked_histories(&p, &panels).map_err(Failure::Run)?;
-            if args.json.as_deref() != Some("-") && out.as_deref() != Some(Path::new("-")) {
+        let step_label = match method {
+            Method::Dop853 => format!("rtol {}", Num(rtol)),
+            _ => format!("h = {}", Num(step)),
+        };
+        for p in plot_run(
+            &sc,
+            &sink.record,
+            base,
+            &format!("{}: {} at {step_label}", sc.name, method.key()),
+        )? {
+            if !quiet {
                 println!("wrote {}", p.display());
             }
         }
     }
-    let summary = report.0;
+    if let (Some(page), Some(path)) = (&sink.page, &args.view) {
+        let steps = summary["steps"].as_u64().unwrap_or(n);
+        let line = view::report(path, page.write(path, steps).map_err(Failure::Run)?, steps);
+        if quiet {
+            eprintln!("{line}");
+        } else {
+            println!("{line}");
+        }
+    }
     match args.json.as_deref() {
         Some(j) => emit_json(Some(j), &summary)?,
         None => print_summary(&summary),
@@ -171,18 +174,44 @@ pub fn multibody(args: &MultibodyArgs) -> CmdResult {
     Ok(())
 }
 
-fn joint_names(sc: &MultibodyScenario, record: &Record) -> Vec<String> {
-    sc.model
+/// Plot the record's joint coordinates and energy error to `base` (PNG, SVG or both);
+/// returns the files written.
+fn plot_run(sc: &MultibodyScenario, record: &Record, base: &Path, title: &str) -> Result<Vec<PathBuf>, Failure> {
+    let names = sc
+        .model
         .joints
         .iter()
         .filter(|j| j.kind.axis().is_some())
-        .map(|j| j.name.clone())
-        .take(record.joints.len())
-        .collect()
+        .map(|j| j.name.clone());
+    let series = |values: &[f64]| -> Vec<(f64, f64)> { record.t.iter().copied().zip(values.iter().copied()).collect() };
+    let coordinates: Vec<(String, Vec<(f64, f64)>)> =
+        names.zip(&record.joints).map(|(name, q)| (name, series(q))).collect();
+    let energy = vec![("(E - E0) / |E0|".to_string(), series(&record.energy_error))];
+    let panels = [
+        plot::Histories {
+            title,
+            x_desc: "t (s)",
+            y_desc: "joint coordinate (rad or m)",
+            lines: &coordinates,
+            points: &[],
+        },
+        plot::Histories {
+            title: "relative energy error",
+            x_desc: "t (s)",
+            y_desc: "(E - E0) / |E0|",
+            lines: &energy,
+            points: &[],
+        },
+    ];
+    let paths = plot::plot_paths(base);
+    for p in &paths {
+        plot::stacked_histories(p, &panels).map_err(Failure::Run)?;
+    }
+    Ok(paths)
 }
 
 /// The trajectory's columns: t, energy, then x, y, z, qw, qx, qy, qz per body.
-fn columns(sc: &MultibodyScenario) -> Vec<String> {
+pub(super) fn columns(sc: &MultibodyScenario) -> Vec<String> {
     let mut c = vec!["t".to_string(), "energy".to_string()];
     for b in sc.model.bodies.iter().take(MAX_TRAJECTORY_BODIES) {
         for s in ["x", "y", "z", "qw", "qx", "qy", "qz"] {
@@ -192,7 +221,7 @@ fn columns(sc: &MultibodyScenario) -> Vec<String> {
     c
 }
 
-fn writer(sc: &MultibodyScenario, out: Option<&Path>) -> Result<Option<TrajectoryWriter>, Failure> {
+pub(super) fn writer(sc: &MultibodyScenario, out: Option<&Path>) -> Result<Option<TrajectoryWriter>, Failure> {
     let Some(path) = out else { return Ok(None) };
     let format = match path.extension().and_then(|x| x.to_str()) {
         Some("npy") => Format::Npy,
@@ -206,44 +235,114 @@ fn writer(sc: &MultibodyScenario, out: Option<&Path>) -> Result<Option<Trajector
 }
 
 /// The rows and record of a run, whichever coordinates it steps.
-trait Poses {
+pub(super) trait Poses {
     fn time(&self) -> f64;
     fn energy(&mut self) -> f64;
+    /// Body `i`'s frame origin and attitude quaternion `w, x, y, z`.
     fn pose(&mut self, i: usize) -> ([f64; 3], [f64; 4]);
     fn hinge_and_slide(&mut self, out: &mut Vec<f64>);
 }
 
-fn observe<P: Poses>(
-    p: &mut P,
-    bodies: usize,
+/// Where a run's observations go: the trajectory file, the plot's record and the view page.
+pub(super) struct Sink {
+    writer: Option<TrajectoryWriter>,
+    pub(super) record: Record,
+    pub(super) page: Option<ViewPage>,
+    centres: Vec<liemid::Vec3>,
+    row: Vec<f64>,
+    frame: Vec<f32>,
     e0: f64,
-    row: &mut Vec<f64>,
-    writer: &mut Option<TrajectoryWriter>,
-    record: &mut Record,
-) -> Result<(), Failure> {
-    let e = p.energy();
-    if let Some(w) = writer.as_mut() {
-        row.clear();
-        row.push(p.time());
-        row.push(e);
-        for i in 0..bodies.min(MAX_TRAJECTORY_BODIES) {
-            let (x, q) = p.pose(i);
-            row.extend_from_slice(&x);
-            row.extend_from_slice(&q);
+}
+
+impl Sink {
+    /// A sink for `sc`'s run writing to `out` and, with `view`, filling a page.
+    pub(super) fn new(sc: &MultibodyScenario, out: Option<&Path>, view: bool) -> Result<Sink, Failure> {
+        Ok(Sink {
+            writer: writer(sc, out)?,
+            record: Record::default(),
+            page: view.then(|| super::view::page(sc)),
+            centres: sc.model.bodies.iter().map(|b| b.com).collect(),
+            row: Vec::new(),
+            frame: Vec::new(),
+            e0: f64::NAN,
+        })
+    }
+
+    /// Record the state `p` shows; the first call sets the reference energy.
+    pub(super) fn observe<P: Poses>(&mut self, p: &mut P) -> Result<(), Failure> {
+        let e = p.energy();
+        if self.e0.is_nan() {
+            self.e0 = e;
         }
-        w.write_row(row).map_err(Failure::Run)?;
+        let t = p.time();
+        let bodies = self.centres.len();
+        if let Some(w) = self.writer.as_mut() {
+            self.row.clear();
+            self.row.push(t);
+            self.row.push(e);
+            for i in 0..bodies.min(MAX_TRAJECTORY_BODIES) {
+                let (x, q) = p.pose(i);
+                self.row.extend_from_slice(&x);
+                self.row.extend_from_slice(&q);
+            }
+            w.write_row(&self.row).map_err(Failure::Run)?;
+        }
+        let relative = (e - self.e0) / self.e0.abs().max(f64::MIN_POSITIVE);
+        if let Some(page) = self.page.as_mut() {
+            page.energy_error(t, relative);
+            if page.wants_frame() {
+                self.frame.clear();
+                for (i, s) in self.centres.iter().enumerate() {
+                    let (x, q) = p.pose(i);
+                    let centre = super::view::centre(x, q, *s);
+                    self.frame.extend(centre.iter().chain(&q).map(|&v| v as f32));
+                }
+            }
+            page.push_frame(t, &self.frame);
+        }
+        self.record.t.push(t);
+        self.record.energy_error.push(relative);
+        let mut q = Vec::new();
+        p.hinge_and_slide(&mut q);
+        if self.record.joints.is_empty() {
+            self.record.joints = vec![Vec::new(); q.len()];
+        }
+        for (k, v) in q.into_iter().enumerate() {
+            self.record.joints[k].push(v);
+        }
+        Ok(())
     }
-    record.t.push(p.time());
-    record.energy_error.push((e - e0) / e0.abs().max(f64::MIN_POSITIVE));
-    let mut q = Vec::new();
-    p.hinge_and_slide(&mut q);
-    if record.joints.is_empty() {
-        record.joints = vec![Vec::new(); q.len()];
+
+    /// The failure of a run stopped by a signal after `done` of `n` steps, keeping the
+    /// partial trajectory.
+    pub(super) fn stopped(self, (signal, code): (&str, u8), t: f64, done: u64, n: u64) -> Failure {
+        let kept = self
+            .writer
+            .map(|w| format!("; {}", w.keep_partial()))
+            .unwrap_or_default();
+        Failure::Signal(
+            code,
+            format!("{signal}: stopped at t = {} after {done} of {n} steps{kept}", Num(t)),
+        )
     }
-    for (k, v) in q.into_iter().enumerate() {
-        record.joints[k].push(v);
+
+    /// A numerical failure `what`, keeping the partial trajectory.
+    pub(super) fn failed(self, what: String) -> Failure {
+        let kept = self
+            .writer
+            .map(|w| format!("; {}", w.keep_partial()))
+            .unwrap_or_default();
+        Failure::Run(format!("{what}{kept}"))
     }
-    Ok(())
+
+    /// Close the trajectory file: its path and row count, if there is one.
+    pub(super) fn finish(&mut self) -> Result<Option<(String, u64)>, Failure> {
+        self.writer
+            .take()
+            .map(TrajectoryWriter::finish)
+            .transpose()
+            .map_err(Failure::Run)
+    }
 }
 
 struct Maximal<'a> {
@@ -272,29 +371,12 @@ impl Poses for Maximal<'_> {
     }
 }
 
-/// The failure of a run stopped by a signal after `done` of `n` steps, keeping the partial
-/// trajectory.
-fn stopped((signal, code): (&str, u8), t: f64, done: u64, n: u64, writer: Option<TrajectoryWriter>) -> Failure {
-    let kept = writer.map(|w| format!("; {}", w.keep_partial())).unwrap_or_default();
-    Failure::Signal(
-        code,
-        format!("{signal}: stopped at t = {} after {done} of {n} steps{kept}", Num(t)),
-    )
-}
-
-fn finish_writer(writer: Option<TrajectoryWriter>) -> Result<Option<(String, u64)>, Failure> {
-    writer.map(TrajectoryWriter::finish).transpose().map_err(Failure::Run)
-}
-
 fn run_maximal(
     sc: &MultibodyScenario,
     method: liemid::multibody::MultibodyMethod,
-    h: f64,
-    t_end: f64,
-    every: u64,
-    out: Option<&Path>,
-    n: u64,
-) -> Result<(serde_json::Value, Record), Failure> {
+    (h, t_end, every, n): (f64, f64, u64, u64),
+    mut sink: Sink,
+) -> Result<(serde_json::Value, Sink), Failure> {
     let mut system =
         MultibodySystem::new(&sc.model, method).map_err(|e| Failure::Input(format!("{}: {e}", sc.name)))?;
     let mut state = sc
@@ -302,37 +384,23 @@ fn run_maximal(
         .initial_state()
         .map_err(|e| Failure::Input(format!("{}: {e}", sc.name)))?;
     let bodies = state.len();
-    let mut writer = writer(sc, out)?;
-    let mut record = Record::default();
-    let mut row = Vec::new();
+    let joints = sc.model.joints.len();
     let e0 = system.energy(&state);
     let p0 = system.linear_momentum(&state);
     let l0 = system.angular_momentum(&state);
-    observe(
-        &mut Maximal {
-            system: &mut system,
-            state: &state,
-            joints: sc.model.joints.len(),
-        },
-        bodies,
-        e0,
-        &mut row,
-        &mut writer,
-        &mut record,
-    )?;
+    sink.observe(&mut Maximal {
+        system: &mut system,
+        state: &state,
+        joints,
+    })?;
     let interrupt = Interrupt::install();
     let bar = progress(n, "steps", n >= 200_000);
     let started = Instant::now();
-    let mut max_dp: f64 = 0.0;
-    let mut max_dl: f64 = 0.0;
-    let mut max_pos: f64 = 0.0;
-    let mut max_vel: f64 = 0.0;
-    let mut max_energy: f64 = 0.0;
-    let mut failure = None;
+    let (mut max_dp, mut max_dl, mut max_pos, mut max_vel, mut max_energy) = (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
     for k in 1..=n {
         if let Some(stop) = interrupt.requested() {
             bar.finish_and_clear();
-            return Err(stopped(stop, state.t, k - 1, n, writer));
+            return Err(sink.stopped(stop, state.t, k - 1, n));
         }
         let t_next = if k == n { t_end } else { k as f64 * h };
         let h_k = t_next - state.t;
@@ -342,8 +410,8 @@ fn run_maximal(
                 max_vel = max_vel.max(r.velocity_violation);
             }
             Err(e) => {
-                failure = Some(format!("at t = {}: {e}", Num(state.t)));
-                break;
+                bar.finish_and_clear();
+                return Err(sink.failed(format!("{}: at t = {}: {e}", sc.name, Num(state.t))));
             }
         }
         state.t = t_next;
@@ -352,33 +420,22 @@ fn run_maximal(
         max_dp = max_dp.max((system.linear_momentum(&state) - p0).norm());
         max_dl = max_dl.max((system.angular_momentum(&state) - l0).norm());
         if k % every == 0 || k == n {
-            observe(
-                &mut Maximal {
-                    system: &mut system,
-                    state: &state,
-                    joints: sc.model.joints.len(),
-                },
-                bodies,
-                e0,
-                &mut row,
-                &mut writer,
-                &mut record,
-            )?;
+            sink.observe(&mut Maximal {
+                system: &mut system,
+                state: &state,
+                joints,
+            })?;
         }
         bar.inc(1);
     }
     bar.finish_and_clear();
     let seconds = started.elapsed().as_secs_f64();
-    if let Some(f) = failure {
-        let kept = writer.map(|w| format!("; {}", w.keep_partial())).unwrap_or_default();
-        return Err(Failure::Run(format!("{}: {f}{kept}", sc.name)));
-    }
-    let written = finish_writer(writer)?;
+    let written = sink.finish()?;
     let free = sc
         .model
         .joints
         .iter()
-        .all(|j| j.parent != liemid::multibody::Link::World)
+        .all(|j| j.parent != liemid::multibody::Link::World || j.kind == liemid::multibody::JointKind::Free)
         && sc.model.gravity.norm() == 0.0;
     let finals: Vec<_> = (0..bodies)
         .map(|i| {
@@ -386,7 +443,7 @@ fn run_maximal(
             json!({"name": sc.model.bodies[i].name, "xpos": [x.x, x.y, x.z], "xquat": system.quaternion(&state, i)})
         })
         .collect();
-    let joints: Vec<_> = (0..sc.model.joints.len())
+    let joint_values: Vec<_> = (0..joints)
         .filter_map(|k| {
             system
                 .joint_coordinate(&state, k)
@@ -405,160 +462,13 @@ fn run_maximal(
         "max_velocity_constraint_violation": max_vel,
         "max_momentum_change": if free { json!({"linear": max_dp, "angular": max_dl}) } else { json!(null) },
         "final": finals,
-        "joints": joints,
+        "joints": joint_values,
         "ignored": sc.ignored,
         "stepping_seconds": seconds,
         "body_steps_per_second": (bodies as f64 * n as f64) / seconds.max(1e-12),
         "trajectory": written.map(|(path, rows)| json!({"path": path, "rows": rows})),
     });
-    Ok((summary, record))
-}
-
-struct Joint<'a> {
-    kinds: &'a [liemid::multibody::JointKind],
-    model: &'a mut JointSpaceModel,
-    t: f64,
-    q: &'a [f64],
-    v: &'a [f64],
-    poses: Vec<(liemid::Vec3, liemid::Mat3)>,
-}
-
-impl Poses for Joint<'_> {
-    fn time(&self) -> f64 {
-        self.t
-    }
-    fn energy(&mut self) -> f64 {
-        self.model.energy(self.q, self.v).unwrap_or(f64::NAN)
-    }
-    fn pose(&mut self, i: usize) -> ([f64; 3], [f64; 4]) {
-        if self.poses.is_empty() {
-            self.poses = self.model.forward_kinematics(self.q).unwrap_or_default();
-        }
-        let Some(&(x, r)) = self.poses.get(i) else {
-            return ([f64::NAN; 3], [f64::NAN; 4]);
-        };
-        let q = liemid::so3::Quaternion::from_matrix(&r);
-        ([x.x, x.y, x.z], [q.w, q.x, q.y, q.z])
-    }
-    fn hinge_and_slide(&mut self, out: &mut Vec<f64>) {
-        hinge_and_slide(self.kinds, self.q, out);
-    }
-}
-
-fn run_joint_space(
-    sc: &MultibodyScenario,
-    h: f64,
-    t_end: f64,
-    every: u64,
-    out: Option<&Path>,
-    n: u64,
-) -> Result<(serde_json::Value, Record), Failure> {
-    let mut model = JointSpaceModel::new(&sc.model).map_err(|e| Failure::Input(format!("{}: {e}", sc.name)))?;
-    let (mut q, mut v) = (model.initial_q().to_vec(), model.initial_v().to_vec());
-    let kinds: Vec<_> = sc.model.joints.iter().map(|j| j.kind).collect();
-    let bodies = sc.model.bodies.len();
-    let mut writer = writer(sc, out)?;
-    let mut record = Record::default();
-    let mut row = Vec::new();
-    let e0 = model
-        .energy(&q, &v)
-        .map_err(|e| Failure::Input(format!("{}: {e}", sc.name)))?;
-    let mut view = |model: &mut JointSpaceModel,
-                    t: f64,
-                    q: &[f64],
-                    v: &[f64],
-                    w: &mut Option<TrajectoryWriter>,
-                    rec: &mut Record| {
-        observe(
-            &mut Joint {
-                kinds: &kinds,
-                model,
-                t,
-                q,
-                v,
-                poses: Vec::new(),
-            },
-            bodies,
-            e0,
-            &mut row,
-            w,
-            rec,
-        )
-    };
-    view(&mut model, 0.0, &q, &v, &mut writer, &mut record)?;
-    let interrupt = Interrupt::install();
-    let bar = progress(n, "steps", n >= 200_000);
-    let started = Instant::now();
-    let mut max_energy: f64 = 0.0;
-    let mut t = 0.0;
-    for k in 1..=n {
-        if let Some(stop) = interrupt.requested() {
-            bar.finish_and_clear();
-            return Err(stopped(stop, t, k - 1, n, writer));
-        }
-        let t_next = if k == n { t_end } else { k as f64 * h };
-        model
-            .rk4_step(&mut q, &mut v, t_next - t)
-            .map_err(|e| Failure::Run(format!("{}: at t = {}: {e}", sc.name, Num(t))))?;
-        t = t_next;
-        if !(q.iter().chain(&v).all(|x| x.is_finite())) {
-            let kept = writer.map(|w| format!("; {}", w.keep_partial())).unwrap_or_default();
-            return Err(Failure::Run(format!(
-                "{}: rk4 produced a non-finite state at t = {} (step too large?){kept}",
-                sc.name,
-                Num(t)
-            )));
-        }
-        let e = model.energy(&q, &v).unwrap_or(f64::NAN);
-        max_energy = max_energy.max(((e - e0) / e0.abs().max(f64::MIN_POSITIVE)).abs());
-        if k % every == 0 || k == n {
-            view(&mut model, t, &q, &v, &mut writer, &mut record)?;
-        }
-        bar.inc(1);
-    }
-    bar.finish_and_clear();
-    let seconds = started.elapsed().as_secs_f64();
-    let written = finish_writer(writer)?;
-    let poses = model.forward_kinematics(&q).map_err(|e| Failure::Run(e.to_string()))?;
-    let finals: Vec<_> = poses
-        .iter()
-        .enumerate()
-        .map(|(i, (x, r))| {
-            let qq = liemid::so3::Quaternion::from_matrix(r);
-            json!({"name": sc.model.bodies[i].name, "xpos": [x.x, x.y, x.z], "xquat": [qq.w, qq.x, qq.y, qq.z]})
-        })
-        .collect();
-    let mut coords = Vec::new();
-    hinge_and_slide(&kinds, &q, &mut coords);
-    let names = sc
-        .model
-        .joints
-        .iter()
-        .filter(|j| j.kind.axis().is_some())
-        .map(|j| j.name.clone());
-    let joints: Vec<_> = names
-        .zip(coords)
-        .map(|(name, value)| json!({"name": name, "value": value}))
-        .collect();
-    let summary = json!({
-        "model": sc.name,
-        "method": "RK4 (joint coordinates)",
-        "step": h,
-        "t_end": t_end,
-        "steps": n,
-        "bodies": bodies,
-        "max_relative_energy_error": max_energy,
-        "max_position_constraint_violation": 0.0,
-        "max_velocity_constraint_violation": 0.0,
-        "max_momentum_change": null,
-        "final": finals,
-        "joints": joints,
-        "ignored": sc.ignored,
-        "stepping_seconds": seconds,
-        "body_steps_per_second": (bodies as f64 * n as f64) / seconds.max(1e-12),
-        "trajectory": written.map(|(path, rows)| json!({"path": path, "rows": rows})),
-    });
-    Ok((summary, record))
+    Ok((summary, sink))
 }
 
 fn print_summary(s: &serde_json::Value) {
@@ -607,15 +517,4 @@ fn print_summary(s: &serde_json::Value) {
         num("stepping_seconds"),
         num("body_steps_per_second")
     );
-}
-
-/// The hinge angles and slide offsets from joint coordinates in MuJoCo's layout.
-fn hinge_and_slide(kinds: &[liemid::multibody::JointKind], q: &[f64], out: &mut Vec<f64>) {
-    let mut at = 0;
-    for kind in kinds {
-        if kind.axis().is_some() {
-            out.push(q.get(at).copied().unwrap_or(f64::NAN));
-        }
-        at += kind.nq();
-    }
 }

@@ -41,11 +41,14 @@ pub enum Method {
     Liemid(MultibodyMethod),
     /// Classical RK4 in joint coordinates (the articulated-body algorithm).
     Rk4,
+    /// Dormand-Prince 8(5,3) with step control in joint coordinates (the articulated-body
+    /// algorithm): the reference for studies without a peer installed.
+    Dop853,
 }
 
 impl Method {
     /// The keys on the command line and in files.
-    pub const KEYS: [&'static str; 5] = ["liemid", "liemid4", "liemid6", "liemid8", "rk4"];
+    pub const KEYS: [&'static str; 6] = ["liemid", "liemid4", "liemid6", "liemid8", "rk4", "dop853"];
 
     /// The method named `key`.
     pub fn from_key(key: &str) -> Result<Method, String> {
@@ -55,6 +58,7 @@ impl Method {
             "liemid6" => Method::Liemid(MultibodyMethod::Liemid6),
             "liemid8" => Method::Liemid(MultibodyMethod::Liemid8),
             "rk4" => Method::Rk4,
+            "dop853" => Method::Dop853,
             other => {
                 return Err(format!(
                     "unknown method \"{other}\" (known: {})",
@@ -73,6 +77,7 @@ impl Method {
             Method::Liemid(MultibodyMethod::Liemid6) => "liemid6",
             Method::Liemid(MultibodyMethod::Liemid8) => "liemid8",
             Method::Rk4 => "rk4",
+            Method::Dop853 => "dop853",
         }
     }
 }

@@ -570,10 +570,23 @@ fn draw_histories<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, h: &Historie
         .y_label_area_size(60)
         .build_cartesian_2d(x0..x1, (y0 - pad)..(y1 + pad))
         .map_err(e)?;
+    // Small or large values in scientific notation (the default prints 1e-5 as "0.0").
+    let magnitude = y0.abs().max(y1.abs());
+    let scientific = !(1e-2..1e5).contains(&magnitude);
+    let y_label = move |v: &f64| {
+        if v.abs() < 1e-9 * magnitude {
+            "0".to_string()
+        } else if scientific {
+            format!("{v:.1e}")
+        } else {
+            format!("{v}")
+        }
+    };
     chart
         .configure_mesh()
         .x_desc(h.x_desc)
         .y_desc(h.y_desc)
+        .y_label_formatter(&y_label)
         .light_line_style(WHITE)
         .label_style(("sans-serif", 14))
         .axis_desc_style(("sans-serif", 16))
@@ -592,8 +605,11 @@ fn draw_histories<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, h: &Historie
     ];
     for (k, (label, v)) in h.lines.iter().enumerate() {
         let c = colours[k % colours.len()];
+        // A thick polyline through a dense, jagged series draws miter spikes far past its
+        // points (plotters joins wide segments with miters): dense series get a thin line.
+        let width = if v.len() > 400 { 1 } else { 2 };
         chart
-            .draw_series(LineSeries::new(v.clone(), ShapeStyle::from(c).stroke_width(2)))
+            .draw_series(LineSeries::new(v.clone(), ShapeStyle::from(c).stroke_width(width)))
             .map_err(e)?
             .label(label.as_str())
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], ShapeStyle::from(c).stroke_width(2)));

@@ -39,6 +39,16 @@ pub const DEFAULT_BUDGET: usize = 3_000_000;
 /// frame).
 pub const MIN_FRAMES: usize = 6;
 
+/// Bodies a page draws at most: above it, every k-th body is drawn (stated in the title),
+/// so that a software-rendered browser still animates a 10⁵-body fluid.
+pub const MAX_DRAWN_BODIES: usize = 20_000;
+
+/// The stride of the bodies drawn out of `count`: every body up to [`MAX_DRAWN_BODIES`].
+#[must_use]
+pub fn body_stride(count: usize) -> usize {
+    count.div_ceil(MAX_DRAWN_BODIES).max(1)
+}
+
 /// Energy-error samples a page holds at most (subsampled like the frames).
 pub const MAX_ENERGY_POINTS: usize = 20_000;
 
@@ -522,6 +532,15 @@ pub fn box_of_inertia(moments: [f64; 3]) -> [f32; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn large_ensembles_draw_every_kth_body() {
+        assert_eq!(body_stride(1), 1);
+        assert_eq!(body_stride(MAX_DRAWN_BODIES), 1);
+        assert_eq!(body_stride(MAX_DRAWN_BODIES + 1), 2);
+        assert_eq!(body_stride(100_000), 5);
+        assert!(100_000usize.div_ceil(body_stride(100_000)) <= MAX_DRAWN_BODIES);
+    }
 
     #[test]
     fn base64_matches_the_standard() {

@@ -17,7 +17,8 @@ True
 - ``ensemble`` steps N bodies on all cores (bit-identical for any thread count),
   ``liemid.dask.ensemble`` on a Dask cluster;
 - ``liemid.many``: interacting bodies (the dipolar fluid); ``liemid.spins``: spin dynamics on lattices;
-  ``liemid.beam``: flexible 3-D beams;
+  ``liemid.beam``: flexible 3-D beams; ``liemid.multibody``: jointed bodies from MJCF and
+  URDF files;
 - ``methods``, ``problems``, ``converge``, ``work_precision``: what the CLI offers.
 
 Reference: P. Krysl, Explicit momentum-conserving integrator for dynamics of rigid bodies
@@ -26,7 +27,7 @@ approximating the midpoint Lie algorithm, Int. J. Numer. Meth. Engng 63 (2005).
 
 from __future__ import annotations
 
-from . import beam, many, problems, spins
+from . import beam, many, multibody, problems, spins
 from ._core import (
     AdaptiveSteps,
     CallableTorque,
@@ -62,6 +63,7 @@ __all__ = [
     "integrate",
     "many",
     "methods",
+    "multibody",
     "problems",
     "spins",
     "work_precision",

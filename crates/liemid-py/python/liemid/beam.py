@@ -15,14 +15,14 @@ True
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Dict, List, Optional, Tuple, Union
 
 import numpy as np
 from numpy.typing import NDArray
 
-from . import _liemid
+from . import _liemid, _view
 
 __all__ = ["BeamRun", "methods", "problems", "run"]
 
@@ -45,6 +45,21 @@ class BeamRun:
     wall_seconds: float
     element_steps_per_second: float
     newton_iterations: Optional[int]
+    page: Optional[str] = field(default=None, repr=False)
+
+    def view(self, path: Optional[str] = None) -> str:
+        """The run as a self-contained 3-D page (the deformed centre line and the nodes'
+        section frames at every sample, and the energy): written to ``path`` (returns it),
+        or returned as HTML without a path. Needs a run made with ``view=True``."""
+        if self.page is None:
+            raise ValueError("this run kept no frames: run it with beam.run(..., view=True)")
+        if path is None:
+            return self.page
+        Path(path).write_text(self.page, encoding="utf-8")
+        return str(path)
+
+    def _repr_html_(self) -> Optional[str]:
+        return None if self.page is None else _view.iframe(self.page)
 
 
 def _optional_number(name: str, value: Optional[float]) -> Optional[float]:
@@ -66,13 +81,15 @@ def run(
     t_end: Optional[float] = None,
     sample: Optional[float] = None,
     force_step: bool = False,
+    view: bool = False,
 ) -> BeamRun:
     """Run a benchmark (``problems()``) or a structure (``file`` path or its ``text``).
 
     ``step`` defaults to 0.9 of the critical step (explicit) or 0.05 (Newmark); an explicit
     step above the critical one raises ``ValueError`` unless ``force_step``. ``sample`` is
     the output interval (default ``t_end/600``). A failed Newton iteration raises
-    ``liemid.ConvergenceError``.
+    ``liemid.ConvergenceError``. With ``view=True`` the run keeps its 3-D page
+    (``BeamRun.view``).
     """
     sources = [s is not None for s in (problem, file, text)]
     if sum(sources) > 1:
@@ -92,6 +109,7 @@ def run(
         _optional_number("t_end", t_end),
         _optional_number("sample", sample),
         bool(force_step),
+        bool(view),
     )
     tracked = {name: np.asarray(out["tracked"][name]).reshape(-1, 3) for name in out["names"]}
     return BeamRun(
@@ -106,6 +124,7 @@ def run(
         wall_seconds=float(out["wall_seconds"]),
         element_steps_per_second=float(out["element_steps_per_second"]),
         newton_iterations=None if out["newton_iterations"] is None else int(out["newton_iterations"]),
+        page=None if out["page"] is None else str(out["page"]),
     )
 
 

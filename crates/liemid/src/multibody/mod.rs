@@ -27,7 +27,8 @@
 //!
 //! **Problems** ([`problems`]): a double pendulum, ball-joint chains (`chain(10)`,
 //! `chain(1000)`), a spinning spacecraft with hinged panels, a four-bar linkage of four
-//! hinges, and the spec's test chain (two hinges and a ball). Tests:
+//! hinges, and the spec's test chain (two hinges and a ball). [`MultibodyEnsemble`] steps
+//! independent copies on threads, bitwise the same for any thread count. Tests:
 //! `tests/multibody.rs`.
 //!
 //! References: E. Hairer, C. Lubich, G. Wanner, *Geometric Numerical Integration*, 2nd
@@ -36,6 +37,7 @@
 //! multipliers", SIGGRAPH 1996; P. Krysl, Int. J. Numer. Meth. Engng 63 (2005).
 
 pub mod constraints;
+pub mod ensemble;
 pub mod forces;
 pub mod joint_space;
 pub mod method;
@@ -49,6 +51,7 @@ pub mod urdf;
 mod xml;
 
 pub use constraints::{JointGeometry, JointRows, Row};
+pub use ensemble::MultibodyEnsemble;
 pub use forces::ForceHook;
 pub use joint_space::JointSpaceModel;
 pub use method::{LimitState, MultibodyMethod, StepReport};

@@ -1,0 +1,195 @@
+//! End-to-end tests of `liemid multibody`: the JSON summary's keys and what they promise
+//! (constraints at round-off, momenta kept on the free spacecraft), the joint-space
+//! reference (RK4 and DOP853) against the maximal-coordinate composition, the example
+//! models, the `--view` page, and refusals (exit 2, one line, nothing written).
+
+mod common;
+use common::{examples, json, run_in, scratch, stderr, stdout};
+use std::path::Path;
+
+fn summary(dir: &Path, args: &[&str]) -> serde_json::Value {
+    let o = run_in(dir, &[&["multibody"], args, &["--json", "-"]].concat());
+    assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+    json(&stdout(&o))
+}
+
+fn xpos(s: &serde_json::Value) -> Vec<f64> {
+    s["final"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|b| b["xpos"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()))
+        .collect()
+}
+
+fn max_diff(a: &[f64], b: &[f64]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
+}
+
+#[test]
+fn summary_keys_and_constraints() {
+    let dir = scratch("mb-summary");
+    let s = summary(&dir, &["--problem", "double-pendulum", "--t-end", "1"]);
+    for key in [
+        "steps",
+        "max_relative_energy_error",
+        "max_position_constraint_violation",
+        "max_velocity_constraint_violation",
+        "max_momentum_change",
+        "final",
+        "joints",
+    ] {
+        assert!(s.get(key).is_some(), "no {key} in {s}");
+    }
+    assert_eq!(s["steps"], 1000);
+    assert!(s["max_position_constraint_violation"].as_f64().unwrap() <= 1e-12);
+    assert!(s["max_velocity_constraint_violation"].as_f64().unwrap() <= 1e-12);
+    // Gravity and a joint to the world: the momenta are not conserved, so not reported.
+    assert!(s["max_momentum_change"].is_null());
+    let body = &s["final"][1];
+    assert!(body["name"].is_string());
+    let q: Vec<f64> = body["xquat"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert!((q.iter().map(|x| x * x).sum::<f64>() - 1.0).abs() < 1e-14);
+    assert_eq!(s["joints"].as_array().unwrap().len(), 2);
+    // Second order: the energy error falls 4x per halving of the step (bounded, not drifting).
+    let coarse = summary(
+        &dir,
+        &["--problem", "double-pendulum", "--t-end", "1", "--step", "2e-3"],
+    );
+    let ratio =
+        coarse["max_relative_energy_error"].as_f64().unwrap() / s["max_relative_energy_error"].as_f64().unwrap();
+    assert!((3.5..4.5).contains(&ratio), "energy error ratio {ratio}");
+}
+
+#[test]
+fn spacecraft_momenta_in_the_summary() {
+    let dir = scratch("mb-spacecraft");
+    let s = summary(&dir, &["--problem", "spacecraft", "--t-end", "1"]);
+    let m = &s["max_momentum_change"];
+    assert!(m.is_object(), "{s}");
+    // The hub spins at 20 rad/s: |L| is of order 10^1-10^3 in the model's units; round-off
+    // over 1000 steps stays below 1e-10 absolute.
+    assert!(
+        m["linear"].as_f64().unwrap() < 1e-10 && m["angular"].as_f64().unwrap() < 1e-10,
+        "{m}"
+    );
+}
+
+#[test]
+fn joint_space_references_agree_with_the_composition() {
+    let dir = scratch("mb-reference");
+    let base = ["--problem", "test-chain", "--t-end", "0.5"];
+    let dop = summary(&dir, &[&base[..], &["--method", "dop853", "--rtol", "1e-13"]].concat());
+    let loose = summary(&dir, &[&base[..], &["--method", "dop853", "--rtol", "1e-10"]].concat());
+    let l8 = summary(&dir, &[&base[..], &["--method", "liemid8", "--step", "1e-3"]].concat());
+    let rk4 = summary(&dir, &[&base[..], &["--method", "rk4", "--step", "1e-4"]].concat());
+    let (x, xl, x8, xr) = (xpos(&dop), xpos(&loose), xpos(&l8), xpos(&rk4));
+    println!(
+        "dop853 1e-10 vs 1e-13: {:.2e}; liemid8 h=1e-3: {:.2e}; rk4 h=1e-4: {:.2e}; dop853 steps {}",
+        max_diff(&xl, &x),
+        max_diff(&x8, &x),
+        max_diff(&xr, &x),
+        dop["steps"]
+    );
+    // Two independent formulations (maximal coordinates with constraints, joint coordinates
+    // with the articulated-body algorithm) meet at the reference's accuracy.
+    assert!(max_diff(&x8, &x) < 1e-10);
+    assert!(max_diff(&xr, &x) < 1e-9);
+    assert!(max_diff(&xl, &x) < 1e-8);
+    assert!(dop["max_relative_energy_error"].as_f64().unwrap() < 1e-11);
+    assert!(dop["evaluations"].as_u64().unwrap() > 12 * dop["steps"].as_u64().unwrap());
+}
+
+#[test]
+fn example_models_load_and_name_what_they_ignore() {
+    let dir = scratch("mb-examples");
+    for file in [
+        "double_pendulum.xml",
+        "double_pendulum.urdf",
+        "chain_10.xml",
+        "arm.xml",
+        "arm.urdf",
+    ] {
+        let path = examples().join("multibody").join(file);
+        let o = run_in(
+            &dir,
+            &["multibody", path.to_str().unwrap(), "--t-end", "0.05", "--json", "-"],
+        );
+        assert!(o.status.success(), "{file}: {}", stderr(&o));
+        let s = json(&stdout(&o));
+        assert!(
+            s["max_position_constraint_violation"].as_f64().unwrap() < 1e-12,
+            "{file}"
+        );
+        if file == "arm.xml" {
+            // Written as a published robot model is: actuators are named, once, on stderr.
+            let err = stderr(&o);
+            assert!(err.contains("ignored") && err.contains("actuator"), "{err}");
+            assert_eq!(err.matches("actuator").count(), 1, "{err}");
+        }
+    }
+}
+
+#[test]
+fn view_page() {
+    let dir = scratch("mb-view");
+    let o = run_in(
+        &dir,
+        &[
+            "multibody",
+            "--problem",
+            "closed-loop",
+            "--t-end",
+            "0.5",
+            "--view",
+            "m.html",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("view: m.html (51 frames of 500 steps)"),
+        "{}",
+        stdout(&o)
+    );
+    let html = std::fs::read_to_string(dir.join("m.html")).unwrap();
+    assert!(html.contains("\"articulated\"") && html.contains("51 frames of 500 steps"));
+}
+
+#[test]
+fn refusals_write_nothing() {
+    let dir = scratch("mb-refusals");
+    let bad_mass = r#"<mujoco><worldbody><body name="a"><joint type="hinge" axis="0 1 0"/>
+<inertial pos="0 0 0" mass="-1" diaginertia="1 1 1"/></body></worldbody></mujoco>"#;
+    std::fs::write(dir.join("bad.xml"), bad_mass).unwrap();
+    let cycle = r#"<robot name="r"><link name="a"/><link name="b"/>
+<joint name="j1" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/></joint>
+<joint name="j2" type="revolute"><parent link="b"/><child link="a"/><axis xyz="0 0 1"/></joint></robot>"#;
+    std::fs::write(dir.join("cycle.urdf"), cycle).unwrap();
+    for (file, words) in [("bad.xml", ["mass", "bad.xml:2"]), ("cycle.urdf", ["cycle", "a"])] {
+        let o = run_in(&dir, &["multibody", file, "--out", "t.csv", "--json", "s.json"]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{file}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        for w in words {
+            assert!(err.contains(w), "{file}: no {w} in {err}");
+        }
+        assert!(!dir.join("t.csv").exists() && !dir.join("s.json").exists());
+    }
+    for args in [
+        &["--problem", "chain-10", "--rtol", "1e-9"][..],
+        &["--problem", "chain-10", "--method", "dop853", "--rtol", "2"],
+        &["--problem", "nope"],
+        &["--problem", "chain-10", "--method", "euler"],
+    ] {
+        let o = run_in(&dir, &[&["multibody"], args].concat());
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+    }
+    let o = run_in(&dir, &["problems"]);
+    assert!(stdout(&o).contains("chain-1000") && stdout(&o).contains("spacecraft"));
+}

@@ -1,0 +1,337 @@
+//! `liemid._liemid` multibody: a model read from an MJCF or URDF file (or a built-in
+//! problem, or a scenario file), and a run of it by RATTLE with EA's rotation (maximal
+//! coordinates, orders 2 to 8) or by RK4 in joint coordinates, returning flat arrays of
+//! the bodies' poses, the energy and the hinge/slide coordinates at every `every`-th step.
+//! `python/liemid/multibody.py` shapes them.
+
+use liemid::multibody::{JointKind, JointSpaceModel, MultibodyState, MultibodySystem};
+use liemid::so3::Quaternion;
+use liemid_cli::multibody::scenario::{self, Method, MultibodyScenario};
+use liemid_cli::multibody::view;
+use numpy::{IntoPyArray, PyReadonlyArray1};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::convert::py_error;
+
+/// A jointed model and what its file held that is not simulated.
+#[pyclass(module = "liemid._liemid")]
+pub struct MultibodyModel {
+    scenario: MultibodyScenario,
+}
+
+#[pymethods]
+impl MultibodyModel {
+    /// The file or problem the model came from.
+    #[getter]
+    fn name(&self) -> String {
+        self.scenario.name.clone()
+    }
+    /// The bodies' names, in the model's order.
+    #[getter]
+    fn bodies(&self) -> Vec<String> {
+        self.scenario.model.bodies.iter().map(|b| b.name.clone()).collect()
+    }
+    /// The joints: (name, kind).
+    #[getter]
+    fn joints(&self) -> Vec<(String, String)> {
+        self.scenario
+            .model
+            .joints
+            .iter()
+            .map(|j| {
+                let kind = match j.kind {
+                    JointKind::Ball => "ball",
+                    JointKind::Hinge { .. } => "hinge",
+                    JointKind::Slide { .. } => "slide",
+                    JointKind::Weld => "weld",
+                    JointKind::Free => "free",
+                };
+                (j.name.clone(), kind.to_string())
+            })
+            .collect()
+    }
+    /// The kinds of content of the file that are not simulated.
+    #[getter]
+    fn ignored(&self) -> Vec<String> {
+        self.scenario.ignored.clone()
+    }
+    /// The file's `timestep` (MJCF `option`), if any.
+    #[getter]
+    fn timestep(&self) -> Option<f64> {
+        self.scenario.model.timestep
+    }
+    /// Gravity (m/s²).
+    #[getter]
+    fn gravity(&self) -> (f64, f64, f64) {
+        let g = self.scenario.model.gravity;
+        (g.x, g.y, g.z)
+    }
+    /// The problem's (or file's) end time when none is given.
+    #[getter]
+    fn default_t_end(&self) -> f64 {
+        self.scenario.t_end.unwrap_or_else(|| self.scenario.default_t_end())
+    }
+    /// The step when none is given.
+    #[getter]
+    fn default_step(&self) -> f64 {
+        self.scenario.step.unwrap_or_else(|| self.scenario.default_step())
+    }
+}
+
+/// Read a model file (`.xml` MJCF, `.urdf` URDF, `.toml` scenario).
+#[pyfunction]
+fn multibody_load(path: &str) -> PyResult<MultibodyModel> {
+    let scenario = scenario::load(std::path::Path::new(path)).map_err(PyValueError::new_err)?;
+    Ok(MultibodyModel { scenario })
+}
+
+/// The built-in problem `name`.
+#[pyfunction]
+fn multibody_problem(name: &str) -> PyResult<MultibodyModel> {
+    let scenario = scenario::builtin(name).map_err(PyValueError::new_err)?;
+    Ok(MultibodyModel { scenario })
+}
+
+/// The built-in problems: (name, description).
+#[pyfunction]
+fn multibody_problems() -> Vec<(String, String)> {
+    scenario::PROBLEMS
+        .iter()
+        .map(|p| (p.to_string(), scenario::describe(p).to_string()))
+        .collect()
+}
+
+/// What a run collects at each sample.
+#[derive(Default)]
+struct Samples {
+    t: Vec<f64>,
+    energy: Vec<f64>,
+    xpos: Vec<f64>,
+    xquat: Vec<f64>,
+    joints: Vec<f64>,
+}
+
+impl Samples {
+    fn push_maximal(&mut self, system: &MultibodySystem, state: &MultibodyState, joints: usize) {
+        self.t.push(state.t);
+        self.energy.push(system.energy(state));
+        for i in 0..state.len() {
+            let x = system.frame_origin(state, i);
+            self.xpos.extend([x.x, x.y, x.z]);
+            self.xquat.extend(system.quaternion(state, i));
+        }
+        for k in 0..joints {
+            if let Some(q) = system.joint_coordinate(state, k) {
+                self.joints.push(q);
+            }
+        }
+    }
+
+    fn push_joint_space(
+        &mut self,
+        model: &mut JointSpaceModel,
+        kinds: &[JointKind],
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+    ) -> liemid::Result<()> {
+        self.t.push(t);
+        self.energy.push(model.energy(q, v)?);
+        for (x, r) in model.forward_kinematics(q)? {
+            let u = Quaternion::from_matrix(&r);
+            self.xpos.extend([x.x, x.y, x.z]);
+            self.xquat.extend([u.w, u.x, u.y, u.z]);
+        }
+        let mut at = 0;
+        for kind in kinds {
+            if kind.axis().is_some() {
+                self.joints.push(q[at]);
+            }
+            at += kind.nq();
+        }
+        Ok(())
+    }
+}
+
+/// Run `model` with `method` at step `step` to `t_end`, sampling every `every` steps (and
+/// the last); returns a dict of flat arrays and the run's maxima.
+#[pyfunction]
+#[pyo3(signature = (model, method, step, t_end, every))]
+fn multibody_run<'py>(
+    py: Python<'py>,
+    model: &MultibodyModel,
+    method: &str,
+    step: f64,
+    t_end: f64,
+    every: u64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let method = Method::from_key(method).map_err(|e| PyValueError::new_err(format!("method: {e}")))?;
+    if !(step.is_finite() && step > 0.0) {
+        return Err(PyValueError::new_err(format!(
+            "step: must be a positive number, found {step}"
+        )));
+    }
+    if !(t_end.is_finite() && t_end > 0.0) {
+        return Err(PyValueError::new_err(format!(
+            "t_end: must be a positive number, found {t_end}"
+        )));
+    }
+    if every == 0 {
+        return Err(PyValueError::new_err("every: at least 1, found 0"));
+    }
+    let n = liemid::rigid::driver::step_count(0.0, t_end, step).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let sc = &model.scenario;
+    let mut samples = Samples::default();
+    let (mut max_pos, mut max_vel) = (0.0f64, 0.0f64);
+    let name = match method {
+        Method::Liemid(m) => {
+            let mut model = sc.model.clone();
+            // As the CLI: a rotor inertia has no exact form in maximal coordinates.
+            model.joints.iter_mut().for_each(|j| j.armature = 0.0);
+            let joints = model.joints.len();
+            let mut system = MultibodySystem::new(&model, m).map_err(|e| py_error(py, &e, &sc.name))?;
+            let mut state = model.initial_state().map_err(|e| py_error(py, &e, &sc.name))?;
+            samples.push_maximal(&system, &state, joints);
+            py.detach(|| -> liemid::Result<()> {
+                for k in 1..=n {
+                    let t_next = if k == n { t_end } else { k as f64 * step };
+                    let h = t_next - state.t;
+                    let r = system.step(&mut state, h)?;
+                    state.t = t_next;
+                    max_pos = max_pos.max(r.position_violation);
+                    max_vel = max_vel.max(r.velocity_violation);
+                    if k % every == 0 || k == n {
+                        samples.push_maximal(&system, &state, joints);
+                    }
+                }
+                Ok(())
+            })
+            .map_err(|e| py_error(py, &e, &sc.name))?;
+            m.name().to_string()
+        }
+        Method::Rk4 => {
+            let mut js = JointSpaceModel::new(&sc.model).map_err(|e| py_error(py, &e, &sc.name))?;
+            let kinds: Vec<JointKind> = sc.model.joints.iter().map(|j| j.kind).collect();
+            let (mut q, mut v) = (js.initial_q().to_vec(), js.initial_v().to_vec());
+            samples
+                .push_joint_space(&mut js, &kinds, 0.0, &q, &v)
+                .map_err(|e| py_error(py, &e, &sc.name))?;
+            py.detach(|| -> liemid::Result<()> {
+                let mut t = 0.0;
+                for k in 1..=n {
+                    let t_next = if k == n { t_end } else { k as f64 * step };
+                    js.rk4_step(&mut q, &mut v, t_next - t)?;
+                    t = t_next;
+                    if !q.iter().chain(&v).all(|x| x.is_finite()) {
+                        return Err(liemid::Error::NonFiniteResult { method: "RK4 (joint coordinates)", t, h: step });
+                    }
+                    if k % every == 0 || k == n {
+                        let mut unit = q.clone();
+                        js.normalize_quaternions(&mut unit)?;
+                        samples.push_joint_space(&mut js, &kinds, t, &unit, &v)?;
+                    }
+                }
+                Ok(())
+            })
+            .map_err(|e| py_error(py, &e, &sc.name))?;
+            "RK4 (joint coordinates)".to_string()
+        }
+        Method::Dop853 => {
+            return Err(PyValueError::new_err(
+                "method: dop853 runs from the command line (`liemid multibody --method dop853`); here: liemid, liemid4, liemid6, liemid8, rk4",
+            ))
+        }
+    };
+    let d = PyDict::new(py);
+    d.set_item("method", name)?;
+    d.set_item("steps", n)?;
+    d.set_item("t", samples.t.into_pyarray(py))?;
+    d.set_item("energy", samples.energy.into_pyarray(py))?;
+    d.set_item("xpos", samples.xpos.into_pyarray(py))?;
+    d.set_item("xquat", samples.xquat.into_pyarray(py))?;
+    d.set_item("joints", samples.joints.into_pyarray(py))?;
+    d.set_item(
+        "joint_names",
+        sc.model
+            .joints
+            .iter()
+            .filter(|j| j.kind.axis().is_some())
+            .map(|j| j.name.clone())
+            .collect::<Vec<_>>(),
+    )?;
+    d.set_item("max_position_constraint_violation", max_pos)?;
+    d.set_item("max_velocity_constraint_violation", max_vel)?;
+    Ok(d)
+}
+
+/// The 3-D page of a run of `model`: `times` (n), `xpos` (n·bodies·3), `xquat`
+/// (n·bodies·4), the relative energy error at the same times; written to `path` (returns
+/// it) or returned as HTML.
+#[pyfunction]
+#[pyo3(signature = (model, times, xpos, xquat, energy_error, total_steps, path=None))]
+fn multibody_view(
+    model: &MultibodyModel,
+    times: PyReadonlyArray1<'_, f64>,
+    xpos: PyReadonlyArray1<'_, f64>,
+    xquat: PyReadonlyArray1<'_, f64>,
+    energy_error: PyReadonlyArray1<'_, f64>,
+    total_steps: u64,
+    path: Option<String>,
+) -> PyResult<String> {
+    let sc = &model.scenario;
+    let (times, xpos, xquat, energy) = (
+        times.as_slice()?,
+        xpos.as_slice()?,
+        xquat.as_slice()?,
+        energy_error.as_slice()?,
+    );
+    let bodies = sc.model.bodies.len();
+    let n = times.len();
+    if xpos.len() != 3 * bodies * n || xquat.len() != 4 * bodies * n || energy.len() != n {
+        return Err(PyValueError::new_err(format!(
+            "a run of {bodies} bodies at {n} times needs {} positions, {} quaternion numbers and {n} energies; found {}, {}, {}",
+            3 * bodies * n,
+            4 * bodies * n,
+            xpos.len(),
+            xquat.len(),
+            energy.len()
+        )));
+    }
+    let mut page = view::page(sc);
+    let mut frame = Vec::with_capacity(7 * bodies);
+    for k in 0..n {
+        frame.clear();
+        for (i, body) in sc.model.bodies.iter().enumerate() {
+            let at = k * bodies + i;
+            let x = [xpos[3 * at], xpos[3 * at + 1], xpos[3 * at + 2]];
+            let q = [xquat[4 * at], xquat[4 * at + 1], xquat[4 * at + 2], xquat[4 * at + 3]];
+            let c = view::centre(x, q, body.com);
+            frame.extend(c.iter().chain(&q).map(|&v| v as f32));
+        }
+        page.push_frame(times[k], &frame);
+        page.energy_error(times[k], energy[k]);
+    }
+    match path {
+        Some(p) => {
+            let mut plan = liemid_cli::shared::output::OutputPlan::new(&[]);
+            plan.add("view", std::path::Path::new(&p))
+                .map_err(PyValueError::new_err)?;
+            page.write(std::path::Path::new(&p), total_steps)
+                .map_err(PyValueError::new_err)?;
+            Ok(p)
+        }
+        None => Ok(page.html(total_steps)),
+    }
+}
+
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<MultibodyModel>()?;
+    m.add_function(wrap_pyfunction!(multibody_load, m)?)?;
+    m.add_function(wrap_pyfunction!(multibody_problem, m)?)?;
+    m.add_function(wrap_pyfunction!(multibody_problems, m)?)?;
+    m.add_function(wrap_pyfunction!(multibody_run, m)?)?;
+    m.add_function(wrap_pyfunction!(multibody_view, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,88 @@
+"""liemid.multibody: the same run as the CLI, the files users have, orders, errors."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import liemid
+from liemid import multibody
+
+ROOT = Path(__file__).resolve().parents[3]
+
+
+def test_the_double_pendulum_matches_the_cli_bit_for_bit(liemid_cli: str) -> None:
+    run = multibody.problem("double-pendulum").run(step=1e-3, t_end=1.0, every=100)
+    assert run.t.shape == (11,) and run.xpos.shape == (11, 2, 3) and run.joints.shape == (11, 2)
+    assert run.max_position_constraint_violation <= 1e-12
+    out = subprocess.run(
+        [liemid_cli, "multibody", "--problem", "double-pendulum", "--step", "1e-3", "--t-end", "1", "--json", "-"],
+        check=True,
+        capture_output=True,
+        text=True,
+    )
+    cli = json.loads(out.stdout)
+    assert np.array_equal(run.xpos[-1], np.array([b["xpos"] for b in cli["final"]]))
+    assert np.array_equal(run.xquat[-1], np.array([b["xquat"] for b in cli["final"]]))
+    assert np.array_equal(run.joints[-1], np.array([j["value"] for j in cli["joints"]]))
+
+
+def test_second_and_fourth_order_against_the_joint_space_rk4() -> None:
+    model = multibody.problem("test-chain")
+    reference = model.run("liemid8", step=1e-3, t_end=0.5, every=500).xpos[-1]
+    rk4 = model.run("rk4", step=1e-4, t_end=0.5, every=5000).xpos[-1]
+    assert np.max(np.abs(rk4 - reference)) < 1e-9
+    for method, order in [("liemid", 2), ("liemid4", 4)]:
+        errors = [
+            np.max(np.abs(model.run(method, step=h, t_end=0.5, every=10**6).xpos[-1] - reference))
+            for h in (4e-3, 2e-3, 1e-3)
+        ]
+        observed = np.log2(errors[-2] / errors[-1])
+        assert abs(observed - order) < 0.1, (method, errors, observed)
+
+
+def test_files_load_with_what_they_ignore() -> None:
+    arm = multibody.load(ROOT / "examples" / "multibody" / "arm.xml")
+    assert any("actuator" in k for k in arm.ignored)
+    assert len(arm.bodies) >= 3 and all(kind in {"ball", "hinge", "slide", "weld", "free"} for _, kind in arm.joints)
+    urdf = multibody.load(ROOT / "examples" / "multibody" / "double_pendulum.urdf")
+    xml = multibody.load(ROOT / "examples" / "multibody" / "double_pendulum.xml")
+    a = urdf.run(step=1e-3, t_end=0.5, every=500)
+    b = xml.run(step=1e-3, t_end=0.5, every=500)
+    assert a.joints.shape == b.joints.shape == (2, 2)
+    energy = a.relative_energy_error
+    assert energy[0] == 0.0 and abs(energy[-1]) < 1e-4
+
+
+def test_bad_input_raises(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.xml"
+    bad.write_text(
+        '<mujoco><worldbody><body name="a"><joint type="hinge" axis="0 0 0"/>\n'
+        '<inertial pos="0 0 0" mass="1" diaginertia="1 1 1"/></body></worldbody></mujoco>'
+    )
+    with pytest.raises(ValueError, match="bad.xml:1"):
+        multibody.load(bad)
+    with pytest.raises(ValueError, match="unknown problem"):
+        multibody.problem("nope")
+    model = multibody.problem("double-pendulum")
+    with pytest.raises(ValueError, match="method"):
+        model.run("euler")
+    with pytest.raises(ValueError, match="step"):
+        model.run(step=-1.0)
+    with pytest.raises(ValueError, match="every"):
+        model.run(every=0)
+    with pytest.raises(TypeError, match="t_end"):
+        model.run(t_end="1")  # type: ignore[arg-type]
+    with pytest.raises(liemid.ConvergenceError):
+        model.run(step=2.0, t_end=10.0)
+
+
+def test_the_module_example_runs() -> None:
+    import doctest
+
+    result = doctest.testmod(multibody)
+    assert result.attempted > 0 and result.failed == 0
