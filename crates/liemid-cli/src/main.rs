@@ -124,6 +124,7 @@ fn main() -> ExitCode {
             for name in multibody::scenario::PROBLEMS {
                 println!("{name:<15} {}", multibody::scenario::describe(name));
             }
+            println!("{:<11} {}", rigid::satellite::PROBLEM, rigid::satellite::DESCRIPTION);
             Ok(())
         }
     };

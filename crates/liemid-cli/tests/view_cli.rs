@@ -61,6 +61,65 @@ fn rigid_page_and_refusals() {
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
 }
 
+/// `--adaptive EPS --view`: one frame a step at the adaptive steps' times (the page states
+/// steps + 1 frames), the trajectory unchanged by the page; the eccentric satellite, whose
+/// run keeps no frames, refuses `--view` in one line.
+#[test]
+fn adaptive_rigid_page_and_satellite_refusal() {
+    let dir = scratch("view-adaptive");
+    let file = examples().join("tennis_racket_flip.toml");
+    let file = file.to_str().unwrap();
+    let args = ["run", file, "--adaptive", "1e-2"];
+    let o = run_in(
+        &dir,
+        &[&args[..], &["--no-output", "--json", "--view", "a.html"]].concat(),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    let steps: u64 = out
+        .split("\"steps\":")
+        .nth(1)
+        .and_then(|r| r.split([',', '}']).next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no steps in {out}"));
+    assert!(out.contains("\"adaptive\":{"), "{out}");
+    let stated = format!("{} frames of {steps} steps", steps + 1);
+    assert!(
+        stderr(&o).contains(&format!("view: a.html ({stated})")),
+        "{}",
+        stderr(&o)
+    );
+    check_page(&dir.join("a.html"), &stated);
+    let a = run_in(&dir, &[&args[..], &["--out", "a.csv"]].concat());
+    let b = run_in(&dir, &[&args[..], &["--out", "b.csv", "--view", "b.html"]].concat());
+    assert!(a.status.success() && b.status.success(), "{}", stderr(&b));
+    assert_eq!(
+        std::fs::read(dir.join("a.csv")).unwrap(),
+        std::fs::read(dir.join("b.csv")).unwrap()
+    );
+    refusals(&dir, &[&args[..], &["--no-output"]].concat(), Some(file));
+    let o = run_in(
+        &dir,
+        &[
+            "run",
+            "--problem",
+            "eccentric-satellite",
+            "--adaptive",
+            "0.05",
+            "--view",
+            "s.html",
+        ],
+    );
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(
+        err.contains("--view is not available for --problem eccentric-satellite"),
+        "{err}"
+    );
+    assert!(!dir.join("s.html").exists());
+}
+
 #[test]
 fn many_page_and_refusals() {
     let dir = scratch("view-many");

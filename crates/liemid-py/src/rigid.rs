@@ -6,6 +6,9 @@
 use std::cell::RefCell;
 use std::time::Instant;
 
+use liemid::rigid::adaptive::{
+    AdaptiveRun, AdaptiveStats, AngularSpeed, ReversibleStepper, RigidAdaptive, RigidDensity, TorqueRate,
+};
 use liemid::{
     so3, ConstantTorque, Error, HeavyTop, Inertia, Mat3, RigidBodySystem, RigidState, RotationMethod, Run, Vec3,
 };
@@ -168,9 +171,11 @@ fn parse_method(name: &str) -> PyResult<RotationMethod> {
 }
 
 /// Integrate one body; returns `(t, pi, rotation, quaternion, energy, spatial_momentum,
-/// summary)` with flat arrays.
+/// summary)` with flat arrays. With `adaptive = eps` (and `step` unused) the reversible
+/// adaptive steps of `liemid::rigid::adaptive` with the density `rho` (`omega`, the default,
+/// or `torque`); the summary then has `adaptive: (eps, rho, min_step, max_step, last_step)`.
 #[pyfunction]
-#[pyo3(signature = (inertia, gravity, constant, torque, potential, attitude_kind, attitude_values, momentum, t0, t_end, step, method, every))]
+#[pyo3(signature = (inertia, gravity, constant, torque, potential, attitude_kind, attitude_values, momentum, t0, t_end, step, method, every, adaptive=None, rho=None))]
 #[allow(clippy::too_many_arguments)]
 fn integrate<'py>(
     py: Python<'py>,
@@ -187,6 +192,8 @@ fn integrate<'py>(
     step: f64,
     method: &str,
     every: u64,
+    adaptive: Option<f64>,
+    rho: Option<&str>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let system = PySystem::new(&inertia, gravity, constant, torque, potential)?;
     let rotation = attitude(attitude_kind, &attitude_values)?;
@@ -201,6 +208,16 @@ fn integrate<'py>(
         w
     };
     let initial = RigidState::new(t0, pi, rotation);
+    if let Some(eps) = adaptive {
+        initial.check_valid().map_err(|e| py_error(py, &e, ""))?;
+        return match rho.unwrap_or("omega") {
+            "omega" => integrate_adaptive(py, &system, initial, t_end, eps, method, every, AngularSpeed),
+            "torque" => integrate_adaptive(py, &system, initial, t_end, eps, method, every, TorqueRate),
+            other => Err(PyValueError::new_err(format!(
+                "rho: unknown step density {other:?} (known: 'omega', 'torque')"
+            ))),
+        };
+    }
     let mut run = Run::new(&system, initial, t_end, step).map_err(|e| py_error(py, &e, ""))?;
     let rows = (run.total_steps / every + 2) as usize;
     let mut out = Trajectory::with_capacity(rows);
@@ -232,6 +249,108 @@ fn integrate<'py>(
     d.set_item("wall_time", wall)?;
     d.set_item("method", method.key())?;
     Ok(d)
+}
+
+/// The largest errors of the diagnostics over an adaptive run, as [`Run::step`] keeps them.
+#[derive(Default)]
+struct Largest {
+    energy: f64,
+    spatial: Vec3,
+    body_norm: f64,
+    orthogonality: f64,
+}
+
+impl Largest {
+    fn see(&mut self, first: &liemid::Diagnostics, d: &liemid::Diagnostics) {
+        let de = (d.energy - first.energy).abs();
+        self.energy = self.energy.max(if first.energy != 0.0 {
+            de / first.energy.abs()
+        } else {
+            de
+        });
+        let dm = d.spatial_momentum - first.spatial_momentum;
+        let m = self.spatial;
+        self.spatial = Vec3::new(m.x.max(dm.x.abs()), m.y.max(dm.y.abs()), m.z.max(dm.z.abs()));
+        self.body_norm = self
+            .body_norm
+            .max((d.body_momentum_norm - first.body_momentum_norm).abs());
+        self.orthogonality = self.orthogonality.max(d.orthogonality_defect);
+    }
+}
+
+/// [`integrate`] with reversible adaptive steps (`h = eps / z`, Hairer-Söderlind) of a
+/// symmetric `method` and the step density `density`; the last step lands on `t_end`.
+#[allow(clippy::too_many_arguments)]
+fn integrate_adaptive<'py, D: RigidDensity + Send>(
+    py: Python<'py>,
+    system: &PySystem,
+    initial: RigidState,
+    t_end: f64,
+    eps: f64,
+    method: RotationMethod,
+    every: u64,
+    density: D,
+) -> PyResult<Bound<'py, PyDict>> {
+    let started = Instant::now();
+    // With a Python callable the GIL is needed at every step; otherwise it is released.
+    let result = if system.has_callable() {
+        adaptive_to_end(system, initial, t_end, eps, method, every, density)
+    } else {
+        let shared = SharedSystem(system);
+        py.detach(|| adaptive_to_end(shared.get(), initial, t_end, eps, method, every, density))
+    };
+    let wall = started.elapsed().as_secs_f64();
+    if let Some(e) = system.take_raised() {
+        return Err(e);
+    }
+    let (out, largest, stats, density_name) = result.map_err(|e| py_error(py, &e, "adaptive"))?;
+    let d = PyDict::new(py);
+    out.into_dict(py, &d)?;
+    d.set_item("steps", stats.steps)?;
+    d.set_item("max_energy_error", largest.energy)?;
+    d.set_item("max_spatial_momentum_change", largest.spatial.to_array().to_vec())?;
+    d.set_item("max_body_momentum_norm_change", largest.body_norm)?;
+    d.set_item("max_orthogonality_defect", largest.orthogonality)?;
+    d.set_item("wall_time", wall)?;
+    d.set_item("method", method.key())?;
+    d.set_item(
+        "adaptive",
+        (stats.eps, density_name, stats.min_step, stats.max_step, stats.last_step),
+    )?;
+    Ok(d)
+}
+
+/// The adaptive run of [`integrate_adaptive`]: the trajectory (every `every` steps, the
+/// first and the last), the largest diagnostics errors, the steps and the density's name.
+fn adaptive_to_end<D: RigidDensity>(
+    system: &PySystem,
+    initial: RigidState,
+    t_end: f64,
+    eps: f64,
+    method: RotationMethod,
+    every: u64,
+    density: D,
+) -> Result<(Trajectory, Largest, AdaptiveStats, &'static str), Error> {
+    let stepper = RigidAdaptive::new(system, method, density)?;
+    let density_name = stepper.density_name();
+    let mut run = AdaptiveRun::new(stepper, initial, t_end, eps)?;
+    let first = liemid::Diagnostics::of(system, &initial);
+    let mut largest = Largest {
+        orthogonality: first.orthogonality_defect,
+        ..Largest::default()
+    };
+    let mut out = Trajectory::with_capacity(1024);
+    out.push(&initial, &first);
+    while !run.is_done() {
+        run.step()?;
+        let s = *run.state();
+        let d = liemid::Diagnostics::of(system, &s);
+        largest.see(&first, &d);
+        if run.stats().steps % every == 0 || run.is_done() {
+            out.push(&s, &d);
+        }
+    }
+    Ok((out, largest, run.stats(), density_name))
 }
 
 /// Step `run` to its end, recording the state every `every` steps (and the first and last).

@@ -155,6 +155,31 @@ pub enum Error {
         /// The largest eigenfrequency found.
         omega: f64,
     },
+    /// A method asked to take time-transformed (adaptive) steps that is not symmetric, or
+    /// not one the adaptive driver supports.
+    #[error("{method} cannot take reversible adaptive steps: {reason}")]
+    NotReversible {
+        /// The method.
+        method: &'static str,
+        /// Why.
+        reason: &'static str,
+    },
+    /// The adaptive step-size control failed: the control variable `z` (the step density,
+    /// `h = ε/z`) became non-positive or non-finite, or the step density was.
+    #[error(
+        "adaptive step control failed at t = {t}: {what} = {value:e} with eps = {eps:e}; the \
+         step density must stay finite and positive (reduce eps)"
+    )]
+    StepControl {
+        /// Time of the state where it failed.
+        t: f64,
+        /// Which quantity (`rho`, `z`, `h`).
+        what: &'static str,
+        /// Its value.
+        value: f64,
+        /// The accuracy parameter.
+        eps: f64,
+    },
     /// A model file (MJCF, URDF) that cannot be loaded: not well-formed XML, a value that is
     /// missing, malformed or out of range, or a structure the multibody model cannot
     /// represent. `line` is 1-based (0 when the whole file is at fault, e.g. unreadable).

@@ -54,6 +54,7 @@ pub mod vector;
 pub use composition::{Composition, Scheme};
 pub use error::{Error, Result};
 pub use linalg::{Mat3, Vec3};
+pub use rigid::adaptive::{AdaptiveRun, AdaptiveStats, ReversibleStepper, RigidAdaptive};
 pub use rigid::driver::{advance, integrate, integrate_to, observed_order, step_count, Run, RunSummary, MAX_STEPS};
 pub use rigid::free_flow::FreeFlow;
 pub use rigid::inertia::{Inertia, InertiaOperator, PrincipalInertia};

@@ -7,10 +7,13 @@ use std::time::Instant;
 
 use clap::Args;
 use liemid::error::Num;
+use liemid::rigid::adaptive::{AngularSpeed, TorqueRate};
 use liemid::{RotationMethod, Run, Vec3};
-use serde_json::json;
 
-use super::{converge, study as work_precision};
+use super::{converge, satellite, study as work_precision};
+
+mod adaptive_run;
+mod summary;
 use crate::rigid::scenario::{self, Conservation, Format, Scenario};
 use crate::shared::checkpoint::{Checkpoint, Settings, Source};
 use crate::shared::command::{check_positive, check_study_outputs, report, CmdResult, Failure};
@@ -18,6 +21,8 @@ use crate::shared::interrupt::{progress, Interrupt};
 use crate::shared::output::{plural, OutputPlan, TrajectoryWriter, COLUMNS};
 use crate::shared::plot;
 use crate::shared::view::{self, Scene, ViewPage};
+use adaptive_run::run_adaptive;
+use summary::print_summary;
 
 /// The largest trajectory `run` writes unless `--allow-large-output` is given (bytes).
 pub const MAX_TRAJECTORY_BYTES: f64 = 4.0 * (1u64 << 30) as f64;
@@ -81,6 +86,19 @@ pub struct RunArgs {
     /// Print the summary as one JSON object.
     #[arg(long)]
     json: bool,
+    /// Reversible adaptive steps (Hairer-Soderlind) with accuracy EPS: h = EPS / z, z the
+    /// step density rho carried by a symmetric recursion; symmetric methods only (the EA,
+    /// EX and FS families); replaces --step, the last step lands on t_end.
+    #[arg(long, value_name = "EPS", allow_negative_numbers = true, conflicts_with_all = ["step", "resume", "checkpoint"])]
+    adaptive: Option<f64>,
+    /// The step density of --adaptive: `omega` (|Omega|, the default) or `torque`
+    /// ((|Omega|^2 + |T|/I_min)^(1/2)); for eccentric-satellite `orbit` (the default,
+    /// (mu/r^3)^(1/2)), `omega` or `orbit+omega`.
+    #[arg(long, requires = "adaptive")]
+    rho: Option<String>,
+    /// Orbits to integrate (eccentric-satellite only) [default: 1].
+    #[arg(long, allow_negative_numbers = true, conflicts_with_all = ["t_end", "file", "resume"])]
+    orbits: Option<f64>,
     /// Write a self-contained 3-D animation of the run (HTML) to FILE, sampled every
     /// `--every` steps.
     #[arg(long, conflicts_with = "resume")]
@@ -202,6 +220,29 @@ fn row(s: &liemid::RigidState, d: &liemid::Diagnostics) -> [f64; 17] {
 
 /// Run `liemid run`.
 pub fn run(args: RunArgs) -> CmdResult {
+    if args.file.is_none() && args.resume.is_none() && args.problem == satellite::PROBLEM {
+        if args.view.is_some() {
+            return Err(Failure::Input(format!(
+                "--view is not available for --problem {}: its run reports the final attitude and \
+                 orbit only (a rigid-body scenario takes --view, with or without --adaptive)",
+                satellite::PROBLEM
+            )));
+        }
+        return satellite::run(&satellite::RunRequest {
+            method: args.method.as_deref(),
+            adaptive: args.adaptive,
+            rho: args.rho.as_deref(),
+            step: args.step,
+            orbits: args.orbits.unwrap_or(1.0),
+            json: args.json,
+        });
+    }
+    if args.orbits.is_some() {
+        return Err(Failure::Input(format!(
+            "--orbits is for --problem {} only; give --t-end",
+            satellite::PROBLEM
+        )));
+    }
     let resumed = args
         .resume
         .as_ref()
@@ -214,6 +255,19 @@ pub fn run(args: RunArgs) -> CmdResult {
     };
     let method = RotationMethod::from_key(&settings.method)
         .ok_or_else(|| Failure::Input(format!("unknown method `{}` in the checkpoint", settings.method)))?;
+    if let Some(eps) = args.adaptive {
+        check_positive("adaptive", eps)?;
+        method
+            .check_reversible()
+            .map_err(|e| Failure::Input(format!("--adaptive: {e}")))?;
+        return match args.rho.as_deref().unwrap_or("omega") {
+            "omega" => run_adaptive(&args, &settings, &sc, method, eps, AngularSpeed),
+            "torque" => run_adaptive(&args, &settings, &sc, method, eps, TorqueRate),
+            other => Err(Failure::Input(format!(
+                "--rho {other}: unknown step density for a rigid body (known: omega, torque)"
+            ))),
+        };
+    }
     let steps = liemid::step_count(sc.initial.t, settings.t_end, settings.step).map_err(|e| {
         Failure::Input(format!(
             "--step {} and --t-end {}: {e}",
@@ -296,22 +350,11 @@ pub fn run(args: RunArgs) -> CmdResult {
         ),
     };
     let to_stdout = settings.output.as_ref().is_some_and(|(p, _)| p == "-");
-    let mut page = args.view.as_ref().map(|_| {
-        let i = liemid::RigidBodySystem::inertia(system).matrix().m;
-        let scene = Scene::RigidBody {
-            half_extents: view::box_of_inertia([i[0][0], i[1][1], i[2][2]]),
-        };
-        ViewPage::new(scene, &sc.name)
-    });
+    let mut page = args.view.as_ref().map(|_| view_page(&sc));
     let e0 = run.progress.initial.energy;
     let sample = |page: &mut Option<ViewPage>, s: &liemid::RigidState, d: &liemid::Diagnostics| {
         if let Some(p) = page.as_mut() {
-            let r = row(s, d);
-            p.push_frame(
-                s.t,
-                &r[4..13].iter().chain(&r[14..17]).map(|&v| v as f32).collect::<Vec<_>>(),
-            );
-            p.energy_error(s.t, (d.energy - e0) / e0.abs().max(f64::MIN_POSITIVE));
+            view_frame(p, s, d, e0);
         }
     };
     sample(&mut page, run.state(), &run.progress.initial);
@@ -393,14 +436,7 @@ pub fn run(args: RunArgs) -> CmdResult {
         return Err(Failure::Run(format!("{message}{kept}")));
     }
     let trajectory = writer.map(TrajectoryWriter::finish).transpose().map_err(Failure::Run)?;
-    let viewed = match (&page, &args.view) {
-        (Some(p), Some(path)) => Some(view::report(
-            path,
-            p.write(path, run.total_steps).map_err(Failure::Run)?,
-            run.total_steps,
-        )),
-        _ => None,
-    };
+    let viewed = write_view(page.as_ref(), args.view.as_deref(), run.total_steps)?;
     print_summary(
         &args,
         &settings,
@@ -411,163 +447,54 @@ pub fn run(args: RunArgs) -> CmdResult {
         wall,
         trajectory,
         to_stdout,
+        None,
     );
-    if let Some(line) = viewed {
-        if args.json || to_stdout {
+    print_view_line(viewed, args.json || to_stdout);
+    Ok(())
+}
+
+/// The page of `--view` for a rigid-body scenario: a box with the body's principal moments.
+fn view_page(sc: &Scenario) -> ViewPage {
+    let i = liemid::RigidBodySystem::inertia(&sc.system).matrix().m;
+    let scene = Scene::RigidBody {
+        half_extents: view::box_of_inertia([i[0][0], i[1][1], i[2][2]]),
+    };
+    ViewPage::new(scene, &sc.name)
+}
+
+/// Offer the state `s` (its rotation and spatial momentum) and its relative energy error
+/// against `e0` to the page; the page keeps each frame's time, so unequal (adaptive) steps
+/// play back at the right pace.
+fn view_frame(page: &mut ViewPage, s: &liemid::RigidState, d: &liemid::Diagnostics, e0: f64) {
+    let r = row(s, d);
+    page.push_frame(
+        s.t,
+        &r[4..13].iter().chain(&r[14..17]).map(|&v| v as f32).collect::<Vec<_>>(),
+    );
+    page.energy_error(s.t, (d.energy - e0) / e0.abs().max(f64::MIN_POSITIVE));
+}
+
+/// Write the page of `--view` (if any) after a run of `steps` steps; the line to print.
+fn write_view(page: Option<&ViewPage>, path: Option<&Path>, steps: u64) -> Result<Option<String>, Failure> {
+    match (page, path) {
+        (Some(p), Some(path)) => Ok(Some(view::report(
+            path,
+            p.write(path, steps).map_err(Failure::Run)?,
+            steps,
+        ))),
+        _ => Ok(None),
+    }
+}
+
+/// Print the line of `--view` after the summary, to standard error when standard output
+/// carries JSON or the trajectory.
+fn print_view_line(line: Option<String>, to_stderr: bool) {
+    if let Some(line) = line {
+        if to_stderr {
             eprintln!("{line}");
         } else {
             println!("{line}");
         }
-    }
-    Ok(())
-}
-
-/// Print the summary (text, or one JSON object with `--json`), to standard error when the
-/// trajectory goes to standard output.
-#[allow(clippy::too_many_arguments)]
-fn print_summary(
-    args: &RunArgs,
-    settings: &Settings,
-    sc: &Scenario,
-    run: &Run,
-    method: RotationMethod,
-    max_conserved: f64,
-    wall: f64,
-    trajectory: Option<(String, u64)>,
-    to_stdout: bool,
-) {
-    let summary = run.summary();
-    let s = &summary.state;
-    let conservation = sc.system.conservation();
-    let n = run.total_steps;
-    let last_step = if n == 0 {
-        0.0
-    } else {
-        run.t_end - (run.t0 + (n - 1) as f64 * run.h)
-    };
-    let energy_note = match conservation {
-        Conservation::Driven => "not conserved: the constant torque does work",
-        _ => "conserved by the dynamics: the error is the method's",
-    };
-    let momentum_note = match conservation {
-        Conservation::Free => "all components conserved (torque-free)".to_string(),
-        Conservation::Gravity(g) => format!(
-            "only the component along gravity [{:.3}, {:.3}, {:.3}] is conserved",
-            g.x, g.y, g.z
-        ),
-        Conservation::Driven => "not conserved: the torque changes it".to_string(),
-    };
-    let warn_energy = !matches!(conservation, Conservation::Driven) && summary.max_energy_error > 1e-2;
-    if warn_energy {
-        eprintln!(
-            "liemid: warning: the relative energy error reached {:.3e}; the step h = {} is probably too \
-             large for this problem",
-            summary.max_energy_error,
-            Num(settings.step)
-        );
-    }
-    if args.json {
-        let out = json!({
-            "problem": sc.name,
-            "method": method.key(),
-            "step": settings.step,
-            "last_step": last_step,
-            "t": s.t,
-            "pi": s.pi.to_array(),
-            "rotation": s.rotation.to_row_major(),
-            "steps": summary.steps,
-            "energy": [summary.initial.energy, summary.last.energy],
-            "energy_conserved": !matches!(conservation, Conservation::Driven),
-            "max_energy_error": summary.max_energy_error,
-            "max_spatial_momentum_change": summary.max_spatial_momentum_change.to_array(),
-            "conserved_momentum": momentum_note,
-            "max_conserved_momentum_change": match conservation {
-                Conservation::Driven => json!(null),
-                _ => json!(max_conserved),
-            },
-            "max_orthogonality_defect": summary.max_orthogonality_defect,
-            "wall_time_seconds": wall,
-            "trajectory": trajectory.as_ref().map(|(p, rows)| json!({
-                "path": p,
-                "rows": rows,
-                "format": settings.output.as_ref().map(|(_, f)| f.as_str()),
-            })),
-        });
-        if to_stdout {
-            eprintln!("{out}");
-        } else {
-            println!("{out}");
-        }
-        return;
-    }
-    let mut text = String::new();
-    let mut line = |l: String| {
-        text.push_str(&l);
-        text.push('\n');
-    };
-    let r = s.rotation.m;
-    let dm = summary.max_spatial_momentum_change;
-    let step_text = if n == 1 && last_step < settings.step {
-        format!(
-            "one step of {} (the given step {} is longer than the interval)",
-            Num(last_step),
-            Num(settings.step)
-        )
-    } else if n > 1 && (last_step - settings.step).abs() > 1e-9 * settings.step {
-        format!("h = {} (the last step {})", Num(settings.step), Num(last_step))
-    } else {
-        format!("h = {}", Num(settings.step))
-    };
-    line(format!(
-        "{}: {} with {step_text} to t = {}",
-        sc.name,
-        method.name(),
-        Num(s.t)
-    ));
-    line(format!("steps                          {}", summary.steps));
-    line(format!(
-        "final Pi (kg m^2/s)            [{:.12e}, {:.12e}, {:.12e}]",
-        s.pi.x, s.pi.y, s.pi.z
-    ));
-    for (i, row) in r.iter().enumerate() {
-        let label = if i == 0 { "final R" } else { "" };
-        line(format!(
-            "{label:<30} [{:>19.12e}, {:>19.12e}, {:>19.12e}]",
-            row[0], row[1], row[2]
-        ));
-    }
-    line(format!(
-        "energy (J)                     {:.9e} at the start; {energy_note}",
-        summary.initial.energy
-    ));
-    let label = match conservation {
-        Conservation::Driven => "max relative energy change     ",
-        _ => "max relative energy error      ",
-    };
-    line(format!("{label}{:.3e}", summary.max_energy_error));
-    line(format!("spatial momentum pi            {momentum_note}"));
-    line(format!(
-        "max change of pi (kg m^2/s)    [{:.3e}, {:.3e}, {:.3e}]",
-        dm.x, dm.y, dm.z
-    ));
-    if let Conservation::Gravity(_) = conservation {
-        line(format!("max change of pi along gravity {max_conserved:.3e}"));
-    }
-    line(format!(
-        "max orthogonality defect       {:.3e}",
-        summary.max_orthogonality_defect
-    ));
-    line(format!("wall time                      {wall:.3} s"));
-    if let Some((p, rows)) = &trajectory {
-        line(format!(
-            "trajectory                     {p} ({rows} {})",
-            plural(*rows, "row", "rows")
-        ));
-    }
-    if to_stdout {
-        eprint!("{text}");
-    } else {
-        print!("{text}");
     }
 }
 
@@ -645,6 +572,22 @@ pub struct WorkPrecisionArgs {
     /// Write the study as JSON to FILE, or to standard output with `-`.
     #[arg(long)]
     pub json: Option<String>,
+    /// Add the reversible adaptive family (EA, EX and their compositions, density |Omega|);
+    /// with --problem eccentric-satellite, the satellite's own study (fixed and adaptive
+    /// EA/EX, the adaptive compositions, DOP853 on the full orbit + attitude ODE).
+    #[arg(long)]
+    pub adaptive: bool,
+    /// With --problem eccentric-satellite --adaptive: instead of the study, N orbits with
+    /// the adaptive --drift-method at --drift-eps against DOP853 at the same CPU time; the
+    /// energy and angular momentum errors per orbit go to --plot.
+    #[arg(long, requires = "adaptive")]
+    pub drift_orbits: Option<u32>,
+    /// The method of the drift run.
+    #[arg(long, default_value = "liemid-ea4", requires = "drift_orbits")]
+    pub drift_method: String,
+    /// The eps of the drift run.
+    #[arg(long, default_value_t = 0.05, requires = "drift_orbits")]
+    pub drift_eps: f64,
 }
 
 /// Print the rigid-body methods: order, torque evaluations a step, what they conserve.
@@ -726,8 +669,16 @@ fn study_end(sc: &Scenario, t_end: Option<f64>) -> Result<f64, Failure> {
 
 /// Run `liemid work-precision`.
 pub fn work_precision_cmd(args: WorkPrecisionArgs) -> CmdResult {
+    if args.scenario.is_none() && args.problem == satellite::PROBLEM {
+        return satellite::work_precision(&args);
+    }
     let sc = load_scenario(args.scenario.as_deref(), &args.problem)?;
     let entries: Vec<work_precision::Entry> = match &args.methods {
+        None if args.adaptive => {
+            let mut v = work_precision::Entry::all();
+            v.extend(work_precision::Entry::adaptive());
+            v
+        }
         None => work_precision::Entry::all(),
         Some(list) => list
             .iter()
@@ -740,6 +691,19 @@ pub fn work_precision_cmd(args: WorkPrecisionArgs) -> CmdResult {
                 })
             })
             .collect::<Result<_, _>>()?,
+    };
+    let entries = if args.adaptive && args.methods.is_some() {
+        let mut v = entries.clone();
+        for e in &entries {
+            if let work_precision::Entry::Fixed(m) = e {
+                if m.check_reversible().is_ok() {
+                    v.push(work_precision::Entry::Adaptive(*m));
+                }
+            }
+        }
+        v
+    } else {
+        entries
     };
     let t_end = study_end(&sc, args.t_end)?;
     let options = work_precision::Options {

@@ -6,5 +6,6 @@
 pub mod baseline;
 pub mod command;
 pub mod converge;
+pub mod satellite;
 pub mod scenario;
 pub mod study;

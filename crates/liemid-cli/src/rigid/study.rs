@@ -18,6 +18,8 @@ pub enum Entry {
     Fixed(RotationMethod),
     /// Dormand-Prince 8(5,3), adaptive.
     Dop853,
+    /// A symmetric method with reversible adaptive steps (density |Ω|).
+    Adaptive(RotationMethod),
 }
 
 impl Entry {
@@ -28,6 +30,22 @@ impl Entry {
         } else {
             RotationMethod::from_key(key).map(Entry::Fixed)
         }
+    }
+    /// The adaptive family: EA, EX and their compositions, with reversible adaptive steps.
+    pub fn adaptive() -> Vec<Entry> {
+        use RotationMethod as M;
+        [
+            M::LieMidpointAlternating,
+            M::LieMidpointAlternating4,
+            M::LieMidpointAlternating6,
+            M::LieMidpointAlternating8,
+            M::LieMidpointExact,
+            M::LieMidpointExact4,
+            M::LieMidpointExact8,
+        ]
+        .into_iter()
+        .map(Entry::Adaptive)
+        .collect()
     }
     /// Every entry.
     pub fn all() -> Vec<Entry> {
@@ -46,6 +64,9 @@ pub struct Point {
     /// The relative tolerance (adaptive baseline).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub tolerance: Option<f64>,
+    /// The accuracy parameter of a reversible adaptive run (`h = eps / z`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub eps: Option<f64>,
     /// `‖R − R_ref‖_F` at `t_end`.
     pub attitude_error: f64,
     /// `|Π − Π_ref| / |Π_ref|` at `t_end`.
@@ -274,6 +295,7 @@ fn curve_fixed(
         points.push(Point {
             step: Some(h),
             tolerance: None,
+            eps: None,
             attitude_error: dr,
             momentum_error: dp,
             seconds,
@@ -321,6 +343,7 @@ fn curve_dop853(scenario: &Scenario, t_end: f64, reference: &RigidState, options
         points.push(Point {
             step: None,
             tolerance: Some(tol),
+            eps: None,
             attitude_error: dr,
             momentum_error: dp,
             seconds,
@@ -337,6 +360,91 @@ fn curve_dop853(scenario: &Scenario, t_end: f64, reference: &RigidState, options
     Curve {
         name: "dop853".into(),
         label: "DOP853".into(),
+        points,
+        note,
+    }
+}
+
+/// A reversible adaptive method (density |Ω|): `eps` from 1 (EA, EX) or 2 (compositions)
+/// halved until the error or the time budget is reached.
+fn curve_adaptive(
+    scenario: &Scenario,
+    method: RotationMethod,
+    t_end: f64,
+    reference: &RigidState,
+    options: &Options,
+) -> Curve {
+    use liemid::rigid::adaptive::{AdaptiveRun, AngularSpeed, RigidAdaptive};
+    let mut eps = if method.order() > 2 { 2.0 } else { 1.0 };
+    let mut points = Vec::new();
+    let mut note = None;
+    while points.len() < options.max_points {
+        let counting = CountingTorque::new(&scenario.system);
+        let go = |system: &dyn Fn() -> Result<(RigidState, u64), String>| system();
+        let run = timed(options.repetitions, || {
+            go(&|| {
+                let st = RigidAdaptive::new(&scenario.system, method, AngularSpeed).map_err(|e| e.to_string())?;
+                let mut run = AdaptiveRun::new(st, scenario.initial, t_end, eps).map_err(|e| e.to_string())?;
+                let s = run.run_to_end().map_err(|e| e.to_string())?;
+                Ok((*run.state(), s.steps))
+            })
+        });
+        let ((end, _), seconds) = match run {
+            Ok(r) => r,
+            Err(e) => {
+                if points.is_empty() && eps > 1e-6 {
+                    eps *= 0.5;
+                    continue;
+                }
+                note = Some(e);
+                break;
+            }
+        };
+        // The diagnostics along the run and the torque count (not timed).
+        let e0 = liemid::Diagnostics::of(&scenario.system, &scenario.initial).energy;
+        let span = t_end - scenario.initial.t;
+        let (mut max, mut first, mut last) = (0.0f64, 0.0f64, 0.0f64);
+        if let Ok(st) = RigidAdaptive::new(&counting, method, AngularSpeed) {
+            if let Ok(mut run) = AdaptiveRun::new(st, scenario.initial, t_end, eps) {
+                while !run.is_done() && run.step().is_ok() {
+                    let s = run.state();
+                    let d = liemid::Diagnostics::of(&scenario.system, s);
+                    let e = if e0 != 0.0 {
+                        ((d.energy - e0) / e0).abs()
+                    } else {
+                        (d.energy - e0).abs()
+                    };
+                    max = max.max(e);
+                    if s.t <= scenario.initial.t + 0.1 * span {
+                        first = first.max(e);
+                    }
+                    if s.t >= t_end - 0.1 * span {
+                        last = last.max(e);
+                    }
+                }
+            }
+        }
+        let (dp, dr) = errors(&end, reference);
+        points.push(Point {
+            step: None,
+            tolerance: None,
+            eps: Some(eps),
+            attitude_error: dr,
+            momentum_error: dp,
+            seconds,
+            torque_evaluations: counting.count(),
+            max_energy_error: max,
+            energy_error_first_tenth: first,
+            energy_error_last_tenth: last,
+        });
+        if dr < options.min_error || seconds > options.budget {
+            break;
+        }
+        eps *= 0.5;
+    }
+    Curve {
+        name: format!("{}-adaptive", method.key()),
+        label: format!("{} adaptive", method.name()),
         points,
         note,
     }
@@ -392,6 +500,7 @@ pub fn study(scenario: &Scenario, t_end: f64, options: &Options) -> Result<Study
         let curve = match entry {
             Entry::Fixed(m) => curve_fixed(scenario, *m, t_end, &ref_state, options),
             Entry::Dop853 => curve_dop853(scenario, t_end, &ref_state, options),
+            Entry::Adaptive(m) => curve_adaptive(scenario, *m, t_end, &ref_state, options),
         };
         methods.push(curve);
         bar.inc(1);

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 from . import beam, many, multibody, problems, spins
 from ._core import (
+    AdaptiveSteps,
     CallableTorque,
     ConstantTorque,
     EnsembleState,
@@ -47,6 +48,7 @@ from ._errors import ConvergenceError
 __version__ = "0.1.0"
 
 __all__ = [
+    "AdaptiveSteps",
     "CallableTorque",
     "ConstantTorque",
     "ConvergenceError",

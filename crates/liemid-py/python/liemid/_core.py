@@ -253,6 +253,25 @@ def _momentum(angular_velocity: Any, angular_momentum: Any) -> Tuple[str, Any]:
 
 
 @dataclass(frozen=True)
+class AdaptiveSteps:
+    """How an adaptive run stepped (``integrate(..., adaptive=eps)``).
+
+    Attributes
+    ----------
+    eps : the accuracy parameter (h = eps / z, z following the step density)
+    rho : the step density, ``omega`` (|Ω|) or ``torque`` ((|Ω|² + |T|/I_min)^½)
+    min_step, max_step : the smallest and largest step (s), the last one excluded
+    last_step : the last step (s), shortened to land on ``t_end``
+    """
+
+    eps: float
+    rho: str
+    min_step: float
+    max_step: float
+    last_step: float
+
+
+@dataclass(frozen=True)
 class Solution:
     """A trajectory and its summary. Every array is an owned, C-contiguous float64 array
     with one row per recorded step (the first, every ``every``-th and the last).
@@ -272,6 +291,7 @@ class Solution:
     max_orthogonality_defect : largest ‖RᵀR − I‖_F over every step
     wall_time : seconds spent stepping
     method : the method's key
+    adaptive : how the steps were chosen (an ``AdaptiveSteps``), or None at a fixed step
     """
 
     t: FloatArray
@@ -288,6 +308,7 @@ class Solution:
     wall_time: float
     method: str
     inertia: FloatArray = field(default_factory=lambda: np.ones(3))
+    adaptive: Optional[AdaptiveSteps] = None
 
     def view(self, path: Optional[str] = None) -> str:
         """The run as a self-contained 3-D page (the body as a box with its principal axes
@@ -313,7 +334,7 @@ def integrate(
     body: RigidBody,
     *,
     t_end: float,
-    step: float,
+    step: Optional[float] = None,
     method: str = "liemid-ea",
     rotation: Optional[ArrayLike] = None,
     rotation_vector: Optional[ArrayLike] = None,
@@ -322,8 +343,11 @@ def integrate(
     angular_momentum: Optional[ArrayLike] = None,
     t0: float = 0.0,
     every: int = 1,
+    adaptive: Optional[float] = None,
+    rho: str = "omega",
 ) -> Solution:
-    """Integrate a rigid body from ``t0`` to ``t_end`` with the fixed step ``step``.
+    """Integrate a rigid body from ``t0`` to ``t_end`` with the fixed step ``step``, or with
+    reversible adaptive steps of accuracy ``adaptive``.
 
     The default method, LIEMID[EA], is the explicit midpoint Lie rule with alternating
     impulses (Krysl 2005): per step, ``P = Π + (h/2) T``; solve ``(2/h) I Ψ₁ =
@@ -354,6 +378,18 @@ def integrate(
         Start time (s).
     every : int
         Record every ``every``-th step (the first and last states always).
+    adaptive : float, optional
+        Instead of ``step``: reversible adaptive steps (Hairer and Söderlind 2005) with
+        accuracy ``eps = adaptive``: ``h = eps / z`` with ``z`` following the step density
+        ``rho`` by a symmetric recursion, so the run stays time-reversible and its energy
+        error bounded; symmetric methods only (the ``liemid-ea``, ``-ex``, ``-fs`` families
+        and their compositions, which keep their order in ``eps``). The last step lands on
+        ``t_end``. Use it when the pace of the motion changes along the run (see
+        docs/adaptive.md); ``Solution.adaptive`` tells the steps taken.
+    rho : str
+        The step density of ``adaptive``: ``omega`` (|Ω|, default: a step turns the body by
+        about ``eps`` radians) or ``torque`` ((|Ω|² + |T|/I_min)^½, two more torque
+        evaluations per step).
 
     Returns
     -------
@@ -372,6 +408,13 @@ def integrate(
     mkind, mvalue = _momentum(angular_velocity, angular_momentum)
     if not isinstance(every, (int, np.integer)) or isinstance(every, bool) or every < 1:
         raise ValueError(f"every: expected a whole number of at least 1, found {every!r}")
+    if (step is None) == (adaptive is None):
+        raise ValueError("give exactly one of step (s, a fixed step) or adaptive (eps, reversible adaptive steps)")
+    eps = None if adaptive is None else _number("adaptive", adaptive)
+    if eps is not None and not eps > 0.0:
+        raise ValueError(f"adaptive: expected a positive accuracy eps, found {adaptive!r}")
+    if rho not in ("omega", "torque"):
+        raise ValueError(f"rho: expected 'omega' or 'torque', found {rho!r}")
     inertia9, gravity, constant, torque, potential = body._model
     d = _liemid.integrate(
         inertia9,
@@ -384,11 +427,14 @@ def integrate(
         (mkind, _vec3(mkind, mvalue)),
         _number("t0", t0),
         _number("t_end", t_end),
-        _number("step", step),
+        0.0 if step is None else _number("step", step),
         str(method),
         int(every),
+        eps,
+        rho if eps is not None else None,
     )
     n = len(d["t"])
+    a = d.get("adaptive")
     return Solution(
         t=d["t"],
         pi=d["pi"].reshape(n, 3),
@@ -404,6 +450,7 @@ def integrate(
         wall_time=float(d["wall_time"]),
         method=str(d["method"]),
         inertia=np.diag(body.inertia).copy(),
+        adaptive=None if a is None else AdaptiveSteps(float(a[0]), str(a[1]), float(a[2]), float(a[3]), float(a[4])),
     )
 
 

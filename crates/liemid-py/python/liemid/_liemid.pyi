@@ -22,6 +22,8 @@ def integrate(
     step: float,
     method: str,
     every: int,
+    adaptive: Optional[float] = None,
+    rho: Optional[str] = None,
 ) -> dict[str, Any]: ...
 def ensemble(
     inertia: List[float],

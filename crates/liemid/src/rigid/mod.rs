@@ -13,6 +13,10 @@
 //! [`rotation::RotationMethod`]; [`driver`] runs any of them from `t0` to `t_end` with an
 //! observer and the extremes of the diagnostics.
 //!
+//! **Adaptive steps** ([`adaptive`]): Hairer and Söderlind's explicit, time-reversible
+//! step-size control for the symmetric methods; [`satellite`]: a rigid satellite on an
+//! eccentric orbit, translation and attitude by one coupled splitting.
+//!
 //! **Problems** ([`problems`]): the fast and slow Lagrangian tops, the torque-dominated
 //! symmetric and asymmetric tops and the free asymmetric body, each with its initial state
 //! and end time.
@@ -21,6 +25,7 @@
 //! P. Krysl, *Explicit momentum-conserving integrator for dynamics of rigid bodies
 //! approximating the midpoint Lie algorithm*, Int. J. Numer. Meth. Engng 63 (2005).
 
+pub mod adaptive;
 pub mod body;
 pub mod driver;
 pub mod free_flow;
@@ -28,5 +33,6 @@ pub mod inertia;
 pub mod midpoint;
 pub mod problems;
 pub mod rotation;
+pub mod satellite;
 
 pub use body::*;

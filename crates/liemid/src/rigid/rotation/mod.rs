@@ -306,6 +306,44 @@ impl RotationMethod {
         self.integrator().order()
     }
 
+    /// Whether the method can take reversible adaptive steps
+    /// ([`crate::rigid::adaptive`]): `Ok` for the symmetric explicit families (EA, EX, FS
+    /// and their compositions), otherwise why not.
+    ///
+    /// # Errors
+    /// [`Error::NotReversible`] naming the method and the reason.
+    pub fn check_reversible(self) -> Result<()> {
+        use RotationMethod as M;
+        let reason = match self {
+            M::LieMidpointAlternating
+            | M::LieMidpointAlternating4
+            | M::LieMidpointAlternating4Yoshida
+            | M::LieMidpointAlternating6
+            | M::LieMidpointAlternating8
+            | M::LieMidpointExact
+            | M::LieMidpointExact4
+            | M::LieMidpointExact6
+            | M::LieMidpointExact8
+            | M::LieMidpointFasso
+            | M::LieMidpointFasso4
+            | M::LieMidpointFasso6
+            | M::LieMidpointFasso8 => return Ok(()),
+            M::LieMidpointE1 | M::LieMidpointE2 => {
+                "it is not symmetric (E1 and E2 are each other's adjoint, first order); use liemid-ea, their symmetric composition"
+            }
+            M::RungeKutta4 | M::RungeKuttaMuntheKaas4 => {
+                "it is not symmetric (an explicit Runge-Kutta method is not its own adjoint), so the time-transformed step would be neither reversible nor of its order in eps"
+            }
+            M::LieMidpointImplicit | M::AustinKrishnaprasadWang | M::SimoWong | M::KryslEndresNewmark => {
+                "only the explicit symmetric families (liemid-ea, liemid-ex, liemid-fs and their compositions) are wired to the adaptive driver"
+            }
+        };
+        Err(Error::NotReversible {
+            method: self.name(),
+            reason,
+        })
+    }
+
     /// Torque evaluations per step in a long run.
     #[must_use]
     pub fn torque_evaluations_per_step(self) -> &'static str {

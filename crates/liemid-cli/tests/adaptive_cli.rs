@@ -1,0 +1,85 @@
+//! `liemid run --adaptive EPS`: the JSON summary's `adaptive` object beside `steps`, the run
+//! landing on t_end, the eccentric satellite's orbit and attitude, and the refusals (exit 2,
+//! one line).
+
+mod common;
+use common::{json, run_in, scratch, stderr, stdout};
+
+#[test]
+fn adaptive_summary_lands_on_t_end() {
+    let dir = scratch("adaptive-run");
+    let o = run_in(
+        &dir,
+        &["run", "--adaptive", "0.3", "--t-end", "0.05", "--no-output", "--json"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v = json(&stdout(&o));
+    assert_eq!(v["t"].as_f64(), Some(0.05));
+    assert!(v["step"].is_null());
+    let a = &v["adaptive"];
+    assert_eq!(a["eps"].as_f64(), Some(0.3));
+    assert_eq!(a["rho"].as_str(), Some("omega"));
+    let (lo, hi) = (a["min_step"].as_f64().unwrap(), a["max_step"].as_f64().unwrap());
+    let last = v["last_step"].as_f64().unwrap();
+    assert!(0.0 < lo && lo <= hi && 0.0 < last && last <= hi, "{v}");
+    // The steps cover the interval: (steps - 1) full steps and the last.
+    let n = v["steps"].as_u64().unwrap() as f64;
+    assert!((n - 1.0) * lo + last <= 0.05 * (1.0 + 1e-12) && (n - 1.0) * hi + last >= 0.05 * (1.0 - 1e-12));
+}
+
+#[test]
+fn eccentric_satellite_one_orbit() {
+    let dir = scratch("adaptive-satellite");
+    let o = run_in(
+        &dir,
+        &[
+            "run",
+            "--problem",
+            "eccentric-satellite",
+            "--adaptive",
+            "0.05",
+            "--json",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v = json(&stdout(&o));
+    assert_eq!(v["adaptive"]["rho"].as_str(), Some("orbit"));
+    assert_eq!(v["rotation"].as_array().map(Vec::len), Some(9));
+    // Back at perigee after one period: |r| = a (1 - e) = 6.9056e6 m to the orbit's error.
+    let r: Vec<f64> = v["position"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    let norm = r.iter().map(|x| x * x).sum::<f64>().sqrt();
+    assert!((norm / 6.9056e6 - 1.0).abs() < 1e-2, "{v}");
+    // Total angular momentum at round-off (compensated orbit sums).
+    assert!(v["max_angular_momentum_error"].as_f64().unwrap() < 1e-14, "{v}");
+}
+
+#[test]
+fn refusals() {
+    let dir = scratch("adaptive-refusals");
+    for args in [
+        &["run", "--method", "rk4", "--adaptive", "0.1", "--no-output"][..],
+        &["run", "--adaptive", "0.1", "--step", "1e-3", "--no-output"],
+        &["run", "--adaptive", "-1", "--no-output"],
+        &["run", "--adaptive", "0.1", "--rho", "orbit", "--no-output"],
+        &[
+            "run",
+            "--problem",
+            "eccentric-satellite",
+            "--method",
+            "liemid-e1",
+            "--adaptive",
+            "0.1",
+        ],
+        &["run", "--orbits", "2", "--no-output"],
+    ] {
+        let o = run_in(&dir, args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(!err.trim().is_empty(), "{args:?}");
+    }
+}
