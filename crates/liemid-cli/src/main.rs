@@ -120,11 +120,11 @@ fn main() -> ExitCode {
             for name in rigid::scenario::PROBLEMS {
                 println!("{name:<15} {}", rigid::scenario::describe(name));
             }
+            println!("{:<15} {}", rigid::satellite::PROBLEM, rigid::satellite::DESCRIPTION);
             println!("\nliemid multibody --problem NAME:");
             for name in multibody::scenario::PROBLEMS {
                 println!("{name:<15} {}", multibody::scenario::describe(name));
             }
-            println!("{:<11} {}", rigid::satellite::PROBLEM, rigid::satellite::DESCRIPTION);
             Ok(())
         }
     };

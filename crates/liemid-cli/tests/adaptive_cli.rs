@@ -76,10 +76,15 @@ fn refusals() {
             "0.1",
         ],
         &["run", "--orbits", "2", "--no-output"],
+        // Options the satellite run does not honour are refused, never silently dropped.
+        &["run", "--problem", "eccentric-satellite", "--out", "sat.csv"],
+        &["run", "--problem", "eccentric-satellite", "--every", "10"],
+        &["run", "--problem", "eccentric-satellite", "--t-end", "100"],
     ] {
         let o = run_in(&dir, args);
         let err = stderr(&o);
         assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
         assert!(!err.trim().is_empty(), "{args:?}");
     }
+    assert!(!dir.join("sat.csv").exists());
 }

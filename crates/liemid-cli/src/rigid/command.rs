@@ -221,10 +221,20 @@ fn row(s: &liemid::RigidState, d: &liemid::Diagnostics) -> [f64; 17] {
 /// Run `liemid run`.
 pub fn run(args: RunArgs) -> CmdResult {
     if args.file.is_none() && args.resume.is_none() && args.problem == satellite::PROBLEM {
-        if args.view.is_some() {
+        let unsupported = [
+            ("--view", args.view.is_some()),
+            ("--out", args.out.is_some()),
+            ("--every", args.every.is_some()),
+            ("--format", args.format.is_some()),
+            ("--checkpoint", args.checkpoint.is_some()),
+            ("--max-steps", args.max_steps.is_some()),
+            ("--t-end", args.t_end.is_some()),
+        ];
+        if let Some((flag, _)) = unsupported.iter().find(|(_, given)| *given) {
+            let instead = if *flag == "--t-end" { "; give --orbits" } else { "" };
             return Err(Failure::Input(format!(
-                "--view is not available for --problem {}: its run reports the final attitude and \
-                 orbit only (a rigid-body scenario takes --view, with or without --adaptive)",
+                "{flag} is not available for --problem {}: its run reports the final attitude and \
+                 orbit only{instead} (a rigid-body scenario takes {flag}, with or without --adaptive)",
                 satellite::PROBLEM
             )));
         }
