@@ -23,6 +23,7 @@ pub mod lattice;
 pub mod problems;
 
 mod explicit;
+mod lanes;
 mod midpoint;
 mod splitting;
 mod sweep;

@@ -84,6 +84,11 @@ impl Shared {
         Shared(spins.as_mut_ptr(), spins.len())
     }
 
+    /// The pointer and the length (for the lane kernels, under the same contract).
+    pub(crate) fn raw(&self) -> (*mut Vec3, usize) {
+        (self.0, self.1)
+    }
+
     /// `(s[i], s[j]) ← f(s[i], s[j])` for the bonds of a matching.
     ///
     /// # Safety
