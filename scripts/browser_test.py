@@ -212,7 +212,7 @@ def make_pages(liemid: Path, work: Path) -> List[Tuple[str, Path]]:
     runs = {
         "rigid": ["run", str(ex / "tennis_racket_flip.toml"), "--no-output", "--step", "1e-2"],
         "many": ["many", "--scenario", str(ex / "dipolar_fluid.toml"), "--bodies", "125", "--t-end", "3", "--out", str(work / "totals.csv")],
-        "spins": ["spins", str(ex / "spins_square.toml")],
+        "spins": ["spins", str(ex / "spins_square.toml"), "--out", str(work / "spins.csv")],
         "beam": ["beam", "--t-end", "10"],
         "multibody": ["multibody", "--problem", "chain-10", "--t-end", "2", "--every", "20"],
     }
