@@ -36,6 +36,7 @@
 //! Dynamics*, Cambridge 2004, ch. 7-8; D. Baraff, "Linear-time dynamics using Lagrange
 //! multipliers", SIGGRAPH 1996; P. Krysl, Int. J. Numer. Meth. Engng 63 (2005).
 
+mod cholesky;
 pub mod constraints;
 pub mod ensemble;
 pub mod forces;
@@ -43,11 +44,13 @@ pub mod joint_space;
 pub mod method;
 pub mod mjcf;
 pub mod model;
+mod positions;
 pub mod problems;
 pub mod rattle;
 pub mod solver;
 pub mod state;
 pub mod urdf;
+mod velocities;
 mod xml;
 
 pub use constraints::{JointGeometry, JointRows, Row};
