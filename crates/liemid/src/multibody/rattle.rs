@@ -81,6 +81,10 @@ pub struct MultibodySystem {
     pub(super) rows1: Vec<JointRows>,
     pub(super) limit: Vec<LimitState>,
     pub(super) lambda: Vec<[f64; 6]>,
+    /// The converged `λ` of the stage before the last, and the steps of the last two
+    /// converged stages (NaN: none), for the extrapolated start of the position solve.
+    pub(super) lambda_prev: Vec<[f64; 6]>,
+    pub(super) lambda_steps: [f64; 2],
     pub(super) delta: Vec<[f64; 6]>,
     pub(super) rhs: Vec<[f64; 6]>,
     pub(super) pb: Vec<Vec3>,
@@ -191,6 +195,8 @@ impl MultibodySystem {
             rows1: vec![JointRows::default(); nj],
             limit: vec![LimitState::Inactive; nj],
             lambda: vec![[0.0; 6]; nj],
+            lambda_prev: vec![[0.0; 6]; nj],
+            lambda_steps: [f64::NAN; 2],
             delta: vec![[0.0; 6]; nj],
             rhs: vec![[0.0; 6]; nj],
             pb: z3.clone(),
@@ -317,6 +323,7 @@ impl MultibodySystem {
     pub fn reset(&mut self) {
         self.cache_valid = false;
         self.factor_rows0 = false;
+        self.lambda_steps = [f64::NAN; 2];
         self.lambda.iter_mut().for_each(|l| *l = [0.0; 6]);
     }
 
@@ -385,6 +392,7 @@ impl MultibodySystem {
             &mut self.rows0,
         );
         self.factor_rows0 = false;
+        self.lambda_steps = [f64::NAN; 2];
         self.remember(state);
     }
 
@@ -459,6 +467,8 @@ impl MultibodySystem {
             self.pb[i] = state.p[i] + (self.force[i] + df) * hh;
             self.pib[i] = state.pi[i] + (self.torque[i] + dt) * hh;
         }
+        self.start_multipliers(h);
+        let limit_changes = report.limit_changes;
         let mut passes = 0;
         loop {
             self.solve_positions(state, h, report)?;
@@ -510,10 +520,32 @@ impl MultibodySystem {
         // The velocity solve's factorization (at `rows1`, now `rows0`) is the next position
         // solve's quasi-Newton matrix.
         self.factor_rows0 = self.rows0.iter().any(|r| r.n > 0);
+        self.lambda_steps = if report.limit_changes == limit_changes {
+            [h, self.lambda_steps[0]]
+        } else {
+            [f64::NAN; 2]
+        };
         core::mem::swap(&mut self.force, &mut self.force1);
         core::mem::swap(&mut self.torque, &mut self.torque1);
         self.remember(state);
         Ok(())
+    }
+
+    /// The start of the position solve: `λ = 2 λₙ − λₙ₋₁` (linear extrapolation, an
+    /// `O(h²)` error where the previous `λ` alone has `O(h)`) after two converged stages of
+    /// the same step `h` with the same rows, else the previous `λ`. Only the iteration's
+    /// start: the solution is the same to round-off.
+    fn start_multipliers(&mut self, h: f64) {
+        let extrapolate = self.lambda_steps == [h, h];
+        for (l, prev) in self.lambda.iter_mut().zip(&mut self.lambda_prev) {
+            let last = *l;
+            if extrapolate {
+                for r in 0..6 {
+                    l[r] = 2.0 * last[r] - prev[r];
+                }
+            }
+            *prev = last;
+        }
     }
 
     fn velocities(&mut self, p: &[Vec3], pi: &[Vec3]) {
