@@ -81,10 +81,10 @@ pub struct MultibodySystem {
     pub(super) rows1: Vec<JointRows>,
     pub(super) limit: Vec<LimitState>,
     pub(super) lambda: Vec<[f64; 6]>,
-    /// The converged `λ` of the stage before the last, and the steps of the last two
-    /// converged stages (NaN: none), for the extrapolated start of the position solve.
-    pub(super) lambda_prev: Vec<[f64; 6]>,
-    pub(super) lambda_steps: [f64; 2],
+    /// The converged `λ` of the two stages before the last, and the steps of the last
+    /// three converged stages (NaN: none), for the extrapolated start of the position solve.
+    pub(super) lambda_prev: Vec<[[f64; 6]; 2]>,
+    pub(super) lambda_steps: [f64; 3],
     pub(super) delta: Vec<[f64; 6]>,
     pub(super) rhs: Vec<[f64; 6]>,
     pub(super) pb: Vec<Vec3>,
@@ -195,8 +195,8 @@ impl MultibodySystem {
             rows1: vec![JointRows::default(); nj],
             limit: vec![LimitState::Inactive; nj],
             lambda: vec![[0.0; 6]; nj],
-            lambda_prev: vec![[0.0; 6]; nj],
-            lambda_steps: [f64::NAN; 2],
+            lambda_prev: vec![[[0.0; 6]; 2]; nj],
+            lambda_steps: [f64::NAN; 3],
             delta: vec![[0.0; 6]; nj],
             rhs: vec![[0.0; 6]; nj],
             pb: z3.clone(),
@@ -323,7 +323,7 @@ impl MultibodySystem {
     pub fn reset(&mut self) {
         self.cache_valid = false;
         self.factor_rows0 = false;
-        self.lambda_steps = [f64::NAN; 2];
+        self.lambda_steps = [f64::NAN; 3];
         self.lambda.iter_mut().for_each(|l| *l = [0.0; 6]);
     }
 
@@ -392,7 +392,7 @@ impl MultibodySystem {
             &mut self.rows0,
         );
         self.factor_rows0 = false;
-        self.lambda_steps = [f64::NAN; 2];
+        self.lambda_steps = [f64::NAN; 3];
         self.remember(state);
     }
 
@@ -521,9 +521,9 @@ impl MultibodySystem {
         // solve's quasi-Newton matrix.
         self.factor_rows0 = self.rows0.iter().any(|r| r.n > 0);
         self.lambda_steps = if report.limit_changes == limit_changes {
-            [h, self.lambda_steps[0]]
+            [h, self.lambda_steps[0], self.lambda_steps[1]]
         } else {
-            [f64::NAN; 2]
+            [f64::NAN; 3]
         };
         core::mem::swap(&mut self.force, &mut self.force1);
         core::mem::swap(&mut self.torque, &mut self.torque1);
@@ -531,20 +531,22 @@ impl MultibodySystem {
         Ok(())
     }
 
-    /// The start of the position solve: `λ = 2 λₙ − λₙ₋₁` (linear extrapolation, an
-    /// `O(h²)` error where the previous `λ` alone has `O(h)`) after two converged stages of
-    /// the same step `h` with the same rows, else the previous `λ`. Only the iteration's
-    /// start: the solution is the same to round-off.
+    /// The start of the position solve: `λ = 3 λₙ − 3 λₙ₋₁ + λₙ₋₂` (quadratic
+    /// extrapolation, an `O(h³)` error where the previous `λ` alone has `O(h)`) after three
+    /// converged stages of the same step `h` with the same rows, `2 λₙ − λₙ₋₁` after two,
+    /// else the previous `λ`. Only the iteration's start: the solution is the same to
+    /// round-off.
     fn start_multipliers(&mut self, h: f64) {
-        let extrapolate = self.lambda_steps == [h, h];
+        let same = self.lambda_steps.iter().take_while(|&&s| s == h).count();
         for (l, prev) in self.lambda.iter_mut().zip(&mut self.lambda_prev) {
             let last = *l;
-            if extrapolate {
-                for r in 0..6 {
-                    l[r] = 2.0 * last[r] - prev[r];
-                }
+            let [p1, p2] = *prev;
+            match same {
+                3 => *l = core::array::from_fn(|r| 3.0 * (last[r] - p1[r]) + p2[r]),
+                2 => *l = core::array::from_fn(|r| 2.0 * last[r] - p1[r]),
+                _ => {}
             }
-            *prev = last;
+            *prev = [last, p1];
         }
     }
 
