@@ -439,7 +439,9 @@ impl MultibodySystem {
                         return Err(e);
                     }
                 }
-                state.t = t0 + h;
+                // The stages' times sum to `t0 + h` up to rounding: keep the end's cache
+                // (forces, rows, factorization) for the next step, as the drivers do.
+                self.set_time(state, t0 + h);
             }
         }
         if let Some(start) = start {
