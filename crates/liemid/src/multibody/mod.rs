@@ -23,7 +23,7 @@
 //! ([`rattle`]). [`MultibodyMethod`] adds symmetric compositions of orders 4, 6, 8. The
 //! matrices `G M⁻¹ Gᵀ` are factored in O(bodies) by leaves-to-root block elimination of the
 //! body-joint tree, with a pseudo-inverted Schur complement for closed loops with redundant
-//! rows ([`solver`]).
+//! rows ([`solver`]); the symmetric ones, one per step, by block Cholesky.
 //!
 //! **Problems** ([`problems`]): a double pendulum, ball-joint chains (`chain(10)`,
 //! `chain(1000)`), a spinning spacecraft with hinged panels, a four-bar linkage of four

@@ -8,10 +8,12 @@
 //!            G(q⁺)(v⁺, Ω⁺) = 0 fixes μ
 //! ```
 //!
-//! λ comes from a quasi-Newton iteration on `g(q⁺(λ)) = 0` with the matrix
-//! `(h²/2) G(q⁺) M⁻¹ G(q)ᵀ` factored at the first iterate (refactored at the current one
-//! when the residual falls by less than 4x), started from the previous step's λ and run
-//! until the residual is at round-off; μ from one linear solve. The end forces are the next
+//! λ comes from a quasi-Newton iteration on `g(q⁺(λ)) = 0` (`positions.rs`) with the
+//! matrix `(h²/2) G(q) M⁻¹ G(q)ᵀ`, which the previous step's velocity solve has factored
+//! (block Cholesky, `cholesky.rs`; the exact drift Jacobian at the current iterate
+//! when the residual falls by less than 4x), started from `λ` extrapolated from the last
+//! stages and run until the residual is at round-off; μ from one linear solve
+//! (`velocities.rs`). One factorization per step. The end forces are the next
 //! step's start forces. Symmetric and, for conservative forces, symplectic; keeps the total
 //! linear and angular momentum when the forces and joints do.
 //!

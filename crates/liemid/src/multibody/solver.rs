@@ -338,7 +338,7 @@ impl TreeSolver {
     }
 
     /// Factor the symmetric `A = G(q) M⁻¹ G(q)ᵀ` (`rows` at `q`) by the block Cholesky of
-    /// [`super::cholesky`], loops as in [`TreeSolver::factor`]. Solves then agree with those
+    /// `cholesky.rs`, loops as in [`TreeSolver::factor`]. Solves then agree with those
     /// after `factor(mass, inertia, joints, rows, rows)` to round-off.
     ///
     /// # Errors
