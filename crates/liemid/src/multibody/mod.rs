@@ -23,7 +23,7 @@
 //! ([`rattle`]). [`MultibodyMethod`] adds symmetric compositions of orders 4, 6, 8. The
 //! matrices `G M⁻¹ Gᵀ` are factored in O(bodies) by leaves-to-root block elimination of the
 //! body-joint tree, with a pseudo-inverted Schur complement for closed loops with redundant
-//! rows ([`solver`]).
+//! rows ([`solver`]); the symmetric ones, one per step, by block Cholesky.
 //!
 //! **Problems** ([`problems`]): a double pendulum, ball-joint chains (`chain(10)`,
 //! `chain(1000)`), a spinning spacecraft with hinged panels, a four-bar linkage of four
@@ -36,6 +36,7 @@
 //! Dynamics*, Cambridge 2004, ch. 7-8; D. Baraff, "Linear-time dynamics using Lagrange
 //! multipliers", SIGGRAPH 1996; P. Krysl, Int. J. Numer. Meth. Engng 63 (2005).
 
+mod cholesky;
 pub mod constraints;
 pub mod ensemble;
 pub mod forces;
@@ -43,11 +44,13 @@ pub mod joint_space;
 pub mod method;
 pub mod mjcf;
 pub mod model;
+mod positions;
 pub mod problems;
 pub mod rattle;
 pub mod solver;
 pub mod state;
 pub mod urdf;
+mod velocities;
 mod xml;
 
 pub use constraints::{JointGeometry, JointRows, Row};

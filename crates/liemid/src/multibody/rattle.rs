@@ -8,10 +8,12 @@
 //!            G(q⁺)(v⁺, Ω⁺) = 0 fixes μ
 //! ```
 //!
-//! λ comes from a quasi-Newton iteration on `g(q⁺(λ)) = 0` with the matrix
-//! `(h²/2) G(q⁺) M⁻¹ G(q)ᵀ` factored at the first iterate (refactored at the current one
-//! when the residual falls by less than 4x), started from the previous step's λ and run
-//! until the residual is at round-off; μ from one linear solve. The end forces are the next
+//! λ comes from a quasi-Newton iteration on `g(q⁺(λ)) = 0` (`positions.rs`) with the
+//! matrix `(h²/2) G(q) M⁻¹ G(q)ᵀ`, which the previous step's velocity solve has factored
+//! (block Cholesky, `cholesky.rs`; the exact drift Jacobian at the current iterate
+//! when the residual falls by less than 4x), started from `λ` extrapolated from the last
+//! stages and run until the residual is at round-off; μ from one linear solve
+//! (`velocities.rs`). One factorization per step. The end forces are the next
 //! step's start forces. Symmetric and, for conservative forces, symplectic; keeps the total
 //! linear and angular momentum when the forces and joints do.
 //!
@@ -37,9 +39,6 @@
 use crate::error::{Error, Result};
 use crate::linalg::{Mat3, Vec3};
 use crate::rigid::inertia::Inertia;
-use crate::rigid::midpoint;
-use crate::rigid::rotation::newton_error;
-use crate::so3;
 
 use super::constraints::{JointGeometry, JointRows};
 use super::forces::ForceHook;
@@ -75,41 +74,48 @@ pub struct MultibodySystem {
     pub(super) hook: Option<Box<dyn ForceHook>>,
     // Cached start-of-step quantities, valid for (cache_t, cache_c, cache_r).
     pub(super) cache_valid: bool,
-    cache_t: f64,
-    cache_c: Vec<Vec3>,
-    cache_r: Vec<Mat3>,
-    force: Vec<Vec3>,
-    torque: Vec<Vec3>,
+    pub(super) cache_t: f64,
+    pub(super) cache_c: Vec<Vec3>,
+    pub(super) cache_r: Vec<Mat3>,
+    pub(super) force: Vec<Vec3>,
+    pub(super) torque: Vec<Vec3>,
     pub(super) rows0: Vec<JointRows>,
     pub(super) rows1: Vec<JointRows>,
     pub(super) limit: Vec<LimitState>,
-    lambda: Vec<[f64; 6]>,
-    delta: Vec<[f64; 6]>,
-    rhs: Vec<[f64; 6]>,
-    pb: Vec<Vec3>,
-    pib: Vec<Vec3>,
-    p_half: Vec<Vec3>,
-    big_p: Vec<Vec3>,
-    c_new: Vec<Vec3>,
-    r_new: Vec<Mat3>,
-    pi_new: Vec<Vec3>,
-    force1: Vec<Vec3>,
-    torque1: Vec<Vec3>,
+    pub(super) lambda: Vec<[f64; 6]>,
+    /// The converged `λ` of the two stages before the last, and the steps of the last
+    /// three converged stages (NaN: none), for the extrapolated start of the position solve.
+    pub(super) lambda_prev: Vec<[[f64; 6]; 2]>,
+    pub(super) lambda_steps: [f64; 3],
+    pub(super) delta: Vec<[f64; 6]>,
+    pub(super) rhs: Vec<[f64; 6]>,
+    pub(super) pb: Vec<Vec3>,
+    pub(super) pib: Vec<Vec3>,
+    pub(super) p_half: Vec<Vec3>,
+    pub(super) big_p: Vec<Vec3>,
+    pub(super) c_new: Vec<Vec3>,
+    pub(super) r_new: Vec<Mat3>,
+    pub(super) pi_new: Vec<Vec3>,
+    pub(super) force1: Vec<Vec3>,
+    pub(super) torque1: Vec<Vec3>,
     pub(super) damp_f: Vec<Vec3>,
     pub(super) damp_t: Vec<Vec3>,
     pub(super) vel: Vec<Vec3>,
     pub(super) omega: Vec<Vec3>,
-    solver: TreeSolver,
-    backup: MultibodyState,
+    pub(super) solver: TreeSolver,
+    pub(super) backup: MultibodyState,
     // The drift's midpoint data per body (Ψ₁, Ψ₂, P, Π_a) and the effective inertia blocks
     // `h (∂θ⁺/∂P)⁻¹` of the exact drift Jacobian.
-    psi1: Vec<Vec3>,
-    psi2: Vec<Vec3>,
-    pi_a: Vec<Vec3>,
-    effective: Vec<Mat3>,
-    profiling: bool,
-    solver_time: std::time::Duration,
-    step_time: std::time::Duration,
+    pub(super) psi1: Vec<Vec3>,
+    pub(super) psi2: Vec<Vec3>,
+    pub(super) pi_a: Vec<Vec3>,
+    pub(super) effective: Vec<Mat3>,
+    /// Whether the solver holds the factorization of `G(q) M⁻¹ G(q)ᵀ` at `rows0` (the
+    /// last velocity solve's, kept for the next position solve).
+    pub(super) factor_rows0: bool,
+    pub(super) profiling: bool,
+    pub(super) solver_time: std::time::Duration,
+    pub(super) step_time: std::time::Duration,
 }
 
 impl core::fmt::Debug for MultibodySystem {
@@ -191,6 +197,8 @@ impl MultibodySystem {
             rows1: vec![JointRows::default(); nj],
             limit: vec![LimitState::Inactive; nj],
             lambda: vec![[0.0; 6]; nj],
+            lambda_prev: vec![[[0.0; 6]; 2]; nj],
+            lambda_steps: [f64::NAN; 3],
             delta: vec![[0.0; 6]; nj],
             rhs: vec![[0.0; 6]; nj],
             pb: z3.clone(),
@@ -212,6 +220,7 @@ impl MultibodySystem {
             psi2: vec![Vec3::ZERO; nb],
             pi_a: vec![Vec3::ZERO; nb],
             effective: vec![Mat3::IDENTITY; nb],
+            factor_rows0: false,
             profiling: false,
             solver_time: std::time::Duration::ZERO,
             step_time: std::time::Duration::ZERO,
@@ -281,7 +290,7 @@ impl MultibodySystem {
         if self.rows1.iter().all(|r| r.n == 0) {
             return Ok(before);
         }
-        self.factor(false, false)?;
+        self.factor(Matrix::End)?;
         self.velocities(&state.p, &state.pi);
         for (k, jr) in self.rows1.iter().enumerate() {
             let g = &self.joints[k];
@@ -307,6 +316,7 @@ impl MultibodySystem {
             }
         }
         self.cache_valid = false;
+        self.factor_rows0 = false;
         Ok(before)
     }
 
@@ -314,6 +324,8 @@ impl MultibodySystem {
     /// cache is detected as stale anyway).
     pub fn reset(&mut self) {
         self.cache_valid = false;
+        self.factor_rows0 = false;
+        self.lambda_steps = [f64::NAN; 3];
         self.lambda.iter_mut().for_each(|l| *l = [0.0; 6]);
     }
 
@@ -381,6 +393,8 @@ impl MultibodySystem {
             &state.rotation,
             &mut self.rows0,
         );
+        self.factor_rows0 = false;
+        self.lambda_steps = [f64::NAN; 3];
         self.remember(state);
     }
 
@@ -427,7 +441,9 @@ impl MultibodySystem {
                         return Err(e);
                     }
                 }
-                state.t = t0 + h;
+                // The stages' times sum to `t0 + h` up to rounding: keep the end's cache
+                // (forces, rows, factorization) for the next step, as the drivers do.
+                self.set_time(state, t0 + h);
             }
         }
         if let Some(start) = start {
@@ -455,6 +471,8 @@ impl MultibodySystem {
             self.pb[i] = state.p[i] + (self.force[i] + df) * hh;
             self.pib[i] = state.pi[i] + (self.torque[i] + dt) * hh;
         }
+        self.start_multipliers(h);
+        let limit_changes = report.limit_changes;
         let mut passes = 0;
         loop {
             self.solve_positions(state, h, report)?;
@@ -466,6 +484,7 @@ impl MultibodySystem {
             if passes > MAX_LIMIT_PASSES {
                 break;
             }
+            self.factor_rows0 = false;
             Self::rows_at(
                 &self.joints,
                 &self.limit,
@@ -502,10 +521,37 @@ impl MultibodySystem {
         state.p.copy_from_slice(&self.p_half);
         state.pi.copy_from_slice(&self.pi_new);
         core::mem::swap(&mut self.rows0, &mut self.rows1);
+        // The velocity solve's factorization (at `rows1`, now `rows0`) is the next position
+        // solve's quasi-Newton matrix.
+        self.factor_rows0 = self.rows0.iter().any(|r| r.n > 0);
+        self.lambda_steps = if report.limit_changes == limit_changes {
+            [h, self.lambda_steps[0], self.lambda_steps[1]]
+        } else {
+            [f64::NAN; 3]
+        };
         core::mem::swap(&mut self.force, &mut self.force1);
         core::mem::swap(&mut self.torque, &mut self.torque1);
         self.remember(state);
         Ok(())
+    }
+
+    /// The start of the position solve: `λ = 3 λₙ − 3 λₙ₋₁ + λₙ₋₂` (quadratic
+    /// extrapolation, an `O(h³)` error where the previous `λ` alone has `O(h)`) after three
+    /// converged stages of the same step `h` with the same rows, `2 λₙ − λₙ₋₁` after two,
+    /// else the previous `λ`. Only the iteration's start: the solution is the same to
+    /// round-off.
+    fn start_multipliers(&mut self, h: f64) {
+        let same = self.lambda_steps.iter().take_while(|&&s| s == h).count();
+        for (l, prev) in self.lambda.iter_mut().zip(&mut self.lambda_prev) {
+            let last = *l;
+            let [p1, p2] = *prev;
+            match same {
+                3 => *l = core::array::from_fn(|r| 3.0 * (last[r] - p1[r]) + p2[r]),
+                2 => *l = core::array::from_fn(|r| 2.0 * last[r] - p1[r]),
+                _ => {}
+            }
+            *prev = [last, p1];
+        }
     }
 
     fn velocities(&mut self, p: &[Vec3], pi: &[Vec3]) {
@@ -515,91 +561,25 @@ impl MultibodySystem {
         }
     }
 
-    /// The drift with multipliers `self.lambda`: `p½`, `P`, then `c⁺`, `R⁺`, `Π'`.
-    fn drift(&mut self, state: &MultibodyState, h: f64) -> Result<()> {
-        let hh = 0.5 * h;
-        self.p_half.copy_from_slice(&self.pb);
-        self.big_p.copy_from_slice(&self.pib);
-        for (k, g) in self.joints.iter().enumerate() {
-            let rows = &self.rows0[k];
-            for r in 0..rows.n {
-                let l = self.lambda[k][r] * hh;
-                let gr = &rows.grad[r];
-                if let Some(p) = g.parent {
-                    self.p_half[p] += gr.ci * l;
-                    self.big_p[p] += gr.ti * l;
-                }
-                self.p_half[g.child] += gr.cj * l;
-                self.big_p[g.child] += gr.tj * l;
-            }
-        }
-        let name = self.method.name();
-        for i in 0..self.mass.len() {
-            self.c_new[i] = state.c[i] + self.p_half[i] * (h / self.mass[i]);
-            let inertia = &self.inertia[i];
-            let (inc1, _) = midpoint::solve_increment(inertia, self.big_p[i], hh)
-                .map_err(|e| newton_error(name, "midpoint equation (M)", state.t, h, e))?;
-            let pa = inc1.inverse_apply(self.big_p[i]);
-            let (inc2, _) = midpoint::solve_increment(inertia, pa, hh)
-                .map_err(|e| newton_error(name, "midpoint equation (M)", state.t, h, e))?;
-            self.psi1[i] = inc1.psi();
-            self.psi2[i] = inc2.psi();
-            self.pi_a[i] = pa;
-            self.r_new[i] = inc2.rotate(&inc1.rotate(&state.rotation[i]));
-            self.pi_new[i] = inc2.inverse_apply(pa);
-        }
-        Ok(())
-    }
-
-    /// Largest scaled `|g|` of `rows`.
-    fn residual(&self, rows: &[JointRows]) -> f64 {
-        let mut r: f64 = 0.0;
-        for jr in rows {
-            for k in 0..jr.n {
-                let v = jr.value[k].abs();
-                r = r.max(if jr.length[k] { v / self.length } else { v });
-            }
-        }
-        r
-    }
-
-    /// The exact Jacobian `D = ∂θ⁺/∂P` of the drift's rotation (body-frame increment of
-    /// `R⁺` per start impulse `δP`), from the last drift: with `J_k` the midpoint Jacobians,
-    /// `A₁ = J₁⁻¹ exp(−Ψ₁/2) h/2`, `B = exp(−Ψ₁)(1 + hat(P) Jr(−Ψ₁) A₁)`,
-    /// `A₂ = J₂⁻¹ exp(−Ψ₂/2) (h/2) B`, `D = exp(−Ψ₂) Jr(Ψ₁) A₁ + Jr(Ψ₂) A₂`; stored as
-    /// the effective inertia `h D⁻¹` (`= I` to leading order in `h`).
-    fn drift_jacobian(&mut self, h: f64) {
-        let hh = 0.5 * h;
-        for i in 0..self.mass.len() {
-            let (psi1, psi2) = (self.psi1[i], self.psi2[i]);
-            let inertia = &self.inertia[i];
-            let j1 = midpoint::jacobian(inertia, self.big_p[i], hh, psi1);
-            let j2 = midpoint::jacobian(inertia, self.pi_a[i], hh, psi2);
-            let (Some(j1i), Some(j2i)) = (j1.inverse(), j2.inverse()) else {
-                self.effective[i] = self.inertia_matrix[i];
-                continue;
-            };
-            let a1 = j1i * so3::exp(-psi1 * 0.5) * hh;
-            let e1 = so3::exp(-psi1);
-            let b = e1 + e1 * so3::hat(self.big_p[i]) * so3::right_jacobian(-psi1) * a1;
-            let a2 = j2i * so3::exp(-psi2 * 0.5) * b * hh;
-            let d = so3::exp(-psi2) * so3::right_jacobian(psi1) * a1 + so3::right_jacobian(psi2) * a2;
-            self.effective[i] = d.inverse().map_or(self.inertia_matrix[i], |m| m * h);
-        }
-    }
-
-    fn factor(&mut self, left_is_new: bool, exact: bool) -> Result<()> {
-        let (left, right) = if left_is_new {
-            (&self.rows1, &self.rows0)
-        } else {
-            (&self.rows1, &self.rows1)
-        };
-        let inertia = if exact { &self.effective } else { &self.inertia_matrix };
+    /// Factor a matrix of the constraint solve (see [`Matrix`]).
+    pub(super) fn factor(&mut self, matrix: Matrix) -> Result<()> {
         let start = self.profiling.then(std::time::Instant::now);
-        let result = self.solver.factor(&self.mass, inertia, &self.pairs, left, right);
+        self.factor_rows0 = false;
+        let result = match matrix {
+            Matrix::Start => self
+                .solver
+                .factor_symmetric(&self.mass, &self.inertia_matrix, &self.pairs, &self.rows0),
+            Matrix::End => self
+                .solver
+                .factor_symmetric(&self.mass, &self.inertia_matrix, &self.pairs, &self.rows1),
+            Matrix::Exact => self
+                .solver
+                .factor(&self.mass, &self.effective, &self.pairs, &self.rows1, &self.rows0),
+        };
         if let Some(start) = start {
             self.solver_time += start.elapsed();
         }
+        self.factor_rows0 = result.is_ok() && matrix == Matrix::Start;
         result.map_err(|s| Error::InvalidModel {
             reason: format!(
                 "dependent constraint rows at joint {:?} / body {:?}: relative pivot {:.3e} (a joint set with \
@@ -609,261 +589,27 @@ impl MultibodySystem {
         })
     }
 
-    fn timed_solve(&mut self) {
+    pub(super) fn timed_solve(&mut self) {
         let start = self.profiling.then(std::time::Instant::now);
         self.solver.solve(&self.pairs, &self.rhs, &mut self.delta);
         if let Some(start) = start {
             self.solver_time += start.elapsed();
         }
     }
+}
 
-    /// The quasi-Newton iteration for λ.
-    fn solve_positions(&mut self, state: &MultibodyState, h: f64, report: &mut StepReport) -> Result<()> {
-        let any_rows = self.rows0.iter().any(|r| r.n > 0);
-        let mut prev = f64::INFINITY;
-        let mut factored = false;
-        let mut it = 0;
-        loop {
-            self.drift(state, h)?;
-            Self::rows_at(
-                &self.joints,
-                &self.limit,
-                &self.params,
-                &self.c_new,
-                &self.r_new,
-                &mut self.rows1,
-            );
-            if !any_rows {
-                return Ok(());
-            }
-            let r = self.residual(&self.rows1);
-            let extent = self.c_new.iter().fold(0.0f64, |m, c| m.max(c.max_abs()));
-            let floor = 16.0 * f64::EPSILON * (1.0 + extent / self.length);
-            if r <= floor || (r <= 1e-12 && r > 0.5 * prev) {
-                report.position_violation = report.position_violation.max(r);
-                return Ok(());
-            }
-            if it >= MAX_ITERATIONS || !r.is_finite() {
-                return Err(Error::NewtonDidNotConverge {
-                    method: self.method.name(),
-                    equation: "position constraints g(q+(lambda)) = 0",
-                    t: state.t,
-                    h,
-                    residual: r,
-                    iterations: it,
-                });
-            }
-            if !factored || r > 0.25 * prev {
-                // First the spec's matrix; when that converges slowly (fast spin about an axis
-                // of small inertia), the exact drift Jacobian at the current iterate.
-                if factored {
-                    self.drift_jacobian(h);
-                }
-                self.factor(true, factored)?;
-                factored = true;
-                report.factorizations += 1;
-            }
-            let s = -2.0 / (h * h);
-            for (k, jr) in self.rows1.iter().enumerate() {
-                for r in 0..jr.n {
-                    self.rhs[k][r] = jr.value[r] * s;
-                }
-            }
-            self.timed_solve();
-            for (k, jr) in self.rows1.iter().enumerate() {
-                for r in 0..jr.n {
-                    self.lambda[k][r] += self.delta[k][r];
-                }
-            }
-            prev = r;
-            it += 1;
-            report.iterations += 1;
-        }
-    }
-
-    /// Switch limits on where the end coordinate crossed a bound, off where the multiplier
-    /// pulls. Returns whether anything changed.
-    fn update_limits_after_positions(&mut self) -> bool {
-        let mut changed = false;
-        for k in 0..self.joints.len() {
-            let Some((lo, hi)) = self.params[k].range else { continue };
-            let base = self.joints[k].kind.rows();
-            match self.limit[k] {
-                LimitState::Inactive => {
-                    let g = &self.joints[k];
-                    let (pi, pj) = pose(g, &self.c_new, &self.r_new);
-                    if let Some((q, _)) = g.coordinate(pi, pj) {
-                        if q < lo || q > hi {
-                            self.limit[k] = if q < lo { LimitState::Lower } else { LimitState::Upper };
-                            self.lambda[k][base] = 0.0;
-                            changed = true;
-                        }
-                    }
-                }
-                LimitState::Lower | LimitState::Upper => {
-                    let l = self.lambda[k][base];
-                    let pulls = if self.limit[k] == LimitState::Lower {
-                        l < 0.0
-                    } else {
-                        l > 0.0
-                    };
-                    if pulls {
-                        self.limit[k] = LimitState::Inactive;
-                        self.lambda[k][base] = 0.0;
-                        changed = true;
-                    }
-                }
-            }
-        }
-        changed
-    }
-
-    /// The μ-kick: one linear solve so that `G(q⁺)(v⁺, Ω⁺) = 0` (two more with dampers).
-    fn solve_velocities(&mut self, h: f64, report: &mut StepReport) -> Result<()> {
-        let nb = self.mass.len();
-        let hh = 0.5 * h;
-        let any_rows = self.rows1.iter().any(|r| r.n > 0);
-        if any_rows {
-            self.factor(false, false)?;
-            report.factorizations += 1;
-        }
-        self.damp_f.iter_mut().for_each(|v| *v = Vec3::ZERO);
-        self.damp_t.iter_mut().for_each(|v| *v = Vec3::ZERO);
-        let passes = if self.has_damping { 3 } else { 1 };
-        let mut limit_pass = 0;
-        let mut pass = 0;
-        while pass < passes {
-            // w* = M⁻¹ (p' + (h/2)(F⁺ + D)).
-            for i in 0..nb {
-                self.vel[i] = (self.p_half[i] + (self.force1[i] + self.damp_f[i]) * hh) * (1.0 / self.mass[i]);
-                self.omega[i] = self.inertia[i].apply_inverse(self.pi_new[i] + (self.torque1[i] + self.damp_t[i]) * hh);
-            }
-            if any_rows {
-                let s = -2.0 / h;
-                for (k, jr) in self.rows1.iter().enumerate() {
-                    let g = &self.joints[k];
-                    let (vi, wi) = g
-                        .parent
-                        .map_or((Vec3::ZERO, Vec3::ZERO), |p| (self.vel[p], self.omega[p]));
-                    for r in 0..jr.n {
-                        self.rhs[k][r] = s * jr.grad[r].rate(vi, wi, self.vel[g.child], self.omega[g.child]);
-                    }
-                }
-                self.timed_solve();
-                // A plastic limit row whose μ pulls is released and the solve redone.
-                let mut released = false;
-                for k in 0..self.joints.len() {
-                    if self.limit[k] == LimitState::Inactive {
-                        continue;
-                    }
-                    let m = self.delta[k][self.joints[k].kind.rows()];
-                    if (self.limit[k] == LimitState::Lower && m < 0.0)
-                        || (self.limit[k] == LimitState::Upper && m > 0.0)
-                    {
-                        self.limit[k] = LimitState::Inactive;
-                        released = true;
-                    }
-                }
-                if released && limit_pass < MAX_LIMIT_PASSES {
-                    limit_pass += 1;
-                    report.limit_changes += 1;
-                    Self::rows_at(
-                        &self.joints,
-                        &self.limit,
-                        &self.params,
-                        &self.c_new,
-                        &self.r_new,
-                        &mut self.rows1,
-                    );
-                    self.factor(false, false)?;
-                    report.factorizations += 1;
-                    continue;
-                }
-            }
-            pass += 1;
-            if pass == passes {
-                break;
-            }
-            // Damping at the provisional end velocity (fixed point).
-            self.end_velocities(hh);
-            let (c, r) = (core::mem::take(&mut self.c_new), core::mem::take(&mut self.r_new));
-            self.damping(&c, &r);
-            self.c_new = c;
-            self.r_new = r;
-        }
-        // Apply the end kick into p_half / pi_new.
-        for i in 0..nb {
-            self.p_half[i] += (self.force1[i] + self.damp_f[i]) * hh;
-            self.pi_new[i] += (self.torque1[i] + self.damp_t[i]) * hh;
-        }
-        if any_rows {
-            for (k, g) in self.joints.iter().enumerate() {
-                let rows = &self.rows1[k];
-                for r in 0..rows.n {
-                    let m = self.delta[k][r] * hh;
-                    let gr = &rows.grad[r];
-                    if let Some(p) = g.parent {
-                        self.p_half[p] += gr.ci * m;
-                        self.pi_new[p] += gr.ti * m;
-                    }
-                    self.p_half[g.child] += gr.cj * m;
-                    self.pi_new[g.child] += gr.tj * m;
-                }
-            }
-        }
-        // Velocity violation of the result.
-        self.velocities_of_new();
-        let vscale = (0..nb).fold(self.velocity_floor(), |m, i| {
-            m.max(self.vel[i].norm() + self.length * self.omega[i].norm())
-        });
-        let mut worst: f64 = 0.0;
-        for (k, jr) in self.rows1.iter().enumerate() {
-            let g = &self.joints[k];
-            let (vi, wi) = g
-                .parent
-                .map_or((Vec3::ZERO, Vec3::ZERO), |p| (self.vel[p], self.omega[p]));
-            for r in 0..jr.n {
-                worst = worst.max(jr.grad[r].rate(vi, wi, self.vel[g.child], self.omega[g.child]).abs());
-            }
-        }
-        if vscale > 0.0 {
-            worst /= vscale;
-        }
-        report.velocity_violation = report.velocity_violation.max(worst);
-        Ok(())
-    }
-
-    /// Velocities after the provisional μ-kick (for the damping fixed point).
-    fn end_velocities(&mut self, hh: f64) {
-        for i in 0..self.mass.len() {
-            self.vel[i] = self.p_half[i] + (self.force1[i] + self.damp_f[i]) * hh;
-            self.omega[i] = self.pi_new[i] + (self.torque1[i] + self.damp_t[i]) * hh;
-        }
-        for (k, g) in self.joints.iter().enumerate() {
-            let rows = &self.rows1[k];
-            for r in 0..rows.n {
-                let m = self.delta[k][r] * hh;
-                let gr = &rows.grad[r];
-                if let Some(p) = g.parent {
-                    self.vel[p] += gr.ci * m;
-                    self.omega[p] += gr.ti * m;
-                }
-                self.vel[g.child] += gr.cj * m;
-                self.omega[g.child] += gr.tj * m;
-            }
-        }
-        for i in 0..self.mass.len() {
-            self.vel[i] = self.vel[i] * (1.0 / self.mass[i]);
-            self.omega[i] = self.inertia[i].apply_inverse(self.omega[i]);
-        }
-    }
-
-    fn velocities_of_new(&mut self) {
-        for i in 0..self.mass.len() {
-            self.vel[i] = self.p_half[i] * (1.0 / self.mass[i]);
-            self.omega[i] = self.inertia[i].apply_inverse(self.pi_new[i]);
-        }
-    }
+/// The matrices of the constraint solve.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Matrix {
+    /// `G(q) M⁻¹ G(q)ᵀ` at the stage's start (`rows0`): the position solve's quasi-Newton
+    /// matrix, which the previous stage's velocity solve has factored already.
+    Start,
+    /// `G(q⁺) M⁻¹ G(q⁺)ᵀ` at the end (`rows1`): the velocity solve's.
+    End,
+    /// `G(q⁺) D G(q)ᵀ` with `D` the exact drift Jacobian at the current iterate (the
+    /// effective inertia blocks): the position solve's fallback when the quasi-Newton
+    /// iteration converges slowly.
+    Exact,
 }
 
 /// The poses `(c_i, R_i)`, `(c_j, R_j)` of a joint's parent (world: 0, I) and child.

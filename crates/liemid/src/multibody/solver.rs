@@ -39,6 +39,7 @@
 
 use crate::linalg::Mat3;
 
+use super::cholesky::SymmetricTree;
 use super::constraints::{JointRows, Row};
 
 /// Relative cut-off of the pseudo-inverse of the loop Schur complement: singular values
@@ -101,6 +102,8 @@ pub struct TreeSolver {
     rhs_l: Vec<f64>,
     lam_l: Vec<f64>,
     rank: usize,
+    sym: SymmetricTree,
+    symmetric: bool,
 }
 
 fn lu(a: &mut Blk, n: usize, piv: &mut [usize; 6]) -> Result<(), f64> {
@@ -219,6 +222,8 @@ impl TreeSolver {
             rhs_l: vec![0.0; nl_max],
             lam_l: vec![0.0; nl_max],
             rank: 0,
+            sym: SymmetricTree::new(parents),
+            symmetric: false,
         }
     }
 
@@ -243,6 +248,7 @@ impl TreeSolver {
         left: &[JointRows],
         right: &[JointRows],
     ) -> Result<(), SingularPivot> {
+        self.symmetric = false;
         for n in 0..self.nodes.len() {
             let node = self.nodes[n];
             let d = &mut self.d[n];
@@ -331,6 +337,26 @@ impl TreeSolver {
         Ok(())
     }
 
+    /// Factor the symmetric `A = G(q) M⁻¹ G(q)ᵀ` (`rows` at `q`) by the block Cholesky of
+    /// `cholesky.rs`, loops as in [`TreeSolver::factor`]. Solves then agree with those
+    /// after `factor(mass, inertia, joints, rows, rows)` to round-off.
+    ///
+    /// # Errors
+    /// A vanishing tree pivot (rows of the tree that depend on each other).
+    pub fn factor_symmetric(
+        &mut self,
+        mass: &[f64],
+        inertia: &[Mat3],
+        joints: &[(Option<usize>, usize)],
+        rows: &[JointRows],
+    ) -> Result<(), SingularPivot> {
+        self.symmetric = true;
+        let nb = self.body_node.len();
+        self.sym.factor(mass, inertia, &rows[..nb])?;
+        self.factor_loops(joints, rows, rows);
+        Ok(())
+    }
+
     fn factor_loops(&mut self, joints: &[(Option<usize>, usize)], left: &[JointRows], right: &[JointRows]) {
         self.loop_rows.clear();
         self.loop_left.clear();
@@ -382,6 +408,10 @@ impl TreeSolver {
 
     /// Leaves-to-root forward elimination and root-to-leaves back substitution on `self.z`.
     fn tree_solve(&mut self) {
+        if self.symmetric {
+            self.sym.solve(&mut self.z, &self.body_node, &self.joint_node);
+            return;
+        }
         for n in (0..self.nodes.len()).rev() {
             let s = self.nodes[n].size;
             let mut y = self.z[n];

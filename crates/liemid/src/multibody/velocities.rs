@@ -1,0 +1,163 @@
+//! The velocity solve of the multibody step: the μ-kick, one linear solve of
+//! `(h/2) G M⁻¹ Gᵀ μ = −G (v, Ω)` at the end configuration so that `G(q⁺)(v⁺, Ω⁺) = 0`
+//! (multibody spec section 3), with the damping fixed point and the release of plastic
+//! limit rows that pull.
+//!
+//! Reference: E. Hairer, C. Lubich, G. Wanner, *Geometric Numerical Integration*, 2nd ed.,
+//! Springer 2006, VII.1 (RATTLE).
+
+use crate::error::Result;
+use crate::linalg::Vec3;
+
+use super::method::{LimitState, StepReport};
+use super::rattle::{Matrix, MAX_LIMIT_PASSES};
+use super::MultibodySystem;
+
+impl MultibodySystem {
+    /// The μ-kick: one linear solve so that `G(q⁺)(v⁺, Ω⁺) = 0` (two more with dampers).
+    pub(super) fn solve_velocities(&mut self, h: f64, report: &mut StepReport) -> Result<()> {
+        let nb = self.mass.len();
+        let hh = 0.5 * h;
+        let any_rows = self.rows1.iter().any(|r| r.n > 0);
+        if any_rows {
+            self.factor(Matrix::End)?;
+            report.factorizations += 1;
+        }
+        self.damp_f.iter_mut().for_each(|v| *v = Vec3::ZERO);
+        self.damp_t.iter_mut().for_each(|v| *v = Vec3::ZERO);
+        let passes = if self.has_damping { 3 } else { 1 };
+        let mut limit_pass = 0;
+        let mut pass = 0;
+        while pass < passes {
+            // w* = M⁻¹ (p' + (h/2)(F⁺ + D)).
+            for i in 0..nb {
+                self.vel[i] = (self.p_half[i] + (self.force1[i] + self.damp_f[i]) * hh) * (1.0 / self.mass[i]);
+                self.omega[i] = self.inertia[i].apply_inverse(self.pi_new[i] + (self.torque1[i] + self.damp_t[i]) * hh);
+            }
+            if any_rows {
+                let s = -2.0 / h;
+                for (k, jr) in self.rows1.iter().enumerate() {
+                    let g = &self.joints[k];
+                    let (vi, wi) = g
+                        .parent
+                        .map_or((Vec3::ZERO, Vec3::ZERO), |p| (self.vel[p], self.omega[p]));
+                    for r in 0..jr.n {
+                        self.rhs[k][r] = s * jr.grad[r].rate(vi, wi, self.vel[g.child], self.omega[g.child]);
+                    }
+                }
+                self.timed_solve();
+                // A plastic limit row whose μ pulls is released and the solve redone.
+                let mut released = false;
+                for k in 0..self.joints.len() {
+                    if self.limit[k] == LimitState::Inactive {
+                        continue;
+                    }
+                    let m = self.delta[k][self.joints[k].kind.rows()];
+                    if (self.limit[k] == LimitState::Lower && m < 0.0)
+                        || (self.limit[k] == LimitState::Upper && m > 0.0)
+                    {
+                        self.limit[k] = LimitState::Inactive;
+                        released = true;
+                    }
+                }
+                if released && limit_pass < MAX_LIMIT_PASSES {
+                    limit_pass += 1;
+                    report.limit_changes += 1;
+                    Self::rows_at(
+                        &self.joints,
+                        &self.limit,
+                        &self.params,
+                        &self.c_new,
+                        &self.r_new,
+                        &mut self.rows1,
+                    );
+                    self.factor(Matrix::End)?;
+                    report.factorizations += 1;
+                    continue;
+                }
+            }
+            pass += 1;
+            if pass == passes {
+                break;
+            }
+            // Damping at the provisional end velocity (fixed point).
+            self.end_velocities(hh);
+            let (c, r) = (core::mem::take(&mut self.c_new), core::mem::take(&mut self.r_new));
+            self.damping(&c, &r);
+            self.c_new = c;
+            self.r_new = r;
+        }
+        // Apply the end kick into p_half / pi_new.
+        for i in 0..nb {
+            self.p_half[i] += (self.force1[i] + self.damp_f[i]) * hh;
+            self.pi_new[i] += (self.torque1[i] + self.damp_t[i]) * hh;
+        }
+        if any_rows {
+            for (k, g) in self.joints.iter().enumerate() {
+                let rows = &self.rows1[k];
+                for r in 0..rows.n {
+                    let m = self.delta[k][r] * hh;
+                    let gr = &rows.grad[r];
+                    if let Some(p) = g.parent {
+                        self.p_half[p] += gr.ci * m;
+                        self.pi_new[p] += gr.ti * m;
+                    }
+                    self.p_half[g.child] += gr.cj * m;
+                    self.pi_new[g.child] += gr.tj * m;
+                }
+            }
+        }
+        // Velocity violation of the result.
+        self.velocities_of_new();
+        let vscale = (0..nb).fold(self.velocity_floor(), |m, i| {
+            m.max(self.vel[i].norm() + self.length * self.omega[i].norm())
+        });
+        let mut worst: f64 = 0.0;
+        for (k, jr) in self.rows1.iter().enumerate() {
+            let g = &self.joints[k];
+            let (vi, wi) = g
+                .parent
+                .map_or((Vec3::ZERO, Vec3::ZERO), |p| (self.vel[p], self.omega[p]));
+            for r in 0..jr.n {
+                worst = worst.max(jr.grad[r].rate(vi, wi, self.vel[g.child], self.omega[g.child]).abs());
+            }
+        }
+        if vscale > 0.0 {
+            worst /= vscale;
+        }
+        report.velocity_violation = report.velocity_violation.max(worst);
+        Ok(())
+    }
+
+    /// Velocities after the provisional μ-kick (for the damping fixed point).
+    pub(super) fn end_velocities(&mut self, hh: f64) {
+        for i in 0..self.mass.len() {
+            self.vel[i] = self.p_half[i] + (self.force1[i] + self.damp_f[i]) * hh;
+            self.omega[i] = self.pi_new[i] + (self.torque1[i] + self.damp_t[i]) * hh;
+        }
+        for (k, g) in self.joints.iter().enumerate() {
+            let rows = &self.rows1[k];
+            for r in 0..rows.n {
+                let m = self.delta[k][r] * hh;
+                let gr = &rows.grad[r];
+                if let Some(p) = g.parent {
+                    self.vel[p] += gr.ci * m;
+                    self.omega[p] += gr.ti * m;
+                }
+                self.vel[g.child] += gr.cj * m;
+                self.omega[g.child] += gr.tj * m;
+            }
+        }
+        for i in 0..self.mass.len() {
+            self.vel[i] = self.vel[i] * (1.0 / self.mass[i]);
+            self.omega[i] = self.inertia[i].apply_inverse(self.omega[i]);
+        }
+    }
+
+    pub(super) fn velocities_of_new(&mut self) {
+        for i in 0..self.mass.len() {
+            self.vel[i] = self.p_half[i] * (1.0 / self.mass[i]);
+            self.omega[i] = self.inertia[i].apply_inverse(self.pi_new[i]);
+        }
+    }
+}
