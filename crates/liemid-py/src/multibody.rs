@@ -313,17 +313,7 @@ fn multibody_view(
         page.push_frame(times[k], &frame);
         page.energy_error(times[k], energy[k]);
     }
-    match path {
-        Some(p) => {
-            let mut plan = liemid_cli::shared::output::OutputPlan::new(&[]);
-            plan.add("view", std::path::Path::new(&p))
-                .map_err(PyValueError::new_err)?;
-            page.write(std::path::Path::new(&p), total_steps)
-                .map_err(PyValueError::new_err)?;
-            Ok(p)
-        }
-        None => Ok(page.html(total_steps)),
-    }
+    crate::view::finish(&page, total_steps, path)
 }
 
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

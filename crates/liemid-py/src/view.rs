@@ -43,6 +43,11 @@ fn view_page(
     for (&t, &e) in energy_t.as_slice()?.iter().zip(energy_e.as_slice()?) {
         page.energy_error(t, e);
     }
+    finish(&page, total_steps, path)
+}
+
+/// Write `page` to `path` (checked like every output; returns the path), or return its HTML.
+pub(crate) fn finish(page: &ViewPage, total_steps: u64, path: Option<String>) -> PyResult<String> {
     match path {
         Some(p) => {
             let mut plan = liemid_cli::shared::output::OutputPlan::new(&[]);
