@@ -35,29 +35,18 @@
 //! relaxation of LLG in the form of G. P. Müller et al., Phys. Rev. B 99, 224414 (2019).
 
 use super::hamiltonian::Rates;
-use super::lanes::{rodrigues_series, sinc_cos_series, SERIES_LIMIT};
+use super::lanes::{
+    asinh_ratio_series, damped_anisotropy_flow, damped_bond_flow, damped_zeeman_flow, rodrigues_series,
+    sinc_cos_series, ASINH_LIMIT, SERIES_LIMIT,
+};
 use crate::linalg::Vec3;
 use crate::so3::rodrigues;
 
-const SQRT_2: f64 = std::f64::consts::SQRT_2;
-
-/// `asinh(x)/x` from `x²`: the series to `x¹⁴` for `x² < 0.01` (first omitted term below
-/// `1.2e-18`), else `asinh` itself.
+/// `asinh(x)/x` from `x²`: the series below `x² = 0.01`, `asinh` itself beyond.
 #[inline(always)]
 fn asinh_ratio(x2: f64) -> f64 {
-    if x2 < 0.01 {
-        const C: [f64; 8] = [
-            1.0,
-            -1.0 / 6.0,
-            3.0 / 40.0,
-            -5.0 / 112.0,
-            35.0 / 1152.0,
-            -63.0 / 2816.0,
-            231.0 / 13312.0,
-            -143.0 / 10240.0,
-        ];
-        let (x4, x8) = (x2 * x2, x2 * x2 * x2 * x2);
-        ((C[0] + x2 * C[1]) + x4 * (C[2] + x2 * C[3])) + x8 * ((C[4] + x2 * C[5]) + x4 * (C[6] + x2 * C[7]))
+    if x2 < ASINH_LIMIT {
+        asinh_ratio_series(x2)
     } else {
         asinh_ratio_closed(x2)
     }
@@ -91,13 +80,6 @@ fn rodrigues_coefficients(t: f64) -> (f64, f64) {
     }
 }
 
-/// `exp(v) x` with Rodrigues' coefficients `(a, b)` of `|v|²`.
-#[inline(always)]
-fn turn(v: Vec3, a: f64, b: f64, x: Vec3) -> Vec3 {
-    let vx = v.cross(x);
-    x + vx * a + v.cross(vx) * b
-}
-
 /// The damped rates of a system (rad/ps, already divided by `1 + α²`).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct DampedRates {
@@ -117,37 +99,37 @@ pub(crate) struct DampedRates {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct BondStep {
     /// `e^δ`.
-    e: f64,
+    pub(crate) e: f64,
     /// `e^{2δ}`.
-    e2: f64,
+    pub(crate) e2: f64,
     /// `expm1(2δ)/α`.
-    big_e: f64,
-    alpha2: f64,
+    pub(crate) big_e: f64,
+    pub(crate) alpha2: f64,
 }
 
 /// The constants of the Zeeman flow over a time `h`.
 #[derive(Clone, Copy, Debug)]
-struct ZeemanStep {
+pub(crate) struct ZeemanStep {
     /// The rotation vector `γB h/(1+α²)` and its Rodrigues coefficients.
-    v: Vec3,
-    a: f64,
-    b: f64,
+    pub(crate) v: Vec3,
+    pub(crate) a: f64,
+    pub(crate) b: f64,
     /// `B̂`.
-    unit: Vec3,
-    tau: f64,
-    sech: f64,
+    pub(crate) unit: Vec3,
+    pub(crate) tau: f64,
+    pub(crate) sech: f64,
 }
 
 /// The constants of the anisotropy flow over a time `h`.
 #[derive(Clone, Copy, Debug)]
-struct AnisotropyStep {
-    axis: Vec3,
-    eg: f64,
-    e2g: f64,
-    expm1g: f64,
+pub(crate) struct AnisotropyStep {
+    pub(crate) axis: Vec3,
+    pub(crate) eg: f64,
+    pub(crate) e2g: f64,
+    pub(crate) expm1g: f64,
     /// `expm1(2g)/α`.
-    f: f64,
-    alpha2: f64,
+    pub(crate) f: f64,
+    pub(crate) alpha2: f64,
 }
 
 /// The constants of the on-site flow over a time `h`: the one term's exact flow, or the
@@ -155,8 +137,8 @@ struct AnisotropyStep {
 /// flows do not commute even for `B ∥ n`).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct SiteStep {
-    zeeman: Option<ZeemanStep>,
-    anisotropy: Option<AnisotropyStep>,
+    pub(crate) zeeman: Option<ZeemanStep>,
+    pub(crate) anisotropy: Option<AnisotropyStep>,
 }
 
 impl DampedRates {
@@ -228,38 +210,38 @@ impl DampedRates {
 /// The exact damped flow of one bond (module docs).
 #[inline(always)]
 pub(crate) fn bond(c: &BondStep, si: Vec3, sj: Vec3) -> (Vec3, Vec3) {
-    let l = si + sj;
-    let d = (si - sj) * 0.5;
-    let p = 0.5 * l.norm_squared();
-    let q = 2.0 * d.norm_squared();
-    let w = (q + p * c.e2).sqrt();
-    let base = c.big_e / (SQRT_2 * c.e + w);
-    let g = base * asinh_ratio(c.alpha2 * p * base * base);
-    let (sinc, cos) = sinc_cos(p * g * g);
-    let inv_w = 1.0 / w;
-    let half = l * (c.e * inv_w * (0.5 * SQRT_2));
-    let turned = (d * cos + l.cross(d) * (sinc * g * (0.5 * SQRT_2))) * (SQRT_2 * inv_w);
-    (half + turned, half - turned)
+    let (a, b) = damped_bond_flow(
+        c.e,
+        c.e2,
+        c.big_e,
+        c.alpha2,
+        si.into(),
+        sj.into(),
+        asinh_ratio,
+        sinc_cos,
+    );
+    (a.into(), b.into())
 }
 
 #[inline(always)]
 fn zeeman(z: &ZeemanStep, s: Vec3) -> Vec3 {
-    let c0 = s.dot(z.unit);
-    let inv = 1.0 / (1.0 + c0 * z.tau);
-    let ratio = z.sech * inv;
-    turn(z.v, z.a, z.b, s) * ratio + z.unit * ((c0 + z.tau) * inv - ratio * c0)
+    damped_zeeman_flow(z.v.into(), z.a, z.b, z.unit.into(), z.tau, z.sech, s.into()).into()
 }
 
 #[inline(always)]
 fn anisotropy(k: &AnisotropyStep, s: Vec3) -> Vec3 {
-    let w0 = s.dot(k.axis);
-    let s02 = s.norm_squared() - w0 * w0;
-    let v = (s02 + w0 * w0 * k.e2g).sqrt();
-    let base = w0 * k.f / (k.eg + v);
-    let phi = base * asinh_ratio(k.alpha2 * base * base);
-    let rot = k.axis * phi;
-    let (a, b) = rodrigues_coefficients(phi * phi);
-    (turn(rot, a, b, s) + k.axis * (w0 * k.expm1g)) * (1.0 / v)
+    damped_anisotropy_flow(
+        k.axis.into(),
+        k.eg,
+        k.e2g,
+        k.expm1g,
+        k.f,
+        k.alpha2,
+        s.into(),
+        asinh_ratio,
+        rodrigues_coefficients,
+    )
+    .into()
 }
 
 /// The exact damped on-site flow of one spin (Strang-split when both terms are present).

@@ -107,7 +107,7 @@ pub(crate) enum Piece {
 
 /// A [`Piece`] with its damped flow's constants.
 #[derive(Clone, Copy)]
-enum DampedPiece {
+pub(crate) enum DampedPiece {
     Site(damped::SiteStep),
     Skip,
     Bond(damped::BondStep),
@@ -328,6 +328,9 @@ fn run(
     // Four bonds at a time in AVX lanes (the same bits), where the processor has AVX and
     // the on-site flow is one rotation; the unfused path (for tests) stays scalar.
     let lanes = fuse && (commute || !onsite_terms) && damped.is_none() && avx_available();
+    // The damped flows run in lanes too (they have no branch on the terms' directions).
+    let damped_lanes = fuse && damped.is_some() && avx_available();
+    let _ = damped_lanes;
     // Adjacent on-site half flows join only where the on-site flow is exact (one rotation);
     // a Strang-split field and anisotropy is not a one-parameter group (with damping, not
     // even for a field along the axis).
@@ -359,6 +362,14 @@ fn run(
                 }
                 (si, sj)
             };
+            #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+            if damped_lanes {
+                let (ptr, len) = shared.raw();
+                // SAFETY: AVX was detected; the pointer and length are the spins'; the bonds
+                // are this part's share of a matching, alone until the barrier.
+                unsafe { super::lanes::sweep_avx_damped(ptr, len, bonds, steps, &scalar) };
+                return;
+            }
             // SAFETY: this part's bonds of a matching, alone until the barrier.
             unsafe { shared.update_bond_range(bonds, &scalar) };
             return;
