@@ -10,7 +10,8 @@
 //! - [`hamiltonian`]: [`SpinSystem`] (exchange `J`, uniaxial anisotropy `K` along `n`,
 //!   field `B`, moment `μ_s`, damping `α`), the energy and the effective field;
 //! - the methods, one file each: `splitting` (explicit, symplectic: exact flows of bond
-//!   colours and of the on-site terms, composed to orders 2, 4, 6, 8), `midpoint` (the
+//!   colours and of the on-site terms, composed to orders 2, 4, 6, 8; with damping the
+//!   exact damped flows of `damped`), `midpoint` (the
 //!   implicit midpoint rule in Cayley form: exact energy and `Σ S_z`; damping), and the
 //!   baselines of the field in `explicit` (Heun, Depondt-Mertens, RK4);
 //! - [`problems`]: named benchmarks.

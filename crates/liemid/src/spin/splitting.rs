@@ -19,6 +19,10 @@
 //! the frozen other (Krech, Bunker and Landau 1998) changes the total spin at every step
 //! and is not a Poisson map.
 //!
+//! With Gilbert damping the same schedule composes the exact damped flows of the same parts
+//! (`spin::damped`): each is still an exact flow, so the Strang step stays symmetric and
+//! second order and its compositions reach 4, 6, 8; it is no longer a Poisson map.
+//!
 //! References: J. Frank, W. Huang, B. Leimkuhler, *Geometric integrators for classical spin
 //! systems*, J. Comput. Phys. 133 (1997); R. I. McLachlan, K. Modin, O. Verdier,
 //! *Symplectic integrators for spin systems*, Phys. Rev. E 89 (2014).
