@@ -247,10 +247,13 @@ pub(crate) fn damped_bond_flow<T: Real>(
     let p = T::from(0.5) * l.dot(l);
     let q = T::from(2.0) * d.dot(d);
     let w = (q + p * e2).sqrt();
-    let base = big_e / (T::from(SQRT_2) * e + w);
+    // One division for `1/(√2 e + w)` and `1/w`.
+    let m = T::from(SQRT_2) * e + w;
+    let r = T::from(1.0) / (w * m);
+    let base = big_e * (w * r);
     let g = base * ratio(alpha2 * p * base * base);
     let (sinc, cos) = coefficients(p * g * g);
-    let inv_w = T::from(1.0) / w;
+    let inv_w = m * r;
     let half = l.scale(e * inv_w * T::from(0.5 * SQRT_2));
     let turned = d
         .scale(cos)
@@ -290,13 +293,16 @@ pub(crate) fn damped_anisotropy_flow<T: Real>(
     let w0 = s.dot(axis);
     let s02 = s.dot(s) - w0 * w0;
     let v = (s02 + w0 * w0 * e2g).sqrt();
-    let base = w0 * f / (eg + v);
+    // One division for `1/(e^g + V)` and `1/V`.
+    let m = eg + v;
+    let r = T::from(1.0) / (v * m);
+    let base = w0 * f * (v * r);
     let phi = base * ratio(alpha2 * base * base);
     let rot = axis.scale(phi);
     let (a, b) = coefficients(phi * phi);
     let vx = rot.cross(s);
     let turned = s.add(vx.scale(a)).add(rot.cross(vx).scale(b));
-    turned.add(axis.scale(w0 * expm1g)).scale(T::from(1.0) / v)
+    turned.add(axis.scale(w0 * expm1g)).scale(m * r)
 }
 
 /// `s (3 − |s|²)/2`: one Newton step towards `|s| = 1`.
