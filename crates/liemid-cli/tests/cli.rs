@@ -711,10 +711,6 @@ fn spins_input_errors_name_the_key_and_exit_2() {
             "[lattice]\nkind = \"square\"\nsize = [4, 4]\n[body]\ninertia = [1, 2, 3]\n",
             "liemid run",
         ),
-        (
-            "[lattice]\nkind = \"square\"\nsize = [4, 4]\n[dynamics]\ndamping = 0.1\nmethod = \"split\"\n",
-            "undamped",
-        ),
     ] {
         let f = write(&dir, "bad.toml", text);
         let o = run_in(&dir, &["spins", f.to_str().unwrap()]);

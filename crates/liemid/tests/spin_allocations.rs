@@ -12,8 +12,20 @@ static GLOBAL: counting::Counting = counting::Counting;
 
 #[test]
 fn spin_steps_allocate_nothing_once_warm() {
-    let p = problems::square_64();
-    for threads in [1, 2] {
+    let mut p = problems::square_64();
+    let damped = {
+        let mut s = p.system.clone();
+        s.damping = 0.1;
+        s
+    };
+    // Undamped, then damped (the splitting's damped flows keep their constants on the stack).
+    for (threads, system) in [
+        (1, p.system.clone()),
+        (2, p.system.clone()),
+        (1, damped.clone()),
+        (2, damped),
+    ] {
+        p.system = system;
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         let mut integrators: Vec<SpinIntegrator> = SpinMethod::ALL.iter().map(|&m| SpinIntegrator::new(m)).collect();
         let mut spins: Vec<_> = SpinMethod::ALL.iter().map(|_| p.spins.clone()).collect();

@@ -155,13 +155,6 @@ pub fn spins(args: SpinsArgs) -> CmdResult {
             sc.step
         )));
     }
-    if sc.system.damping > 0.0 && !sc.method.handles_damping() {
-        return Err(input(format!(
-            "damping {} needs a method for the damped equation (midpoint, depondt, heun, rk4); `{}` integrates the undamped one",
-            Num(sc.system.damping),
-            sc.method.key()
-        )));
-    }
     let steps = liemid::step_count(0.0, sc.t_end, sc.step)
         .map_err(|e| input(format!("step {} and t_end {}: {e}", Num(sc.step), Num(sc.t_end))))?;
     if let Some(max) = args.max_spin_steps {

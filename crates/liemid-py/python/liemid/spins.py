@@ -45,7 +45,7 @@ class System:
     mu_s : float
         Moment per spin in Bohr magnetons.
     damping : float
-        Gilbert ``alpha`` (the splitting integrates the undamped equation only).
+        Gilbert ``alpha`` (every method, the splitting by the exact damped flows of its parts).
     """
 
     def __init__(

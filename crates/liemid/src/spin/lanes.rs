@@ -15,13 +15,26 @@
 //! systems*, Phys. Rev. E 89 (2014) (the bond flow); operation counts and timings in
 //! `docs/spins.md`.
 
-use std::ops::{Add, Mul, Sub};
+use std::ops::{Add, Div, Mul, Sub};
 
 use crate::linalg::Vec3;
 
 /// What a lane value needs: the four operations the flows use, and splatting constants.
 pub(crate) trait Lane: Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + From<f64> {}
 impl<T: Copy + Add<Output = T> + Sub<Output = T> + Mul<Output = T> + From<f64>> Lane for T {}
+
+/// A lane value with the correctly rounded division and square root (the same bits in
+/// every lane as on `f64`), for the damped flows.
+pub(crate) trait Real: Lane + Div<Output = Self> {
+    fn sqrt(self) -> Self;
+}
+
+impl Real for f64 {
+    #[inline(always)]
+    fn sqrt(self) -> f64 {
+        f64::sqrt(self)
+    }
+}
 
 /// A 3-vector of lanes, with the operations of [`Vec3`] in the same order.
 #[derive(Clone, Copy)]
@@ -190,6 +203,108 @@ pub(crate) fn site_flow<T: Lane>(
     s.add(vx.scale(a)).add(v.cross(vx).scale(b))
 }
 
+/// Where [`asinh_ratio_series`] holds: `x² < 0.01`.
+pub(crate) const ASINH_LIMIT: f64 = 0.01;
+
+/// `asinh(x)/x` from `x²` by its series to `x¹⁴` (for `x² < 0.01` the first omitted term
+/// is below `1.2e-18`), by Estrin's scheme.
+#[inline(always)]
+pub(crate) fn asinh_ratio_series<T: Lane>(x2: T) -> T {
+    const C: [f64; 8] = [
+        1.0,
+        -1.0 / 6.0,
+        3.0 / 40.0,
+        -5.0 / 112.0,
+        35.0 / 1152.0,
+        -63.0 / 2816.0,
+        231.0 / 13312.0,
+        -143.0 / 10240.0,
+    ];
+    let k = T::from;
+    let (x4, x8) = (x2 * x2, (x2 * x2) * (x2 * x2));
+    ((k(C[0]) + x2 * k(C[1])) + x4 * (k(C[2]) + x2 * k(C[3])))
+        + x8 * ((k(C[4]) + x2 * k(C[5])) + x4 * (k(C[6]) + x2 * k(C[7])))
+}
+
+/// The exact damped flow of one bond (`spin::damped`): `e = e^δ`, `e2 = e^{2δ}`,
+/// `big_e = expm1(2δ)/α`, `alpha2 = α²`; `ratio` gives `asinh(x)/x` from `x²` and
+/// `coefficients` `(sin θ/θ, cos θ)` from `θ²`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn damped_bond_flow<T: Real>(
+    e: T,
+    e2: T,
+    big_e: T,
+    alpha2: T,
+    si: V<T>,
+    sj: V<T>,
+    mut ratio: impl FnMut(T) -> T,
+    mut coefficients: impl FnMut(T) -> (T, T),
+) -> (V<T>, V<T>) {
+    const SQRT_2: f64 = std::f64::consts::SQRT_2;
+    let l = si.add(sj);
+    let d = si.sub(sj).scale(T::from(0.5));
+    let p = T::from(0.5) * l.dot(l);
+    let q = T::from(2.0) * d.dot(d);
+    let w = (q + p * e2).sqrt();
+    // One division for `1/(√2 e + w)` and `1/w`.
+    let m = T::from(SQRT_2) * e + w;
+    let r = T::from(1.0) / (w * m);
+    let base = big_e * (w * r);
+    let g = base * ratio(alpha2 * p * base * base);
+    let (sinc, cos) = coefficients(p * g * g);
+    let inv_w = m * r;
+    let half = l.scale(e * inv_w * T::from(0.5 * SQRT_2));
+    let turned = d
+        .scale(cos)
+        .add(l.cross(d).scale(sinc * g * T::from(0.5 * SQRT_2)))
+        .scale(T::from(SQRT_2) * inv_w);
+    (half.add(turned), half.sub(turned))
+}
+
+/// The exact damped Zeeman flow: the rotation `v` (Rodrigues' `(a, b)`), `unit = B̂`,
+/// `tau = tanh(c_B α h)`, `sech = sech(c_B α h)`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn damped_zeeman_flow<T: Real>(v: V<T>, a: T, b: T, unit: V<T>, tau: T, sech: T, s: V<T>) -> V<T> {
+    let c0 = s.dot(unit);
+    let inv = T::from(1.0) / (T::from(1.0) + c0 * tau);
+    let ratio = sech * inv;
+    let vx = v.cross(s);
+    let turned = s.add(vx.scale(a)).add(v.cross(vx).scale(b));
+    turned.scale(ratio).add(unit.scale((c0 + tau) * inv - ratio * c0))
+}
+
+/// The exact damped anisotropy flow: `eg = e^g`, `e2g = e^{2g}`, `expm1g = expm1(g)`,
+/// `f = expm1(2g)/α`; `ratio` and `coefficients` (Rodrigues' pair from `Φ²`) as above.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn damped_anisotropy_flow<T: Real>(
+    axis: V<T>,
+    eg: T,
+    e2g: T,
+    expm1g: T,
+    f: T,
+    alpha2: T,
+    s: V<T>,
+    mut ratio: impl FnMut(T) -> T,
+    mut coefficients: impl FnMut(T) -> (T, T),
+) -> V<T> {
+    let w0 = s.dot(axis);
+    let s02 = s.dot(s) - w0 * w0;
+    let v = (s02 + w0 * w0 * e2g).sqrt();
+    // One division for `1/(e^g + V)` and `1/V`.
+    let m = eg + v;
+    let r = T::from(1.0) / (v * m);
+    let base = w0 * f * (v * r);
+    let phi = base * ratio(alpha2 * base * base);
+    let rot = axis.scale(phi);
+    let (a, b) = coefficients(phi * phi);
+    let vx = rot.cross(s);
+    let turned = s.add(vx.scale(a)).add(rot.cross(vx).scale(b));
+    turned.add(axis.scale(w0 * expm1g)).scale(m * r)
+}
+
 /// `s (3 − |s|²)/2`: one Newton step towards `|s| = 1`.
 #[inline(always)]
 pub(crate) fn unit<T: Lane>(s: V<T>) -> V<T> {
@@ -197,19 +312,23 @@ pub(crate) fn unit<T: Lane>(s: V<T>) -> V<T> {
 }
 
 #[cfg(all(feature = "simd", target_arch = "x86_64"))]
-pub(crate) use avx::{sweep_avx, use_avx};
+pub(crate) use avx::{sweep_avx, sweep_avx_damped, use_avx};
 
 #[cfg(all(feature = "simd", target_arch = "x86_64"))]
 mod avx {
     use std::arch::x86_64::{
-        __m256d, _mm256_add_pd, _mm256_cmp_pd, _mm256_movemask_pd, _mm256_mul_pd, _mm256_set1_pd, _mm256_set_pd,
-        _mm256_storeu_pd, _mm256_sub_pd, _CMP_LT_OQ,
+        __m256d, _mm256_add_pd, _mm256_cmp_pd, _mm256_div_pd, _mm256_movemask_pd, _mm256_mul_pd, _mm256_set1_pd,
+        _mm256_set_pd, _mm256_sqrt_pd, _mm256_storeu_pd, _mm256_sub_pd, _CMP_LT_OQ,
     };
-    use std::ops::{Add, Mul, Sub};
+    use std::ops::{Add, Div, Mul, Sub};
 
-    use super::{bond_flow, rodrigues_series, sinc_cos_series, site_flow, unit, SERIES_LIMIT, V};
+    use super::{
+        asinh_ratio_series, bond_flow, damped_anisotropy_flow, damped_bond_flow, damped_zeeman_flow, rodrigues_series,
+        sinc_cos_series, site_flow, unit, Real, ASINH_LIMIT, SERIES_LIMIT, V,
+    };
     use crate::linalg::Vec3;
-    use crate::spin::splitting::{Kernel, Piece};
+    use crate::spin::damped::SiteStep;
+    use crate::spin::splitting::{DampedPiece, Kernel, Piece};
 
     // SAFETY (every `unsafe` block in this module): the AVX intrinsics are reached only
     // from `sweep_avx`, which is `#[target_feature(enable = "avx")]` and called only after
@@ -245,6 +364,19 @@ mod avx {
         #[inline(always)]
         fn mul(self, b: F) -> F {
             F(unsafe { _mm256_mul_pd(self.0, b.0) })
+        }
+    }
+    impl Div for F {
+        type Output = F;
+        #[inline(always)]
+        fn div(self, b: F) -> F {
+            F(unsafe { _mm256_div_pd(self.0, b.0) })
+        }
+    }
+    impl Real for F {
+        #[inline(always)]
+        fn sqrt(self) -> F {
+            F(unsafe { _mm256_sqrt_pd(self.0) })
         }
     }
     impl F {
@@ -324,6 +456,156 @@ mod avx {
             }
         }
         (site_ok && bond_ok).then(|| (scatter(a), scatter(b)))
+    }
+
+    #[inline(always)]
+    fn splat(v: Vec3) -> V<F> {
+        V {
+            x: F::from(v.x),
+            y: F::from(v.y),
+            z: F::from(v.z),
+        }
+    }
+
+    /// The damped on-site flow of four spins (as `spin::damped::site`).
+    #[target_feature(enable = "avx")]
+    #[inline]
+    fn damped_site(c: &SiteStep, s: V<F>, ok: &mut bool) -> V<F> {
+        let zeeman = |s: V<F>| match &c.zeeman {
+            Some(z) => damped_zeeman_flow(
+                splat(z.v),
+                F::from(z.a),
+                F::from(z.b),
+                splat(z.unit),
+                F::from(z.tau),
+                F::from(z.sech),
+                s,
+            ),
+            None => s,
+        };
+        let s = if c.anisotropy.is_some() && c.zeeman.is_some() {
+            zeeman(s)
+        } else {
+            s
+        };
+        let s = match &c.anisotropy {
+            Some(k) => {
+                let (mut ok_r, mut ok_s) = (true, true);
+                let out = damped_anisotropy_flow(
+                    splat(k.axis),
+                    F::from(k.eg),
+                    F::from(k.e2g),
+                    F::from(k.expm1g),
+                    F::from(k.f),
+                    F::from(k.alpha2),
+                    s,
+                    |x2: F| {
+                        ok_r &= x2.all_below(ASINH_LIMIT);
+                        asinh_ratio_series(x2)
+                    },
+                    |t2: F| {
+                        ok_s &= t2.all_below(SERIES_LIMIT);
+                        rodrigues_series(t2)
+                    },
+                );
+                *ok &= ok_r && ok_s;
+                out
+            }
+            None => s,
+        };
+        zeeman(s)
+    }
+
+    /// The damped pieces applied to four bonds' spins in lanes; `None` when a lane needs
+    /// the scalar path's longer branches.
+    #[target_feature(enable = "avx")]
+    #[inline]
+    fn group_damped(pieces: &[DampedPiece], si: [Vec3; 4], sj: [Vec3; 4]) -> Option<([Vec3; 4], [Vec3; 4])> {
+        let (mut a, mut b) = (gather(si), gather(sj));
+        let mut ok = true;
+        for p in pieces {
+            match p {
+                DampedPiece::Site(c) => {
+                    a = damped_site(c, a, &mut ok);
+                    b = damped_site(c, b, &mut ok);
+                }
+                DampedPiece::Skip => {}
+                DampedPiece::Bond(c) => {
+                    let mut ok_r = true;
+                    let mut ok_s = true;
+                    (a, b) = damped_bond_flow(
+                        F::from(c.e),
+                        F::from(c.e2),
+                        F::from(c.big_e),
+                        F::from(c.alpha2),
+                        a,
+                        b,
+                        |x2: F| {
+                            ok_r &= x2.all_below(ASINH_LIMIT);
+                            asinh_ratio_series(x2)
+                        },
+                        |t2: F| {
+                            ok_s &= t2.all_below(SERIES_LIMIT);
+                            sinc_cos_series(t2)
+                        },
+                    );
+                    ok &= ok_r && ok_s;
+                }
+                DampedPiece::Unit => (a, b) = (unit(a), unit(b)),
+            }
+        }
+        ok.then(|| (scatter(a), scatter(b)))
+    }
+
+    /// [`sweep_avx`] for the damped pieces.
+    ///
+    /// # Safety
+    /// As for [`sweep_avx`].
+    #[target_feature(enable = "avx")]
+    pub(crate) unsafe fn sweep_avx_damped(
+        spins: *mut Vec3,
+        len: usize,
+        bonds: &[[u32; 2]],
+        pieces: &[DampedPiece],
+        scalar: &impl Fn(Vec3, Vec3) -> (Vec3, Vec3),
+    ) {
+        let mut groups = bonds.chunks_exact(4);
+        for g in &mut groups {
+            let idx: [(usize, usize); 4] = std::array::from_fn(|k| (g[k][0] as usize, g[k][1] as usize));
+            for &(i, j) in &idx {
+                assert!(i < len && j < len && i != j);
+            }
+            // SAFETY: as in `sweep_avx`.
+            unsafe {
+                let si = idx.map(|(i, _)| *spins.add(i));
+                let sj = idx.map(|(_, j)| *spins.add(j));
+                match group_damped(pieces, si, sj) {
+                    Some((a, b)) => {
+                        for k in 0..4 {
+                            *spins.add(idx[k].0) = a[k];
+                            *spins.add(idx[k].1) = b[k];
+                        }
+                    }
+                    None => {
+                        for k in 0..4 {
+                            let (a, b) = scalar(si[k], sj[k]);
+                            *spins.add(idx[k].0) = a;
+                            *spins.add(idx[k].1) = b;
+                        }
+                    }
+                }
+            }
+        }
+        for b in groups.remainder() {
+            let (i, j) = (b[0] as usize, b[1] as usize);
+            assert!(i < len && j < len && i != j);
+            // SAFETY: as above.
+            unsafe {
+                let (a, c) = scalar(*spins.add(i), *spins.add(j));
+                *spins.add(i) = a;
+                *spins.add(j) = c;
+            }
+        }
     }
 
     /// `(s[i], s[j]) ← pieces(s[i], s[j])` for the bonds of a matching, four at a time in

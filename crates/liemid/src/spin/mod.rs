@@ -10,7 +10,8 @@
 //! - [`hamiltonian`]: [`SpinSystem`] (exchange `J`, uniaxial anisotropy `K` along `n`,
 //!   field `B`, moment `μ_s`, damping `α`), the energy and the effective field;
 //! - the methods, one file each: `splitting` (explicit, symplectic: exact flows of bond
-//!   colours and of the on-site terms, composed to orders 2, 4, 6, 8), `midpoint` (the
+//!   colours and of the on-site terms, composed to orders 2, 4, 6, 8; with damping the
+//!   exact damped flows of `damped`), `midpoint` (the
 //!   implicit midpoint rule in Cayley form: exact energy and `Σ S_z`; damping), and the
 //!   baselines of the field in `explicit` (Heun, Depondt-Mertens, RK4);
 //! - [`problems`]: named benchmarks.
@@ -22,6 +23,7 @@ pub mod hamiltonian;
 pub mod lattice;
 pub mod problems;
 
+mod damped;
 mod explicit;
 mod lanes;
 mod midpoint;
@@ -121,13 +123,11 @@ impl SpinMethod {
         }
     }
 
-    /// Whether it integrates the damped equation (`α > 0`).
+    /// Whether it integrates the damped equation (`α > 0`): every method does (the
+    /// splitting by the exact damped flows of its parts).
     #[must_use]
     pub fn handles_damping(self) -> bool {
-        !matches!(
-            self,
-            SpinMethod::Splitting | SpinMethod::Splitting4 | SpinMethod::Splitting6 | SpinMethod::Splitting8
-        )
+        true
     }
 
     /// One line on what it is and what it keeps.
@@ -135,7 +135,7 @@ impl SpinMethod {
     pub fn description(self) -> &'static str {
         match self {
             SpinMethod::Splitting => {
-                "exact flows of the bond colours and the on-site terms, Strang-composed; explicit, symplectic; keeps |S_i| and sum S (exchange) exactly, energy bounded; undamped only"
+                "exact flows of the bond colours and the on-site terms, Strang-composed; explicit, symplectic undamped; keeps |S_i| and sum S (exchange) exactly, energy bounded; with damping the exact damped flows of the same parts"
             }
             SpinMethod::Splitting4 => "the splitting composed by Suzuki's 5-stage scheme; keeps what it keeps",
             SpinMethod::Splitting6 => "the splitting composed by Kahan-Li's 9-stage scheme; keeps what it keeps",
@@ -196,8 +196,7 @@ impl SpinIntegrator {
     /// One step of `h` (ps) from time `t` (for error messages).
     ///
     /// # Errors
-    /// A spin array of the wrong length, a non-finite or zero step, damping with a method
-    /// for the undamped equation, a midpoint solve that does not converge (the spins are
+    /// A spin array of the wrong length, a non-finite or zero step, a midpoint solve that does not converge (the spins are
     /// then left as they were), or a non-finite result.
     pub fn step(&mut self, system: &SpinSystem, spins: &mut [Vec3], t: f64, h: f64) -> Result<()> {
         self.advance(system, spins, t, h, 1)
@@ -221,14 +220,6 @@ impl SpinIntegrator {
         }
         if !(h.is_finite() && h != 0.0) {
             return Err(Error::InvalidStep { h });
-        }
-        if system.damping != 0.0 && !self.method.handles_damping() {
-            return Err(Error::InvalidParameter {
-                name: "damping",
-                value: system.damping,
-                reason:
-                    "the splitting integrates the undamped equation; with damping use midpoint, depondt, heun or rk4",
-            });
         }
         let [a, b, c] = &mut self.buffers;
         match self.method {
