@@ -137,7 +137,11 @@ fn spins_page_and_refusals() {
     let dir = scratch("view-spins");
     let file = examples().join("spins_square.toml");
     let file = file.to_str().unwrap();
-    let o = run_in(&dir, &["spins", file, "--every", "100", "--view", "s.html"]);
+    // The time series goes to the scratch folder, not next to the example.
+    let o = run_in(
+        &dir,
+        &["spins", file, "--every", "100", "--out", "s.csv", "--view", "s.html"],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     check_page(&dir.join("s.html"), "11 frames of 1000 steps");
     refusals(&dir, &["spins", file], Some(file));
