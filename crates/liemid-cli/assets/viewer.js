@@ -346,6 +346,9 @@
     const slider = $('slider'), play = $('play'), speed = $('speed'), label = $('time'), readout = $('readout');
     const rate = Math.max(F / 12, 1);
     let pos = 0, playing = F > 1, shown = -1, last = null, count = 0, since = null;
+    // `#frame=N` opens the page at frame N (a link to a moment of the run; the browser test).
+    const asked = /frame=(\d+)/.exec(location.hash);
+    if (asked) pos = Math.min(Math.max(F - 1, 0), Number(asked[1]));
     play.textContent = playing ? 'pause' : 'play';
     play.onclick = () => { playing = !playing; play.textContent = playing ? 'pause' : 'play'; };
     slider.oninput = () => { pos = Number(slider.value); };
