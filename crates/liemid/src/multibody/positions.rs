@@ -22,7 +22,7 @@ use crate::so3;
 
 use super::constraints::JointRows;
 use super::method::{LimitState, StepReport};
-use super::rattle::{pose, Matrix, MAX_ITERATIONS};
+use super::rattle::{add_impulse, pose, Matrix, MAX_ITERATIONS};
 use super::{MultibodyState, MultibodySystem};
 
 impl MultibodySystem {
@@ -31,19 +31,14 @@ impl MultibodySystem {
         let hh = 0.5 * h;
         self.p_half.copy_from_slice(&self.pb);
         self.big_p.copy_from_slice(&self.pib);
-        for (k, g) in self.joints.iter().enumerate() {
-            let rows = &self.rows0[k];
-            for r in 0..rows.n {
-                let l = self.lambda[k][r] * hh;
-                let gr = &rows.grad[r];
-                if let Some(p) = g.parent {
-                    self.p_half[p] += gr.ci * l;
-                    self.big_p[p] += gr.ti * l;
-                }
-                self.p_half[g.child] += gr.cj * l;
-                self.big_p[g.child] += gr.tj * l;
-            }
-        }
+        add_impulse(
+            &self.joints,
+            &self.rows0,
+            &self.lambda,
+            hh,
+            &mut self.p_half,
+            &mut self.big_p,
+        );
         let name = self.method.name();
         for i in 0..self.mass.len() {
             self.c_new[i] = state.c[i] + self.p_half[i] * (h / self.mass[i]);

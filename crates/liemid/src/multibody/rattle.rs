@@ -302,19 +302,7 @@ impl MultibodySystem {
             }
         }
         self.timed_solve();
-        for (k, g) in self.joints.iter().enumerate() {
-            let rows = &self.rows1[k];
-            for r in 0..rows.n {
-                let m = self.delta[k][r];
-                let gr = &rows.grad[r];
-                if let Some(p) = g.parent {
-                    state.p[p] += gr.ci * m;
-                    state.pi[p] += gr.ti * m;
-                }
-                state.p[g.child] += gr.cj * m;
-                state.pi[g.child] += gr.tj * m;
-            }
-        }
+        add_impulse(&self.joints, &self.rows1, &self.delta, 1.0, &mut state.p, &mut state.pi);
         self.cache_valid = false;
         self.factor_rows0 = false;
         Ok(before)
@@ -618,4 +606,28 @@ pub(super) fn pose<'a>(g: &JointGeometry, c: &'a [Vec3], r: &'a [Mat3]) -> ((Vec
     const IDENTITY: &Mat3 = &Mat3::IDENTITY;
     let pi = g.parent.map_or((Vec3::ZERO, IDENTITY), |p| (c[p], &r[p]));
     (pi, (c[g.child], &r[g.child]))
+}
+
+/// Add the rows' impulse `Gᵀ (scale · multipliers)` to the bodies' linear and (body-frame)
+/// angular momenta: the force on the centres of mass and the torque of each row, to the
+/// parent (if not the world) and the child.
+pub(super) fn add_impulse(
+    joints: &[JointGeometry],
+    rows: &[JointRows],
+    multipliers: &[[f64; 6]],
+    scale: f64,
+    linear: &mut [Vec3],
+    angular: &mut [Vec3],
+) {
+    for ((g, rows), mult) in joints.iter().zip(rows).zip(multipliers) {
+        for (gr, &mu) in rows.grad[..rows.n].iter().zip(mult) {
+            let m = mu * scale;
+            if let Some(p) = g.parent {
+                linear[p] += gr.ci * m;
+                angular[p] += gr.ti * m;
+            }
+            linear[g.child] += gr.cj * m;
+            angular[g.child] += gr.tj * m;
+        }
+    }
 }

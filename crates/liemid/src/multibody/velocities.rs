@@ -10,7 +10,7 @@ use crate::error::Result;
 use crate::linalg::Vec3;
 
 use super::method::{LimitState, StepReport};
-use super::rattle::{Matrix, MAX_LIMIT_PASSES};
+use super::rattle::{add_impulse, Matrix, MAX_LIMIT_PASSES};
 use super::MultibodySystem;
 
 impl MultibodySystem {
@@ -93,19 +93,14 @@ impl MultibodySystem {
             self.pi_new[i] += (self.torque1[i] + self.damp_t[i]) * hh;
         }
         if any_rows {
-            for (k, g) in self.joints.iter().enumerate() {
-                let rows = &self.rows1[k];
-                for r in 0..rows.n {
-                    let m = self.delta[k][r] * hh;
-                    let gr = &rows.grad[r];
-                    if let Some(p) = g.parent {
-                        self.p_half[p] += gr.ci * m;
-                        self.pi_new[p] += gr.ti * m;
-                    }
-                    self.p_half[g.child] += gr.cj * m;
-                    self.pi_new[g.child] += gr.tj * m;
-                }
-            }
+            add_impulse(
+                &self.joints,
+                &self.rows1,
+                &self.delta,
+                hh,
+                &mut self.p_half,
+                &mut self.pi_new,
+            );
         }
         // Velocity violation of the result.
         self.velocities_of_new();
@@ -135,19 +130,14 @@ impl MultibodySystem {
             self.vel[i] = self.p_half[i] + (self.force1[i] + self.damp_f[i]) * hh;
             self.omega[i] = self.pi_new[i] + (self.torque1[i] + self.damp_t[i]) * hh;
         }
-        for (k, g) in self.joints.iter().enumerate() {
-            let rows = &self.rows1[k];
-            for r in 0..rows.n {
-                let m = self.delta[k][r] * hh;
-                let gr = &rows.grad[r];
-                if let Some(p) = g.parent {
-                    self.vel[p] += gr.ci * m;
-                    self.omega[p] += gr.ti * m;
-                }
-                self.vel[g.child] += gr.cj * m;
-                self.omega[g.child] += gr.tj * m;
-            }
-        }
+        add_impulse(
+            &self.joints,
+            &self.rows1,
+            &self.delta,
+            hh,
+            &mut self.vel,
+            &mut self.omega,
+        );
         for i in 0..self.mass.len() {
             self.vel[i] = self.vel[i] * (1.0 / self.mass[i]);
             self.omega[i] = self.inertia[i].apply_inverse(self.omega[i]);
