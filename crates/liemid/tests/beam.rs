@@ -300,20 +300,9 @@ fn flying_beam_keeps_momenta_to_round_off_and_energy_without_drift() {
     assert!(last < 2.0 * first && last < 1e-3, "energy {first:e} then {last:e}");
 }
 
-/// Nodal positions and attitudes after `t` from `start`.
-fn advance(start: &BeamSystem, method: BeamMethod, h: f64, t: f64) -> Vec<f64> {
-    let mut s = start.clone();
-    let steps = (t / h).round() as usize;
-    for _ in 0..steps {
-        s.step_with(method, h).unwrap();
-    }
-    let mut out = Vec::new();
-    for node in 0..s.frame.nodes.len() {
-        out.extend(s.position(node).to_array());
-        out.extend(s.rotation(node).to_row_major());
-    }
-    out
-}
+#[path = "common/beam_runs.rs"]
+mod beam_runs;
+use beam_runs::advance;
 
 #[test]
 fn observed_order_is_two_and_four_on_the_beam() {

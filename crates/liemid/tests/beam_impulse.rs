@@ -1,22 +1,11 @@
 //! The impulse method (`liemid-mts`) and Newmark's exact element tangent.
 
-use liemid::beam::{element, impulse, problems, tangent, BeamMethod, BeamSystem, ElementStiffness, Newmark, Tangent};
+use liemid::beam::{element, impulse, problems, tangent, BeamMethod, ElementStiffness, Newmark, Tangent};
 use liemid::{so3, Mat3, Vec3};
 
-/// Nodal positions and attitudes after `t` from `start`.
-fn advance(start: &BeamSystem, method: BeamMethod, h: f64, t: f64) -> Vec<f64> {
-    let mut s = start.clone();
-    let steps = (t / h).round() as usize;
-    for _ in 0..steps {
-        s.step_with(method, h).unwrap();
-    }
-    let mut out = Vec::new();
-    for node in 0..s.frame.nodes.len() {
-        out.extend(s.position(node).to_array());
-        out.extend(s.rotation(node).to_row_major());
-    }
-    out
-}
+#[path = "common/beam_runs.rs"]
+mod beam_runs;
+use beam_runs::advance;
 
 #[test]
 fn impulse_method_is_second_order() {
