@@ -1,7 +1,7 @@
 //! The splitting's per-bond work written once, generic over a lane type, and run on four
 //! bonds at a time in AVX lanes where the processor has AVX.
 //!
-//! [`bond_flow`], [`site_flow`] and [`unit`] are the exact bond flow, the on-site flow (when
+//! [`bond_flow`], [`site_flow`] and [`unit()`] are the exact bond flow, the on-site flow (when
 //! anisotropy and field commute) and the renormalisation, on [`V`] vectors of any lane type:
 //! `f64` for the scalar path, and four `f64` in one AVX register ([`sweep_avx`]). Both
 //! perform the same IEEE operations in the same order (no FMA contraction), so a bond gives

@@ -118,7 +118,8 @@ pub(crate) enum DampedPiece {
     Unit,
 }
 
-/// What the lanes need of the system (rates in rad/ps).
+/// What the lanes need of the system (rates in rad/ps); read only by the SIMD lanes.
+#[cfg_attr(not(all(feature = "simd", target_arch = "x86_64")), allow(dead_code))]
 pub(crate) struct Kernel {
     /// `γJ/(μ_s μ_B)`.
     pub rate: f64,

@@ -85,6 +85,7 @@ impl Shared {
     }
 
     /// The pointer and the length (for the lane kernels, under the same contract).
+    #[cfg_attr(not(all(feature = "simd", target_arch = "x86_64")), allow(dead_code))]
     pub(crate) fn raw(&self) -> (*mut Vec3, usize) {
         (self.0, self.1)
     }
