@@ -36,8 +36,8 @@
 
 use super::hamiltonian::Rates;
 use super::lanes::{
-    asinh_ratio_series, damped_anisotropy_flow, damped_bond_flow, damped_zeeman_flow, rodrigues_series,
-    sinc_cos_series, ASINH_LIMIT, SERIES_LIMIT,
+    asinh_ratio_series, asinh_ratio_short, damped_anisotropy_flow, damped_bond_flow, damped_zeeman_flow,
+    rodrigues_series, sinc_cos_series, ASINH_LIMIT, ASINH_SHORT_LIMIT, SERIES_LIMIT,
 };
 use crate::linalg::Vec3;
 use crate::so3::rodrigues;
@@ -80,6 +80,16 @@ fn rodrigues_coefficients(t: f64) -> (f64, f64) {
     }
 }
 
+/// Whether every `asinh(x)/x` argument `x² = α² p (E/m)²` of a sweep stays below
+/// [`ASINH_SHORT_LIMIT`], from the step's constants alone: `e = e^δ` (or `e^g`), `big_e =
+/// expm1(2δ)/α` (or `expm1(2g)/α`). For `δ ≥ 0`, `W ≥ √2` (and `V ≥ 1`), so `m ≥ √2 (e + 1)`
+/// and `x² ≤ α² E²/(e + 1)²`; for `δ < 0`, `W ≥ √2 e`, so `x² ≤ α² E²/(4e²)` (with `p ≤ 2`,
+/// `|w₀| ≤ 1`). A 1 % margin covers spins off the unit sphere by round-off.
+fn short_ratio_holds(alpha2: f64, e: f64, big_e: f64) -> bool {
+    let bound = alpha2 * big_e * big_e / ((e + 1.0) * (e + 1.0)).min(4.0 * e * e);
+    1.01 * bound < ASINH_SHORT_LIMIT
+}
+
 /// The damped rates of a system (rad/ps, already divided by `1 + α²`).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct DampedRates {
@@ -105,6 +115,8 @@ pub(crate) struct BondStep {
     /// `expm1(2δ)/α`.
     pub(crate) big_e: f64,
     pub(crate) alpha2: f64,
+    /// Whether the sweep may use the short `asinh(x)/x` series ([`short_ratio_holds`]).
+    pub(crate) short: bool,
 }
 
 /// The constants of the Zeeman flow over a time `h`.
@@ -130,6 +142,8 @@ pub(crate) struct AnisotropyStep {
     /// `expm1(2g)/α`.
     pub(crate) f: f64,
     pub(crate) alpha2: f64,
+    /// Whether the sweep may use the short `asinh(x)/x` series ([`short_ratio_holds`]).
+    pub(crate) short: bool,
 }
 
 /// The constants of the on-site flow over a time `h`: the one term's exact flow, or the
@@ -163,11 +177,14 @@ impl DampedRates {
     pub(crate) fn bond_step(&self, h: f64) -> BondStep {
         let delta = 2.0 * self.exchange * self.alpha * h;
         let e = delta.exp();
+        let big_e = (2.0 * delta).exp_m1() / self.alpha;
+        let alpha2 = self.alpha * self.alpha;
         BondStep {
             e,
             e2: e * e,
-            big_e: (2.0 * delta).exp_m1() / self.alpha,
-            alpha2: self.alpha * self.alpha,
+            big_e,
+            alpha2,
+            short: short_ratio_holds(alpha2, e, big_e),
         }
     }
 
@@ -188,13 +205,16 @@ impl DampedRates {
     fn anisotropy_step(&self, h: f64) -> AnisotropyStep {
         let g = self.anisotropy * self.alpha * h;
         let eg = g.exp();
+        let f = (2.0 * g).exp_m1() / self.alpha;
+        let alpha2 = self.alpha * self.alpha;
         AnisotropyStep {
             axis: self.axis,
             eg,
             e2g: eg * eg,
             expm1g: g.exp_m1(),
-            f: (2.0 * g).exp_m1() / self.alpha,
-            alpha2: self.alpha * self.alpha,
+            f,
+            alpha2,
+            short: short_ratio_holds(alpha2, eg, f),
         }
     }
 
@@ -217,7 +237,13 @@ pub(crate) fn bond(c: &BondStep, si: Vec3, sj: Vec3) -> (Vec3, Vec3) {
         c.alpha2,
         si.into(),
         sj.into(),
-        asinh_ratio,
+        |x2| {
+            if c.short {
+                asinh_ratio_short(x2)
+            } else {
+                asinh_ratio(x2)
+            }
+        },
         sinc_cos,
     );
     (a.into(), b.into())
@@ -238,7 +264,13 @@ fn anisotropy(k: &AnisotropyStep, s: Vec3) -> Vec3 {
         k.f,
         k.alpha2,
         s.into(),
-        asinh_ratio,
+        |x2| {
+            if k.short {
+                asinh_ratio_short(x2)
+            } else {
+                asinh_ratio(x2)
+            }
+        },
         rodrigues_coefficients,
     )
     .into()
@@ -252,5 +284,59 @@ pub(crate) fn site(c: &SiteStep, s: Vec3) -> Vec3 {
         (Some(z), None) => zeeman(z, s),
         (None, Some(k)) => anisotropy(k, s),
         (None, None) => s,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The short series agrees with `asinh(x)/x` to round-off below its limit, and the
+    /// sweep bound holds: for random unit spin pairs at steps where it chose the short
+    /// series, the argument stays below the limit (forward and backward steps).
+    #[test]
+    fn the_short_asinh_series_holds_where_the_sweep_bound_chooses_it() {
+        for k in 0..=1000 {
+            let x2 = ASINH_SHORT_LIMIT * k as f64 / 1000.0;
+            let closed = if x2 == 0.0 { 1.0 } else { asinh_ratio_closed(x2) };
+            assert!(
+                (asinh_ratio_short(x2) - closed).abs() <= 2.0 * f64::EPSILON,
+                "x² = {x2}"
+            );
+        }
+        let mut rng = crate::random::Rng::new(7);
+        let mut unit = || rng.unit_vector();
+        let mut chosen = 0;
+        for &alpha in &[0.01, 0.1, 0.3, 1.0] {
+            for &h in &[0.3, 0.1, 0.03, 0.01, -0.01, -0.03, -0.1, -0.3] {
+                let rates = DampedRates {
+                    alpha,
+                    exchange: 3.0,
+                    field: Vec3::ZERO,
+                    field_norm: 0.0,
+                    anisotropy: 2.0,
+                    axis: Vec3::new(0.0, 0.0, 1.0),
+                };
+                let (b, a) = (rates.bond_step(h), rates.anisotropy_step(h));
+                for _ in 0..200 {
+                    let (si, sj) = (unit(), unit());
+                    if b.short {
+                        chosen += 1;
+                        // The argument `α² p (E/m)²` of the bond flow (lanes.rs).
+                        let p = 1.0 + si.dot(sj);
+                        let w = (1.0 - si.dot(sj) + p * b.e2).sqrt();
+                        let base = b.big_e / (std::f64::consts::SQRT_2 * b.e + w);
+                        assert!(b.alpha2 * p * base * base < ASINH_SHORT_LIMIT);
+                    }
+                    if a.short {
+                        let w0 = si.dot(a.axis);
+                        let v = (1.0 - w0 * w0 + w0 * w0 * a.e2g).sqrt();
+                        let base = w0 * a.f / (a.eg + v);
+                        assert!(a.alpha2 * base * base < ASINH_SHORT_LIMIT);
+                    }
+                }
+            }
+        }
+        assert!(chosen > 0);
     }
 }
