@@ -879,3 +879,29 @@ fn many_observes_at_every_multiple_of_either_interval_while_it_advances_in_block
     }
     assert!(outputs[0] == outputs[1], "1 and 2 threads wrote different files");
 }
+
+/// `--json` means the same in every subcommand: no value or `-` for standard output, FILE
+/// for a file (the text summary then still printed); a scenario file given after it is
+/// refused rather than replaced.
+#[test]
+fn json_takes_a_file_or_standard_output_in_every_subcommand() {
+    let dir = scratch("json-flag");
+    let o = run_in(&dir, &["run", "--t-end", "0.01", "--no-output", "--json", "run.json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("steps"), "{}", stdout(&o));
+    let summary = json(&std::fs::read_to_string(dir.join("run.json")).unwrap());
+    assert_eq!(summary["steps"], 100);
+    let o = run_in(&dir, &["run", "--t-end", "0.01", "--no-output", "--json", "-"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(json(&stdout(&o))["steps"], 100);
+    let o = run_in(&dir, &["spins", "--problem", "chain-64", "--t-end", "0.1", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(json(&stdout(&o)).get("method").is_some(), "{}", stdout(&o));
+    let scenario = dir.join("top.toml");
+    std::fs::copy(examples().join("fast_top.toml"), &scenario).unwrap();
+    let before = std::fs::read(&scenario).unwrap();
+    let o = run_in(&dir, &["run", "--json", "top.toml"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("looks like a scenario"), "{}", stderr(&o));
+    assert_eq!(std::fs::read(&scenario).unwrap(), before);
+}

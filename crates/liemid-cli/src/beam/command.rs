@@ -65,8 +65,8 @@ pub struct BeamArgs {
     /// are comments), e.g. a published curve of the tracked nodes.
     #[arg(long, requires = "plot")]
     pub compare: Option<PathBuf>,
-    /// Write the summary as JSON to FILE, or to standard output with `-`.
-    #[arg(long)]
+    /// Write the summary as JSON to FILE, or to standard output with `-` or no value.
+    #[arg(long, value_name = "FILE|-", num_args = 0..=1, default_missing_value = "-")]
     pub json: Option<String>,
     /// Write a self-contained 3-D animation of the run (HTML) to FILE: the deformed centre
     /// line and the section frames at every sample.
@@ -94,8 +94,8 @@ pub struct WorkPrecisionArgs {
     /// Threads [default: 1, the fair setting against serial Newmark].
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
     pub threads: u64,
-    /// Write the study as JSON to FILE, or to standard output with `-`.
-    #[arg(long)]
+    /// Write the study as JSON to FILE, or to standard output with `-` or no value.
+    #[arg(long, value_name = "FILE|-", num_args = 0..=1, default_missing_value = "-")]
     pub json: Option<String>,
 }
 

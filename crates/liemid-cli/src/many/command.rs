@@ -92,8 +92,8 @@ pub struct ManyArgs {
     /// [default: switched].
     #[arg(long)]
     pub cutoff_form: Option<String>,
-    /// Write the summary as JSON to FILE, or to standard output with `-`.
-    #[arg(long)]
+    /// Write the summary as JSON to FILE, or to standard output with `-` or no value.
+    #[arg(long, value_name = "FILE|-", num_args = 0..=1, default_missing_value = "-")]
     pub json: Option<String>,
     /// Write the totals (t, energy, P, L) every `--every` steps to this CSV file.
     #[arg(long)]

@@ -47,8 +47,8 @@ pub struct MultibodyArgs {
     /// output).
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Write the summary as JSON to FILE, or to standard output with `-`.
-    #[arg(long)]
+    /// Write the summary as JSON to FILE, or to standard output with `-` or no value.
+    #[arg(long, value_name = "FILE|-", num_args = 0..=1, default_missing_value = "-")]
     pub json: Option<String>,
     /// Plot the joint coordinates and the relative energy error against time (PNG or SVG;
     /// NAME alone writes both).

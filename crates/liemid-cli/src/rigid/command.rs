@@ -83,9 +83,10 @@ pub struct RunArgs {
     /// Continue the run saved in a checkpoint FILE, bit for bit as if uninterrupted.
     #[arg(long, conflicts_with_all = ["file", "method", "step", "t_end", "out", "every", "format", "no_output", "checkpoint"])]
     resume: Option<PathBuf>,
-    /// Print the summary as one JSON object.
-    #[arg(long)]
-    json: bool,
+    /// Write the summary as one JSON object to FILE, or to standard output with `-` or no
+    /// value.
+    #[arg(long, value_name = "FILE|-", num_args = 0..=1, default_missing_value = "-")]
+    json: Option<String>,
     /// Reversible adaptive steps (Hairer-Soderlind) with accuracy EPS: h = EPS / z, z the
     /// step density rho carried by a symmetric recursion; symmetric methods only (the EA,
     /// EX and FS families); replaces --step, the last step lands on t_end.
@@ -244,7 +245,7 @@ pub fn run(args: RunArgs) -> CmdResult {
             rho: args.rho.as_deref(),
             step: args.step,
             orbits: args.orbits.unwrap_or(1.0),
-            json: args.json,
+            json: args.json.as_deref(),
         });
     }
     if args.orbits.is_some() {
@@ -331,6 +332,9 @@ pub fn run(args: RunArgs) -> CmdResult {
     }
     if let Some(path) = &args.view {
         plan.add("--view", path).map_err(Failure::Input)?;
+    }
+    if let Some(path) = args.json.as_deref().filter(|p| *p != "-") {
+        plan.add("--json", Path::new(path)).map_err(Failure::Input)?;
     }
 
     let system = &sc.system;
@@ -458,8 +462,8 @@ pub fn run(args: RunArgs) -> CmdResult {
         trajectory,
         to_stdout,
         None,
-    );
-    print_view_line(viewed, args.json || to_stdout);
+    )?;
+    print_view_line(viewed, args.json.as_deref() == Some("-") || to_stdout);
     Ok(())
 }
 
@@ -541,9 +545,9 @@ pub struct ConvergeArgs {
     /// Write no plot.
     #[arg(long)]
     pub no_plot: bool,
-    /// Write the study as JSON to FILE, or to standard output with `-` (the table then
+    /// Write the study as JSON to FILE, or to standard output with `-` or no value (the table then
     /// goes to standard error).
-    #[arg(long)]
+    #[arg(long, value_name = "FILE|-", num_args = 0..=1, default_missing_value = "-")]
     pub json: Option<String>,
 }
 
@@ -579,8 +583,8 @@ pub struct WorkPrecisionArgs {
     /// Write no plot.
     #[arg(long)]
     pub no_plot: bool,
-    /// Write the study as JSON to FILE, or to standard output with `-`.
-    #[arg(long)]
+    /// Write the study as JSON to FILE, or to standard output with `-` or no value.
+    #[arg(long, value_name = "FILE|-", num_args = 0..=1, default_missing_value = "-")]
     pub json: Option<String>,
     /// Add the reversible adaptive family (EA, EX and their compositions, density |Omega|);
     /// with --problem eccentric-satellite, the satellite's own study (fixed and adaptive

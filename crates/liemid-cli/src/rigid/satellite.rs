@@ -20,8 +20,9 @@ use serde::Serialize;
 use serde_json::json;
 
 use crate::rigid::command::{parse_method, WorkPrecisionArgs};
-use crate::shared::command::{check_positive, check_study_outputs, write_json, CmdResult, Failure};
+use crate::shared::command::{check_positive, check_study_outputs, emit_json, write_json, CmdResult, Failure};
 use crate::shared::cpu_time::thread_seconds;
+use crate::shared::output::OutputPlan;
 use crate::shared::plot;
 
 /// The problem's name.
@@ -46,8 +47,8 @@ pub struct RunRequest<'a> {
     pub step: Option<f64>,
     /// `--orbits`.
     pub orbits: f64,
-    /// `--json`.
-    pub json: bool,
+    /// `--json FILE|-`.
+    pub json: Option<&'a str>,
 }
 
 /// The density named by `--rho` for the satellite (default `orbit`).
@@ -100,6 +101,11 @@ pub fn run(req: &RunRequest) -> CmdResult {
     if let Some(eps) = req.adaptive {
         check_positive("adaptive", eps)?;
     }
+    if let Some(path) = req.json.filter(|p| *p != "-") {
+        OutputPlan::new(&[])
+            .add("--json", Path::new(path))
+            .map_err(Failure::Input)?;
+    }
     let p = eccentric_satellite();
     let sat = &p.satellite;
     if !(req.orbits.is_finite() && req.orbits > 0.0) {
@@ -143,7 +149,7 @@ pub fn run(req: &RunRequest) -> CmdResult {
     };
     let wall = started.elapsed().as_secs_f64();
     let e1 = sat.energy(&state);
-    if req.json {
+    if let Some(target) = req.json {
         let out = json!({
             "problem": PROBLEM,
             "method": method.key(),
@@ -164,8 +170,10 @@ pub fn run(req: &RunRequest) -> CmdResult {
             "max_angular_momentum_error": tracker.max_momentum,
             "wall_time_seconds": wall,
         });
-        println!("{out}");
-        return Ok(());
+        emit_json(Some(target), &out)?;
+        if target == "-" {
+            return Ok(());
+        }
     }
     let how = match (adaptive, step_info) {
         (Some((s, d)), _) => format!(

@@ -50,8 +50,8 @@ pub struct SpinsArgs {
     /// Write a PNG of the final in-plane angle of a 2-D lattice.
     #[arg(long)]
     pub snapshot: Option<PathBuf>,
-    /// Write the summary as JSON to FILE, or to standard output with `-`.
-    #[arg(long)]
+    /// Write the summary as JSON to FILE, or to standard output with `-` or no value.
+    #[arg(long, value_name = "FILE|-", num_args = 0..=1, default_missing_value = "-")]
     pub json: Option<String>,
     /// Refuse runs of more than N spin-steps (spins × steps; exit 2) before the first step.
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
@@ -102,8 +102,8 @@ pub struct WorkPrecisionArgs {
     /// Write no plot.
     #[arg(long)]
     pub no_plot: bool,
-    /// Write the study as JSON to FILE, or to standard output with `-`.
-    #[arg(long)]
+    /// Write the study as JSON to FILE, or to standard output with `-` or no value.
+    #[arg(long, value_name = "FILE|-", num_args = 0..=1, default_missing_value = "-")]
     pub json: Option<String>,
 }
 

@@ -55,6 +55,9 @@ pub(super) fn run_adaptive<D: RigidDensity>(
     if let Some(path) = &args.view {
         plan.add("--view", path).map_err(Failure::Input)?;
     }
+    if let Some(path) = args.json.as_deref().filter(|p| *p != "-") {
+        plan.add("--json", Path::new(path)).map_err(Failure::Input)?;
+    }
     let stepper = RigidAdaptive::new(system, method, density).map_err(|e| Failure::Input(e.to_string()))?;
     sc.initial
         .check_valid()
@@ -145,7 +148,7 @@ pub(super) fn run_adaptive<D: RigidDensity>(
         trajectory,
         to_stdout,
         Some((stats, run.stepper.density_name())),
-    );
-    print_view_line(viewed, args.json || to_stdout);
+    )?;
+    print_view_line(viewed, args.json.as_deref() == Some("-") || to_stdout);
     Ok(())
 }

@@ -9,10 +9,12 @@ use serde_json::json;
 use super::RunArgs;
 use crate::rigid::scenario::{Conservation, Scenario};
 use crate::shared::checkpoint::Settings;
+use crate::shared::command::{emit_json, CmdResult};
 use crate::shared::output::plural;
 
-/// Print the summary (text, or one JSON object with `--json`), to standard error when the
-/// trajectory goes to standard output.
+/// Print the summary (text, or one JSON object with `--json -`), to standard error when the
+/// trajectory goes to standard output; with `--json FILE` the JSON object goes to FILE and
+/// the text is printed.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn print_summary(
     args: &RunArgs,
@@ -25,7 +27,7 @@ pub(super) fn print_summary(
     trajectory: Option<(String, u64)>,
     to_stdout: bool,
     adaptive: Option<(AdaptiveStats, &str)>,
-) {
+) -> CmdResult {
     let summary = run.summary();
     let s = &summary.state;
     let conservation = sc.system.conservation();
@@ -59,7 +61,7 @@ pub(super) fn print_summary(
             Num(settings.step)
         );
     }
-    if args.json {
+    if let Some(target) = args.json.as_deref() {
         let mut out = json!({
             "problem": sc.name,
             "method": method.key(),
@@ -93,12 +95,14 @@ pub(super) fn print_summary(
                 json!({"eps": a.eps, "rho": rho, "min_step": a.min_step, "max_step": a.max_step}),
             );
         }
-        if to_stdout {
-            eprintln!("{out}");
-        } else {
-            println!("{out}");
+        match target {
+            "-" if to_stdout => eprintln!("{out}"),
+            "-" => println!("{out}"),
+            file => emit_json(Some(file), &out)?,
         }
-        return;
+        if target == "-" {
+            return Ok(());
+        }
     }
     let mut text = String::new();
     let mut line = |l: String| {
@@ -177,4 +181,5 @@ pub(super) fn print_summary(
     } else {
         print!("{text}");
     }
+    Ok(())
 }
