@@ -11,10 +11,11 @@
 use std::cell::RefCell;
 use std::time::Instant;
 
+use crate::shared::dop853::dop853;
 use liemid::error::Num;
 use liemid::multibody::{JointKind, JointSpaceModel};
 use liemid::{Mat3, Vec3};
-use ode_solvers::{DVector, Dop853, OutputType, System};
+use ode_solvers::{DVector, System};
 use serde_json::json;
 
 use super::command::{Poses, Sink};
@@ -242,7 +243,7 @@ pub(super) fn dop853(
     let error = RefCell::new(None);
     let interrupt = Interrupt::install();
     let started = Instant::now();
-    let mut solver = Dop853::from_param(
+    let mut solver = dop853!(
         Rhs {
             model: &model,
             error: &error,
@@ -253,16 +254,6 @@ pub(super) fn dop853(
         t_end,
         y0,
         rtol,
-        rtol * 1e-3,
-        0.9,
-        0.0,
-        0.333,
-        6.0,
-        t_end,
-        0.0,
-        u32::MAX,
-        1000,
-        OutputType::Sparse,
     );
     let stats = solver.integrate();
     let seconds = started.elapsed().as_secs_f64();

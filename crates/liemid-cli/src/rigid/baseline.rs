@@ -2,9 +2,10 @@
 //! `(Π, q)` with `Π' = Π × W + T(R(q/|q|), t)`, `q' = ½ q ⊗ (0, W)`; the quaternion is
 //! renormalised only at output, as a user of a general ODE solver would do.
 
+use crate::shared::dop853::dop853;
 use liemid::so3::Quaternion;
 use liemid::{Diagnostics, RigidBodySystem, RigidState, Vec3};
-use ode_solvers::{Dop853, OutputType, SVector, System};
+use ode_solvers::{Dop853, SVector, System};
 
 type State = SVector<f64, 7>;
 
@@ -54,24 +55,7 @@ fn integrate<'a, S: RigidBodySystem + ?Sized>(
     let pi = initial.pi;
     let y0 = State::from([pi.x, pi.y, pi.z, q.w, q.x, q.y, q.z]);
     let span = t_end - initial.t;
-    let mut solver = Dop853::from_param(
-        RigidQuaternion { system },
-        initial.t,
-        t_end,
-        span,
-        y0,
-        rtol,
-        rtol * 1e-3,
-        0.9,
-        0.0,
-        0.333,
-        6.0,
-        span,
-        0.0,
-        u32::MAX,
-        1000,
-        OutputType::Sparse,
-    );
+    let mut solver = dop853!(RigidQuaternion { system }, initial.t, t_end, span, y0, rtol,);
     let stats = solver
         .integrate()
         .map_err(|e| format!("Dop853 at rtol {rtol:e}: {e}"))?;

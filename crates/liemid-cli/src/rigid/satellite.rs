@@ -8,6 +8,7 @@
 use std::path::Path;
 use std::time::Instant;
 
+use crate::shared::dop853::dop853;
 use liemid::rigid::adaptive::{AdaptiveRun, AdaptiveStats};
 use liemid::rigid::satellite::{
     eccentric_satellite, Satellite, SatelliteAdaptive, SatelliteDensity, SatelliteIntegrator, SatelliteProblem,
@@ -15,7 +16,7 @@ use liemid::rigid::satellite::{
 };
 use liemid::so3::Quaternion;
 use liemid::{RotationMethod, Vec3};
-use ode_solvers::{Dop853, OutputType, SVector, System};
+use ode_solvers::{SVector, System};
 use serde::Serialize;
 use serde_json::json;
 
@@ -287,24 +288,7 @@ fn dop853(
         q.y,
         q.z,
     ]);
-    let mut solver = Dop853::from_param(
-        FullOde { sat: &p.satellite },
-        0.0,
-        t_end,
-        t_end,
-        y0,
-        rtol,
-        rtol * 1e-3,
-        0.9,
-        0.0,
-        0.333,
-        6.0,
-        t_end,
-        0.0,
-        u32::MAX,
-        1000,
-        OutputType::Sparse,
-    );
+    let mut solver = dop853!(FullOde { sat: &p.satellite }, 0.0, t_end, t_end, y0, rtol,);
     let stats = solver
         .integrate()
         .map_err(|e| format!("Dop853 at rtol {rtol:e}: {e}"))?;
