@@ -19,7 +19,6 @@ use crate::shared::checkpoint::{Checkpoint, Settings, Source};
 use crate::shared::command::{check_positive, check_study_outputs, report, CmdResult, Failure};
 use crate::shared::interrupt::{progress, Interrupt};
 use crate::shared::output::{plural, OutputPlan, TrajectoryWriter, COLUMNS};
-use crate::shared::plot;
 use crate::shared::view::{self, Scene, ViewPage};
 use adaptive_run::run_adaptive;
 use summary::print_summary;
@@ -660,7 +659,7 @@ pub fn converge_cmd(args: ConvergeArgs) -> CmdResult {
     report(
         &converge::table(&study),
         &study,
-        plot::Figure::Convergence(&study),
+        study.figure(),
         &args.plot,
         args.no_plot,
         args.json.as_deref(),
@@ -732,7 +731,7 @@ pub fn work_precision_cmd(args: WorkPrecisionArgs) -> CmdResult {
     report(
         &work_precision::table(&study),
         &study,
-        plot::Figure::WorkPrecision(&study),
+        study.figure(),
         &args.plot,
         args.no_plot,
         args.json.as_deref(),

@@ -5,6 +5,7 @@ use liemid::{integrate_to, RigidState, RotationIntegrator, RotationMethod, Runge
 use serde::Serialize;
 
 use crate::rigid::scenario::Scenario;
+use crate::shared::plot::{Axes, Figure, Series};
 
 /// One method's errors.
 #[derive(Clone, Debug, Serialize)]
@@ -221,4 +222,44 @@ pub fn table(study: &Study) -> String {
         }
     }
     s
+}
+
+impl Study {
+    /// The figure: momentum and attitude errors at `t_end` against the step, log-log, with
+    /// the reference slopes.
+    pub fn figure(&self) -> Figure<'static> {
+        let collect = |f: &dyn Fn(&MethodErrors, usize) -> Option<f64>| -> Vec<Series> {
+            self.methods
+                .iter()
+                .map(|m| {
+                    let pts = m
+                        .steps
+                        .iter()
+                        .enumerate()
+                        .filter_map(|(k, h)| f(m, k).filter(|v| *v > 0.0).map(|v| (*h, v)));
+                    (m.label.clone(), pts.collect())
+                })
+                .collect()
+        };
+        let axes = |title, y_desc| Axes {
+            title,
+            x_desc: "step h (s)",
+            y_desc,
+            slopes: true,
+        };
+        Figure {
+            title: format!("{}: error at t = {} s against the step", self.problem, self.t_end),
+            labels: self.methods.iter().map(|m| m.label.clone()).collect(),
+            panels: [
+                (
+                    axes("body angular momentum", "|Pi - Pi_ref| / |Pi_ref|"),
+                    collect(&|m, k| m.momentum_error[k]),
+                ),
+                (
+                    axes("attitude", "||R - R_ref||_F"),
+                    collect(&|m, k| m.attitude_error[k]),
+                ),
+            ],
+        }
+    }
 }

@@ -10,6 +10,7 @@ use serde::Serialize;
 use crate::rigid::baseline;
 use crate::rigid::converge::Reference;
 use crate::rigid::scenario::Scenario;
+use crate::shared::plot::{work_series, Axes, Figure};
 
 /// A method in the study: fixed-step liemid method or the adaptive baseline.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -586,4 +587,31 @@ pub fn table(study: &Study) -> String {
         );
     }
     s
+}
+
+impl Study {
+    /// The figure: attitude error at `t_end` and the largest energy error against CPU time.
+    pub fn figure(&self) -> Figure<'static> {
+        let curves = || self.methods.iter().map(|c| (c.label.as_str(), c.points.as_slice()));
+        let axes = |title, y_desc| Axes {
+            title,
+            x_desc: "CPU time (s), median of repeated runs",
+            y_desc,
+            slopes: false,
+        };
+        Figure {
+            title: format!("{}: work-precision to t = {} s", self.problem, self.t_end),
+            labels: self.methods.iter().map(|m| m.label.clone()).collect(),
+            panels: [
+                (
+                    axes("attitude error at t_end", "||R - R_ref||_F"),
+                    work_series(curves(), |p| p.seconds, |p| p.attitude_error),
+                ),
+                (
+                    axes("largest energy error along the run", "max |E - E0| / |E0|"),
+                    work_series(curves(), |p| p.seconds, |p| p.max_energy_error),
+                ),
+            ],
+        }
+    }
 }

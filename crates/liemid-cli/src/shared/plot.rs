@@ -9,9 +9,6 @@ use std::sync::Once;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use crate::rigid::converge::Study;
-use crate::rigid::study::Study as WorkStudy;
-
 static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
 static REGISTER: Once = Once::new();
 
@@ -197,15 +194,18 @@ fn nice_label(v: &f64) -> String {
 }
 
 /// The series of one panel: label, points.
-type Series = (String, Vec<(f64, f64)>);
+pub type Series = (String, Vec<(f64, f64)>);
 
 /// Axis names and options of one panel.
-struct Axes<'a> {
-    title: &'a str,
-    x_desc: &'a str,
-    y_desc: &'a str,
+pub struct Axes<'a> {
+    /// The panel's title.
+    pub title: &'a str,
+    /// The horizontal axis.
+    pub x_desc: &'a str,
+    /// The vertical axis.
+    pub y_desc: &'a str,
     /// Draw reference slopes 1 and 2.
-    slopes: bool,
+    pub slopes: bool,
 }
 
 fn panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, axes: &Axes, series: &[Series]) -> Result<(), String> {
@@ -282,14 +282,14 @@ fn two_panels<DB: DrawingBackend>(
     root: DrawingArea<DB, Shift>,
     title: &str,
     labels: &[String],
-    panels: [(Axes<'_>, Vec<Series>); 2],
+    panels: &[(Axes<'_>, Vec<Series>); 2],
 ) -> Result<(), String> {
     root.fill(&WHITE).map_err(e)?;
     let root = root.titled(title, ("sans-serif", 24)).map_err(e)?;
     let (plots, strip) = root.split_horizontally(root.dim_in_pixel().0 - LEGEND_WIDTH);
     legend(&strip, labels, panels[0].0.slopes)?;
     let areas = plots.split_evenly((1, 2));
-    for (area, (axes, series)) in areas.iter().zip(&panels) {
+    for (area, (axes, series)) in areas.iter().zip(panels) {
         panel(area, axes, series)?;
     }
     root.present().map_err(e)?;
@@ -297,7 +297,7 @@ fn two_panels<DB: DrawingBackend>(
 }
 
 /// The series `(label, [(seconds, error)])` of a work-precision study, positive points only.
-fn work_series<'a, P: 'a>(
+pub fn work_series<'a, P: 'a>(
     curves: impl Iterator<Item = (&'a str, &'a [P])>,
     seconds: impl Fn(&P) -> f64,
     error: impl Fn(&P) -> f64,
@@ -311,106 +311,6 @@ fn work_series<'a, P: 'a>(
             (label.to_string(), pts.collect())
         })
         .collect()
-}
-
-fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, study: &Study) -> Result<(), String> {
-    let title = format!("{}: error at t = {} s against the step", study.problem, study.t_end);
-    let labels: Vec<String> = study.methods.iter().map(|m| m.label.clone()).collect();
-    let collect = |f: &dyn Fn(&crate::rigid::converge::MethodErrors, usize) -> Option<f64>| -> Vec<Series> {
-        study
-            .methods
-            .iter()
-            .map(|m| {
-                let pts = m
-                    .steps
-                    .iter()
-                    .enumerate()
-                    .filter_map(|(k, h)| f(m, k).filter(|v| *v > 0.0).map(|v| (*h, v)));
-                (m.label.clone(), pts.collect())
-            })
-            .collect()
-    };
-    let axes = |title, y_desc| Axes {
-        title,
-        x_desc: "step h (s)",
-        y_desc,
-        slopes: true,
-    };
-    two_panels(
-        root,
-        &title,
-        &labels,
-        [
-            (
-                axes("body angular momentum", "|Pi - Pi_ref| / |Pi_ref|"),
-                collect(&|m, k| m.momentum_error[k]),
-            ),
-            (
-                axes("attitude", "||R - R_ref||_F"),
-                collect(&|m, k| m.attitude_error[k]),
-            ),
-        ],
-    )
-}
-
-fn draw_work<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, study: &WorkStudy) -> Result<(), String> {
-    let title = format!("{}: work-precision to t = {} s", study.problem, study.t_end);
-    let labels: Vec<String> = study.methods.iter().map(|m| m.label.clone()).collect();
-    let curves = || study.methods.iter().map(|c| (c.label.as_str(), c.points.as_slice()));
-    let axes = |title, y_desc| Axes {
-        title,
-        x_desc: "CPU time (s), median of repeated runs",
-        y_desc,
-        slopes: false,
-    };
-    two_panels(
-        root,
-        &title,
-        &labels,
-        [
-            (
-                axes("attitude error at t_end", "||R - R_ref||_F"),
-                work_series(curves(), |p| p.seconds, |p| p.attitude_error),
-            ),
-            (
-                axes("largest energy error along the run", "max |E - E0| / |E0|"),
-                work_series(curves(), |p| p.seconds, |p| p.max_energy_error),
-            ),
-        ],
-    )
-}
-
-fn draw_spin_work<DB: DrawingBackend>(
-    root: DrawingArea<DB, Shift>,
-    study: &crate::spin::study::SpinStudy,
-) -> Result<(), String> {
-    let title = format!(
-        "{}: {} spins, work-precision to t = {} ps",
-        study.problem, study.spins, study.t_end
-    );
-    let labels: Vec<String> = study.methods.iter().map(|m| m.name.clone()).collect();
-    let curves = || study.methods.iter().map(|c| (c.name.as_str(), c.points.as_slice()));
-    let axes = |title, y_desc| Axes {
-        title,
-        x_desc: "CPU time (s)",
-        y_desc,
-        slopes: false,
-    };
-    two_panels(
-        root,
-        &title,
-        &labels,
-        [
-            (
-                axes("largest energy error along the run", "max |E - E0| / |E0|"),
-                work_series(curves(), |p| p.seconds, |p| p.max_relative_energy_error),
-            ),
-            (
-                axes("spins at t_end", "max |S_i - S_i,ref|"),
-                work_series(curves(), |p| p.seconds, |p| p.spin_error),
-            ),
-        ],
-    )
 }
 
 /// The files a plot option names: `NAME` writes `NAME.svg` and `NAME.png`; a name ending
@@ -505,22 +405,20 @@ pub fn spin_snapshot(path: &Path, size: &[usize; 3], spins: &[liemid::Vec3], tit
     Ok(())
 }
 
-/// A figure the tool can draw.
-pub enum Figure<'a> {
-    /// The convergence study.
-    Convergence(&'a Study),
-    /// The work-precision study.
-    WorkPrecision(&'a WorkStudy),
-    /// The spin work-precision study.
-    SpinWorkPrecision(&'a crate::spin::study::SpinStudy),
+/// A study's figure: two side-by-side log-log panels under `title`, with the legend of
+/// `labels` (and the reference slopes, when the panels draw them) in its own strip. Each
+/// domain's study builds its own (`rigid::converge`, `rigid::study`, `spin::study`).
+pub struct Figure<'a> {
+    /// Above both panels.
+    pub title: String,
+    /// The legend's entries, in order.
+    pub labels: Vec<String>,
+    /// The two panels.
+    pub panels: [(Axes<'a>, Vec<Series>); 2],
 }
 
 fn render<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, figure: &Figure) -> Result<(), String> {
-    match figure {
-        Figure::Convergence(s) => draw(root, s),
-        Figure::WorkPrecision(s) => draw_work(root, s),
-        Figure::SpinWorkPrecision(s) => draw_spin_work(root, s),
-    }
+    two_panels(root, &figure.title, &figure.labels, &figure.panels)
 }
 
 /// Write the plot as SVG or PNG, chosen by the extension of `path`.

@@ -417,7 +417,7 @@ fn work_precision(args: WorkPrecisionArgs) -> CmdResult {
         }
     }
     for p in &plot_paths {
-        crate::shared::plot::write(p, &crate::shared::plot::Figure::SpinWorkPrecision(&study)).map_err(Failure::Run)?;
+        crate::shared::plot::write(p, &study.figure()).map_err(Failure::Run)?;
         if args.json.as_deref() != Some("-") {
             println!("wrote {}", p.display());
         }

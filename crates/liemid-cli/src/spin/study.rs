@@ -11,6 +11,7 @@ use liemid::spin::{SpinIntegrator, SpinMethod};
 use liemid::Vec3;
 use serde::Serialize;
 
+use crate::shared::plot::{work_series, Axes, Figure};
 use crate::spin::scenario::SpinScenario;
 
 /// One run.
@@ -272,4 +273,34 @@ pub fn table(study: &SpinStudy) -> String {
         s.push('\n');
     }
     s
+}
+
+impl SpinStudy {
+    /// The figure: the largest energy error and the spin error at `t_end` against CPU time.
+    pub fn figure(&self) -> Figure<'static> {
+        let curves = || self.methods.iter().map(|c| (c.name.as_str(), c.points.as_slice()));
+        let axes = |title, y_desc| Axes {
+            title,
+            x_desc: "CPU time (s)",
+            y_desc,
+            slopes: false,
+        };
+        Figure {
+            title: format!(
+                "{}: {} spins, work-precision to t = {} ps",
+                self.problem, self.spins, self.t_end
+            ),
+            labels: self.methods.iter().map(|m| m.name.clone()).collect(),
+            panels: [
+                (
+                    axes("largest energy error along the run", "max |E - E0| / |E0|"),
+                    work_series(curves(), |p| p.seconds, |p| p.max_relative_energy_error),
+                ),
+                (
+                    axes("spins at t_end", "max |S_i - S_i,ref|"),
+                    work_series(curves(), |p| p.seconds, |p| p.spin_error),
+                ),
+            ],
+        }
+    }
 }
