@@ -24,13 +24,14 @@ pub mod lattice;
 pub mod problems;
 
 mod damped;
+mod dmi;
 mod explicit;
 mod lanes;
 mod midpoint;
 mod splitting;
 mod sweep;
 
-pub use hamiltonian::SpinSystem;
+pub use hamiltonian::{DmiKind, SpinSystem};
 pub use lattice::{Lattice, LatticeKind};
 pub use sweep::CHUNK;
 
@@ -166,6 +167,24 @@ pub fn splitting_unfused(system: &SpinSystem, spins: &mut [Vec3], h: f64, gammas
     splitting::composed_unfused(system, spins, h, gammas);
 }
 
+/// One piece of a DMI bond's flow (0 Ising, 1 rotated exchange, 2 the Strang bond flow)
+/// over `h`, damped for `alpha > 0` (for tests against a reference integration).
+#[doc(hidden)]
+#[allow(clippy::too_many_arguments)]
+#[must_use]
+pub fn dmi_piece_flow(
+    which: u8,
+    d: Vec3,
+    exchange: f64,
+    k: f64,
+    alpha: f64,
+    si: Vec3,
+    sj: Vec3,
+    h: f64,
+) -> (Vec3, Vec3) {
+    dmi::piece_flow(which, d, exchange, k, alpha, si, sj, h)
+}
+
 /// A spin integrator with its scratch buffers (allocated on the first step, reused after:
 /// stepping allocates nothing once warm).
 #[derive(Clone, Debug)]
@@ -220,6 +239,13 @@ impl SpinIntegrator {
         }
         if !(h.is_finite() && h != 0.0) {
             return Err(Error::InvalidStep { h });
+        }
+        if !system.dmi_matches_lattice() {
+            return Err(Error::InvalidParameter {
+                name: "dmi",
+                value: system.lattice.bonds().len() as f64,
+                reason: "the DMI vectors were set for another lattice (bond count given); set them again",
+            });
         }
         let [a, b, c] = &mut self.buffers;
         match self.method {

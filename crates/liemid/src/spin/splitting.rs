@@ -28,6 +28,7 @@
 //! *Symplectic integrators for spin systems*, Phys. Rev. E 89 (2014).
 
 use super::damped::{self, DampedRates};
+use super::dmi::{self, DmiBond};
 use super::hamiltonian::{Rates, SpinSystem};
 use super::lanes::{bond_flow, rodrigues_series, sinc_cos_series, site_flow, unit, SERIES_LIMIT};
 use super::sweep::{team, Shared};
@@ -332,9 +333,11 @@ fn run(
     };
     // Four bonds at a time in AVX lanes (the same bits), where the processor has AVX and
     // the on-site flow is one rotation; the unfused path (for tests) stays scalar.
-    let lanes = fuse && (commute || !onsite_terms) && damped.is_none() && avx_available();
+    // Bonds with DMI run on the scalar path (`dmi`); without DMI the paths are unchanged.
+    let dmi_vectors = system.dmi_vectors();
+    let lanes = fuse && (commute || !onsite_terms) && damped.is_none() && dmi_vectors.is_none() && avx_available();
     // The damped flows run in lanes too (they have no branch on the terms' directions).
-    let damped_lanes = fuse && damped.is_some() && avx_available();
+    let damped_lanes = fuse && damped.is_some() && dmi_vectors.is_none() && avx_available();
     let _ = damped_lanes;
     // Adjacent on-site half flows join only where the on-site flow is exact (one rotation);
     // a Strang-split field and anisotropy is not a one-parameter group (with damping, not
@@ -343,7 +346,48 @@ fn run(
         Some(d) => d.onsite_is_group(),
         None => commute || !onsite_terms,
     };
-    let bond_sweep = |shared: &Shared, bonds: &[[u32; 2]], pieces: &[Piece]| {
+    let (exchange, k_dmi, alpha) = (system.exchange, rates.per_moment * rates.damping_factor, rates.damping);
+    // `bonds` starts at index `base` of the lattice's bonds.
+    let bond_sweep = |shared: &Shared, bonds: &[[u32; 2]], base: usize, pieces: &[Piece]| {
+        if let Some(dv) = dmi_vectors {
+            // The damped on-site constants once per sweep.
+            let mut sites: [Option<damped::SiteStep>; 6] = [None; 6];
+            if let Some(d) = &damped {
+                for (k, p) in pieces.iter().enumerate() {
+                    if let Piece::Site(t) = *p {
+                        sites[k] = Some(d.site_step(t));
+                    }
+                }
+            }
+            let scalar = |index: usize, mut si: Vec3, mut sj: Vec3| {
+                let bond = DmiBond::new(dv[index], exchange, k_dmi);
+                for (k, p) in pieces.iter().enumerate() {
+                    match *p {
+                        Piece::Site(t) if onsite_terms => match &sites[k] {
+                            Some(c) => (si, sj) = (damped::site(c, si), damped::site(c, sj)),
+                            None => {
+                                si = onsite_turn(rates, commute, si, t);
+                                sj = onsite_turn(rates, commute, sj, t);
+                            }
+                        },
+                        Piece::Site(_) => {}
+                        Piece::Bond(t) => {
+                            (si, sj) = match (&bond, &damped) {
+                                (Some(b), None) => dmi::flow(b, si, sj, t),
+                                (Some(b), Some(_)) => dmi::damped_flow(b, alpha, si, sj, t),
+                                (None, None) => bond_turn(rate, si, sj, t),
+                                (None, Some(d)) => damped::bond(&d.bond_step(t), si, sj),
+                            }
+                        }
+                        Piece::Unit => (si, sj) = (renormalize(si), renormalize(sj)),
+                    }
+                }
+                (si, sj)
+            };
+            // SAFETY: this part's bonds of a matching, alone until the barrier.
+            unsafe { shared.update_bond_range_indexed(bonds, base, &scalar) };
+            return;
+        }
         if let Some(d) = &damped {
             // Each piece's constants once per sweep, then the damped flows per bond.
             let mut steps = [DampedPiece::Unit; 6];
@@ -428,11 +472,15 @@ fn run(
                 }
                 Sweep::Colour(c, t) => {
                     let bonds = lattice.colour(c);
-                    bond_sweep(&shared, &bonds[part.range(bonds.len())], &[Piece::Bond(t)]);
+                    let range = part.range(bonds.len());
+                    let base = lattice.colour_offset(c) + range.start;
+                    bond_sweep(&shared, &bonds[range], base, &[Piece::Bond(t)]);
                 }
                 Sweep::Fused(pieces) => {
                     let bonds = lattice.colour(0);
-                    bond_sweep(&shared, &bonds[part.range(bonds.len())], pieces);
+                    let range = part.range(bonds.len());
+                    let base = lattice.colour_offset(0) + range.start;
+                    bond_sweep(&shared, &bonds[range], base, pieces);
                 }
             }
             barrier.wait();
