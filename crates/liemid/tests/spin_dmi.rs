@@ -4,8 +4,8 @@
 //! fused/unfused and on any thread count, and the same bits as before when `D = 0`.
 
 use liemid::spin::{
-    dmi_piece_flow, problems, DmiKind, Lattice, LatticeKind, SpinIntegrator, SpinMethod, SpinSystem,
-    GYROMAGNETIC_RATIO, MU_B,
+    dmi_piece_flow, problems, topological_charge, DmiKind, Lattice, LatticeKind, SpinIntegrator, SpinMethod,
+    SpinSystem, GYROMAGNETIC_RATIO, MU_B,
 };
 use liemid::Vec3;
 
@@ -302,4 +302,37 @@ fn zero_dmi_is_the_system_without_dmi_bit_for_bit() {
         assert!(a == run(method, &zero, &p.spins, 0.01, 20) && a == run(method, &listed, &p.spins, 0.01, 20));
     }
     assert_eq!(p.system.energy(&p.spins).to_bits(), zero.energy(&p.spins).to_bits());
+}
+
+#[test]
+fn the_relaxed_skyrmion_has_charge_minus_one_and_keeps_it_undamped() {
+    let system = problems::skyrmion_system();
+    let (relaxed, report) = problems::skyrmion_relaxed(&system).unwrap();
+    let q = topological_charge(&system, &relaxed).unwrap();
+    let e = system.energy(&relaxed);
+    let uniform = system.energy(&vec![Vec3::new(0.0, 0.0, 1.0); system.len()]);
+    let core = relaxed.iter().filter(|s| s.z < 0.0).count();
+    println!(
+        "relaxed in {} iterations (force {:.1e} meV): Q = {q:.15}, E = {e:.12} meV, E - E_uniform = {:.6} meV, {core} spins with S_z < 0",
+        report.iterations,
+        report.force,
+        e - uniform
+    );
+    assert!((q + 1.0).abs() < 1e-6, "Q = {q}");
+    // A metastable skyrmion: above the uniform state.
+    assert!(e > uniform);
+    // Undamped from the problem's start (the relaxed skyrmion in spin waves).
+    let p = problems::skyrmion();
+    let mut s = p.spins.clone();
+    let e0 = p.system.energy(&s);
+    let mut integ = SpinIntegrator::new(SpinMethod::Splitting);
+    let mut worst: f64 = 0.0;
+    let mut worst_q: f64 = 0.0;
+    for k in 0..100 {
+        integ.advance(&p.system, &mut s, k as f64 * 0.1, 0.01, 100).unwrap();
+        worst = worst.max(((p.system.energy(&s) - e0) / e0).abs());
+        worst_q = worst_q.max((topological_charge(&p.system, &s).unwrap() + 1.0).abs());
+    }
+    println!("10^4 undamped steps of 0.01 ps: max relative energy error {worst:.2e}, max |Q + 1| {worst_q:.1e}");
+    assert!(worst_q < 1e-6 && worst < 1e-4);
 }

@@ -30,10 +30,12 @@ mod lanes;
 mod midpoint;
 mod splitting;
 mod sweep;
+mod topology;
 
 pub use hamiltonian::{DmiKind, SpinSystem};
 pub use lattice::{Lattice, LatticeKind};
 pub use sweep::CHUNK;
+pub use topology::{relax, topological_charge, Relaxation};
 
 use crate::composition::Scheme;
 use crate::error::{Error, Result};
