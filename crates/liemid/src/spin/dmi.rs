@@ -38,15 +38,16 @@
 //! the form of G. P. Müller et al., Phys. Rev. B 99, 224414 (2019).
 
 use super::damped::{self, BondStep};
-use super::lanes::{asinh_ratio_series, bond_flow, rodrigues_series, sinc_cos_series, ASINH_LIMIT, SERIES_LIMIT};
+use super::lanes::{
+    asinh_ratio_series, bond_flow, dmi_bond_flow, dmi_ising, dmi_q, dmi_q_t, rodrigues_series, sinc_cos_series,
+    sinc_cos_short, DmiStep, ASINH_LIMIT, SERIES_LIMIT, SHORT_LIMIT, V,
+};
 use crate::linalg::Vec3;
 use crate::so3::rodrigues;
 
-/// The constants of one DMI bond (rates in rad/ps, divided by `1 + α²`).
+/// The constants of the DMI bonds of one `|D|` (rates in rad/ps, divided by `1 + α²`).
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct DmiBond {
-    /// `u = D/|D|`.
-    pub(crate) unit: Vec3,
+pub(crate) struct DmiShape {
     /// `cos φ`, `sin φ`, `1 − cos φ` of `Q = rot(u, −φ)`.
     pub(crate) cos: f64,
     pub(crate) sin: f64,
@@ -55,6 +56,47 @@ pub(crate) struct DmiBond {
     pub(crate) rho: f64,
     /// `k g`.
     pub(crate) ising: f64,
+}
+
+impl DmiShape {
+    /// For `|D| = dn > 0` (meV), exchange `exchange` (meV) and `k = γ/((1+α²) μ_s μ_B)`.
+    #[inline(always)]
+    pub(crate) fn new(dn: f64, exchange: f64, k: f64) -> Self {
+        let d2 = dn * dn;
+        let rho = (exchange * exchange + d2).sqrt();
+        // g = ρ − J without cancellation for J > 0.
+        let g = if exchange > 0.0 { d2 / (rho + exchange) } else { rho - exchange };
+        let inv = 1.0 / rho;
+        DmiShape {
+            cos: exchange * inv,
+            sin: dn * inv,
+            versine: g * inv,
+            rho: k * rho,
+            ising: k * g,
+        }
+    }
+
+    /// The undamped flow's constants over `h`.
+    #[inline(always)]
+    pub(crate) fn step(&self, h: f64) -> DmiStep {
+        let ising_half = self.ising * (0.5 * h);
+        DmiStep {
+            cos: self.cos,
+            sin: self.sin,
+            versine: self.versine,
+            rho_h: self.rho * h,
+            ising_half,
+            short: ising_half * ising_half < SHORT_LIMIT,
+        }
+    }
+}
+
+/// One DMI bond: its unit vector and its shape.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct DmiBond {
+    /// `u = D/|D|`.
+    pub(crate) unit: Vec3,
+    pub(crate) shape: DmiShape,
 }
 
 impl DmiBond {
@@ -67,40 +109,30 @@ impl DmiBond {
             return None;
         }
         let dn = d2.sqrt();
-        let rho = (exchange * exchange + d2).sqrt();
-        // g = ρ − J without cancellation for J > 0.
-        let g = if exchange > 0.0 {
-            d2 / (rho + exchange)
-        } else {
-            rho - exchange
-        };
-        let inv = 1.0 / rho;
         Some(DmiBond {
             unit: d * (1.0 / dn),
-            cos: exchange * inv,
-            sin: dn * inv,
-            versine: g * inv,
-            rho: k * rho,
-            ising: k * g,
+            shape: DmiShape::new(dn, exchange, k),
         })
     }
 
     /// `Q v = rot(u, −φ) v`.
     #[inline(always)]
     fn q(&self, v: Vec3) -> Vec3 {
-        v * self.cos - self.unit.cross(v) * self.sin + self.unit * (self.versine * self.unit.dot(v))
+        let c = &self.shape;
+        dmi_q(self.unit.into(), c.cos, c.sin, c.versine, v.into()).into()
     }
 
     /// `Qᵀ v = rot(u, φ) v`.
     #[inline(always)]
     fn q_t(&self, v: Vec3) -> Vec3 {
-        v * self.cos + self.unit.cross(v) * self.sin + self.unit * (self.versine * self.unit.dot(v))
+        let c = &self.shape;
+        dmi_q_t(self.unit.into(), c.cos, c.sin, c.versine, v.into()).into()
     }
 }
 
 /// `(sin θ/θ, cos θ)` from `θ²`.
 #[inline(always)]
-fn sinc_cos(t: f64) -> (f64, f64) {
+pub(crate) fn sinc_cos(t: f64) -> (f64, f64) {
     if t < SERIES_LIMIT {
         sinc_cos_series(t)
     } else {
@@ -110,37 +142,34 @@ fn sinc_cos(t: f64) -> (f64, f64) {
     }
 }
 
-/// `rot(u, θ) s` for a unit `u`.
+/// `rot(u, θ) s` for a unit `u` (Rodrigues), for the damped flows.
 #[inline(always)]
 fn rotate(u: Vec3, theta: f64, s: Vec3) -> Vec3 {
     let t = theta * theta;
-    let (a, b) = if t < SERIES_LIMIT {
-        rodrigues_series(t)
-    } else {
-        rodrigues(t)
-    };
+    let (a, b) = if t < SERIES_LIMIT { rodrigues_series(t) } else { rodrigues(t) };
     let v = u * theta;
     let vx = v.cross(s);
     s + vx * a + v.cross(vx) * b
 }
 
-/// The undamped Ising flow over `t`: `S_i` about `u` by `−k g a_j t`, `S_j` by `−k g a_i t`.
+/// The exact undamped flow of a DMI bond with unit vector `u` over the time of `c`
+/// ([`dmi_bond_flow`] on the scalar path: the bits of the lanes).
 #[inline(always)]
-fn ising(b: &DmiBond, si: Vec3, sj: Vec3, t: f64) -> (Vec3, Vec3) {
-    let (ai, aj) = (si.dot(b.unit), sj.dot(b.unit));
-    (
-        rotate(b.unit, -b.ising * aj * t, si),
-        rotate(b.unit, -b.ising * ai * t, sj),
-    )
-}
-
-/// The exact undamped flow of a DMI bond over `h` (Strang within the bond).
-#[inline(always)]
-pub(crate) fn flow(b: &DmiBond, si: Vec3, sj: Vec3, h: f64) -> (Vec3, Vec3) {
-    let (si, sj) = ising(b, si, sj, 0.5 * h);
-    let (si, t) = bond_flow(b.rho * h, si.into(), b.q(sj).into(), sinc_cos);
-    let (si, t): (Vec3, Vec3) = (si.into(), t.into());
-    ising(b, si, b.q_t(t), 0.5 * h)
+pub(crate) fn flow(u: Vec3, c: &DmiStep, si: Vec3, sj: Vec3) -> (Vec3, Vec3) {
+    let short = c.short;
+    let (a, b) = dmi_bond_flow(
+        V::from(u),
+        c.cos,
+        c.sin,
+        c.versine,
+        c.rho_h,
+        c.ising_half,
+        si.into(),
+        sj.into(),
+        |t| if short { sinc_cos_short(t) } else { sinc_cos(t) },
+        sinc_cos,
+    );
+    (a.into(), b.into())
 }
 
 /// `asinh(x)/x` from `x²`.
@@ -172,7 +201,7 @@ fn damped_ising_spin(u: Vec3, alpha: f64, ch1: f64, sh: f64, s: Vec3, a: f64, ot
 /// The exact damped Ising flow over `t`.
 #[inline(always)]
 fn damped_ising(b: &DmiBond, alpha: f64, si: Vec3, sj: Vec3, t: f64) -> (Vec3, Vec3) {
-    let x = b.ising * alpha * t;
+    let x = b.shape.ising * alpha * t;
     let half = (0.5 * x).sinh();
     let ch1 = 2.0 * half * half / alpha;
     let sh = x.sinh() / alpha;
@@ -200,7 +229,7 @@ fn damped_bond_step(rate: f64, alpha: f64, h: f64) -> BondStep {
 #[inline(always)]
 pub(crate) fn damped_flow(b: &DmiBond, alpha: f64, si: Vec3, sj: Vec3, h: f64) -> (Vec3, Vec3) {
     let (si, sj) = damped_ising(b, alpha, si, sj, 0.5 * h);
-    let (si, t) = damped::bond(&damped_bond_step(b.rho, alpha, h), si, b.q(sj));
+    let (si, t) = damped::bond(&damped_bond_step(b.shape.rho, alpha, h), si, b.q(sj));
     damped_ising(b, alpha, si, b.q_t(t), 0.5 * h)
 }
 
@@ -221,18 +250,22 @@ pub(crate) fn piece_flow(
     let Some(b) = DmiBond::new(d, exchange, k) else {
         return (si, sj);
     };
+    let ising = |angle: f64, si: Vec3, sj: Vec3| {
+        let (a, c) = dmi_ising(V::from(b.unit), angle, si.into(), sj.into(), &mut sinc_cos);
+        (a.into(), c.into())
+    };
     match (which, alpha == 0.0) {
-        (0, true) => ising(&b, si, sj, h),
+        (0, true) => ising(b.shape.ising * h, si, sj),
         (0, false) => damped_ising(&b, alpha, si, sj, h),
         (1, true) => {
-            let (a, t) = bond_flow(b.rho * h, si.into(), b.q(sj).into(), sinc_cos);
+            let (a, t) = bond_flow(b.shape.rho * h, si.into(), b.q(sj).into(), sinc_cos);
             (a.into(), b.q_t(t.into()))
         }
         (1, false) => {
-            let (a, t) = damped::bond(&damped_bond_step(b.rho, alpha, h), si, b.q(sj));
+            let (a, t) = damped::bond(&damped_bond_step(b.shape.rho, alpha, h), si, b.q(sj));
             (a, b.q_t(t))
         }
-        (_, true) => flow(&b, si, sj, h),
+        (_, true) => flow(b.unit, &b.shape.step(h), si, sj),
         (_, false) => damped_flow(&b, alpha, si, sj, h),
     }
 }

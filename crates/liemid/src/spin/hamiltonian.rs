@@ -83,6 +83,22 @@ struct Dmi {
     /// `D_ij` seen from site `i` for each entry of the neighbour lists (`−D_b` at the
     /// bond's second site), so that `B_i` adds `Σ_j S_j × D_ij`.
     neighbour: Vec<Vec3>,
+    /// `D/|D|` of each bond (zero where `D = 0`) and `|D|`.
+    unit: Vec<Vec3>,
+    norm: Vec<f64>,
+    /// The common `|D|` when every bond has the same non-zero `|D|`.
+    uniform: Option<f64>,
+}
+
+/// The DMI of every bond as the splitting uses it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct DmiBonds<'a> {
+    /// `D/|D|` per bond (zero where `D = 0`).
+    pub unit: &'a [Vec3],
+    /// `|D|` per bond.
+    pub norm: &'a [f64],
+    /// The common `|D|` when every bond has the same non-zero one.
+    pub uniform: Option<f64>,
 }
 
 /// The rates the field is made of, in rad/ps.
@@ -245,9 +261,19 @@ impl SpinSystem {
             neighbour[at(i, b[1])] = *d;
             neighbour[at(j, b[0])] = -*d;
         }
+        let norm: Vec<f64> = vectors.iter().map(|v| v.norm()).collect();
+        let unit = vectors
+            .iter()
+            .zip(&norm)
+            .map(|(v, &n)| if n > 0.0 { *v * (1.0 / n) } else { Vec3::ZERO })
+            .collect();
+        let uniform = Some(norm[0]).filter(|&n| n > 0.0 && norm.iter().all(|&m| m == n));
         self.dmi = Some(Dmi {
             bond: vectors.to_vec(),
             neighbour,
+            unit,
+            norm,
+            uniform,
         });
         Ok(self)
     }
@@ -257,6 +283,15 @@ impl SpinSystem {
     #[must_use]
     pub fn dmi_vectors(&self) -> Option<&[Vec3]> {
         self.dmi.as_ref().map(|d| d.bond.as_slice())
+    }
+
+    /// The DMI per bond for the splitting.
+    pub(crate) fn dmi_bonds(&self) -> Option<DmiBonds<'_>> {
+        self.dmi.as_ref().map(|d| DmiBonds {
+            unit: &d.unit,
+            norm: &d.norm,
+            uniform: d.uniform,
+        })
     }
 
     /// Whether the DMI table still matches the lattice (the lattice is a public field).
