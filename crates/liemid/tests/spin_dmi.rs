@@ -17,6 +17,9 @@ fn run(method: SpinMethod, system: &SpinSystem, spins: &[Vec3], h: f64, steps: u
     s
 }
 
+/// `A v` of a piece's energy `−S_iᵀ A S_j`.
+type Coupling<'a> = &'a dyn Fn(Vec3) -> Vec3;
+
 fn max_difference(a: &[Vec3], b: &[Vec3]) -> f64 {
     a.iter().zip(b).map(|(x, y)| (*x - *y).norm()).fold(0.0, f64::max)
 }
@@ -34,6 +37,7 @@ fn cross(d: Vec3, v: Vec3) -> Vec3 {
 /// The pair's LLG `dS/dt = −k [S × F + α S × (S × F)]` for an energy `E = −S_iᵀ A S_j`
 /// given by `A v` and `Aᵀ v`, by classical RK4 in `steps` steps (no renormalisation: the
 /// reference must not hide a drift of `|S|`).
+#[allow(clippy::too_many_arguments)]
 fn reference(
     a: &dyn Fn(Vec3) -> Vec3,
     at: &dyn Fn(Vec3) -> Vec3,
@@ -56,8 +60,8 @@ fn reference(
         let (k2x, k2y) = f(x + k1x * (0.5 * dt), y + k1y * (0.5 * dt));
         let (k3x, k3y) = f(x + k2x * (0.5 * dt), y + k2y * (0.5 * dt));
         let (k4x, k4y) = f(x + k3x * dt, y + k3y * dt);
-        x = x + (k1x + k2x * 2.0 + k3x * 2.0 + k4x) * (dt / 6.0);
-        y = y + (k1y + k2y * 2.0 + k3y * 2.0 + k4y) * (dt / 6.0);
+        x += (k1x + k2x * 2.0 + k3x * 2.0 + k4x) * (dt / 6.0);
+        y += (k1y + k2y * 2.0 + k3y * 2.0 + k4y) * (dt / 6.0);
     }
     (x, y)
 }
@@ -100,8 +104,7 @@ fn each_piece_of_a_dmi_bond_flows_exactly() {
             let k = k0 / (1.0 + alpha * alpha);
             for (si, sj) in starts {
                 for h in [0.7, -0.4] {
-                    let pieces: [(u8, &dyn Fn(Vec3) -> Vec3, &dyn Fn(Vec3) -> Vec3); 2] =
-                        [(0, &ising_a, &ising_a), (1, &exch_a, &exch_at)];
+                    let pieces: [(u8, Coupling, Coupling); 2] = [(0, &ising_a, &ising_a), (1, &exch_a, &exch_at)];
                     for (which, a, at) in pieces {
                         let (x, y) = dmi_piece_flow(which, d, j, k, alpha, si, sj, h);
                         let (rx, ry) = reference(a, at, k, alpha, si, sj, h, 20_000);
@@ -339,4 +342,29 @@ fn the_relaxed_skyrmion_has_charge_minus_one_and_keeps_it_undamped() {
     }
     println!("10^4 undamped steps of 0.01 ps: max relative energy error {worst:.2e}, max |Q + 1| {worst_q:.1e}");
     assert!(worst_q < 1e-6 && worst < 1e-4);
+}
+
+#[test]
+#[ignore = "10^5 steps of the 48x48 skyrmion: run with --release -- --ignored"]
+fn the_skyrmion_keeps_its_charge_over_1e5_undamped_steps() {
+    // The acceptance run: the skyrmion problem, split at 0.01 ps for 10^5 steps (1 ns), the
+    // charge checked every 100 steps, the energy error bounded (last tenth against first).
+    let p = problems::skyrmion();
+    let mut s = p.spins.clone();
+    let e0 = p.system.energy(&s);
+    let mut integ = SpinIntegrator::new(SpinMethod::Splitting);
+    let (mut worst_q, mut first, mut last): (f64, f64, f64) = (0.0, 0.0, 0.0);
+    let blocks = 1000;
+    for k in 0..blocks {
+        integ.advance(&p.system, &mut s, 0.0, 0.01, 100).unwrap();
+        worst_q = worst_q.max((topological_charge(&p.system, &s).unwrap() + 1.0).abs());
+        let de = ((p.system.energy(&s) - e0) / e0).abs();
+        if k < blocks / 10 {
+            first = first.max(de);
+        } else if k >= blocks - blocks / 10 {
+            last = last.max(de);
+        }
+    }
+    println!("skyrmion, 10^5 steps of 0.01 ps: max |Q + 1| {worst_q:.1e}; energy error first tenth {first:.2e}, last tenth {last:.2e}");
+    assert!(worst_q < 1e-6 && last < 1.5 * first.max(1e-12) && first < 1e-4);
 }

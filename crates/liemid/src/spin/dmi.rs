@@ -65,7 +65,11 @@ impl DmiShape {
         let d2 = dn * dn;
         let rho = (exchange * exchange + d2).sqrt();
         // g = ρ − J without cancellation for J > 0.
-        let g = if exchange > 0.0 { d2 / (rho + exchange) } else { rho - exchange };
+        let g = if exchange > 0.0 {
+            d2 / (rho + exchange)
+        } else {
+            rho - exchange
+        };
         let inv = 1.0 / rho;
         DmiShape {
             cos: exchange * inv,
@@ -146,7 +150,11 @@ pub(crate) fn sinc_cos(t: f64) -> (f64, f64) {
 #[inline(always)]
 fn rotate(u: Vec3, theta: f64, s: Vec3) -> Vec3 {
     let t = theta * theta;
-    let (a, b) = if t < SERIES_LIMIT { rodrigues_series(t) } else { rodrigues(t) };
+    let (a, b) = if t < SERIES_LIMIT {
+        rodrigues_series(t)
+    } else {
+        rodrigues(t)
+    };
     let v = u * theta;
     let vx = v.cross(s);
     s + vx * a + v.cross(vx) * b

@@ -416,7 +416,8 @@ mod avx {
 
     use super::{
         asinh_ratio_series, bond_flow, damped_anisotropy_flow, damped_bond_flow, damped_zeeman_flow, dmi_bond_flow,
-        rodrigues_series, sinc_cos_series, sinc_cos_short, site_flow, unit, DmiStep, Real, ASINH_LIMIT, SERIES_LIMIT, V,
+        rodrigues_series, sinc_cos_series, sinc_cos_short, site_flow, unit, DmiStep, Real, ASINH_LIMIT, SERIES_LIMIT,
+        V,
     };
     use crate::linalg::Vec3;
     use crate::spin::damped::SiteStep;

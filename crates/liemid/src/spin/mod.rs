@@ -7,14 +7,16 @@
 //!
 //! - [`lattice`]: sites, bonds (each pair once), neighbours, and a colouring of the bonds
 //!   into matchings;
-//! - [`hamiltonian`]: [`SpinSystem`] (exchange `J`, uniaxial anisotropy `K` along `n`,
-//!   field `B`, moment `μ_s`, damping `α`), the energy and the effective field;
+//! - [`hamiltonian`]: [`SpinSystem`] (exchange `J`, Dzyaloshinskii-Moriya vectors `D_ij`,
+//!   uniaxial anisotropy `K` along `n`, field `B`, moment `μ_s`, damping `α`), the energy
+//!   and the effective field;
 //! - the methods, one file each: `splitting` (explicit, symplectic: exact flows of bond
 //!   colours and of the on-site terms, composed to orders 2, 4, 6, 8; with damping the
-//!   exact damped flows of `damped`), `midpoint` (the
+//!   exact damped flows of `damped`; a DMI bond by the exact flows of `dmi`), `midpoint` (the
 //!   implicit midpoint rule in Cayley form: exact energy and `Σ S_z`; damping), and the
 //!   baselines of the field in `explicit` (Heun, Depondt-Mertens, RK4);
-//! - [`problems`]: named benchmarks.
+//! - [`problems`]: named benchmarks (`skyrmion`: a relaxed Néel skyrmion);
+//! - [`topological_charge`] (Berg-Lüscher) and [`relax`] (velocity projection).
 //!
 //! Units: meV, T, ps, Bohr magnetons, with Spirit's constants, so a run with the same
 //! inputs as Spirit follows the same equation.

@@ -29,8 +29,8 @@
 
 use super::damped::{self, DampedRates};
 use super::dmi::{self, DmiBond, DmiShape};
-use super::lanes::DmiStep;
 use super::hamiltonian::{Rates, SpinSystem};
+use super::lanes::DmiStep;
 use super::lanes::{bond_flow, rodrigues_series, sinc_cos_series, site_flow, unit, SERIES_LIMIT};
 use super::sweep::{team, Shared};
 use crate::linalg::Vec3;
@@ -350,7 +350,9 @@ fn run(
     let (exchange, k_dmi, alpha) = (system.exchange, rates.per_moment * rates.damping_factor, rates.damping);
     // Bonds of one |D| share their constants; undamped, they run in lanes under the same
     // conditions as the bonds without DMI.
-    let dmi_shape = dmi_vectors.and_then(|d| d.uniform).map(|dn| DmiShape::new(dn, exchange, k_dmi));
+    let dmi_shape = dmi_vectors
+        .and_then(|d| d.uniform)
+        .map(|dn| DmiShape::new(dn, exchange, k_dmi));
     let dmi_lanes = fuse && dmi_shape.is_some() && damped.is_none() && (commute || !onsite_terms) && avx_available();
     let _ = dmi_lanes;
     // `bonds` starts at index `base` of the lattice's bonds.
