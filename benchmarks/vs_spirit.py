@@ -124,21 +124,33 @@ def spirit_config(h: Hamiltonian, dt: float) -> str:
     )
 
 
-def liemid_scenario(h: Hamiltonian, start_file: str) -> str:
-    """liemid's scenario file for `h` (no DMI: liemid's own scenario key for it is another
-    issue's) starting from the spins in `start_file` (.npy, shape (N, 3))."""
-    if h.dmi:
-        raise ValueError("liemid_scenario: DMI is not written here yet")
+def liemid_dmi(h: Hamiltonian) -> tuple[float, str]:
+    """liemid's (dmi, dmi_kind) for Spirit's (dij, dm_chirality): chirality 1 is liemid's
+    bulk D r_ij, -2 its interfacial D z x r_ij (checked on one-bond energies); -1 and 2 are
+    the same with -D."""
+    kind = {1: "bulk", -1: "bulk", 2: "interfacial", -2: "interfacial"}[h.dm_chirality]
+    sign = 1.0 if h.dm_chirality in (1, -2) else -1.0
+    return sign * h.dmi, kind
+
+
+def liemid_scenario(h: Hamiltonian, start_file: str, t_end: float | None = None, initial: str | None = None) -> str:
+    """liemid's scenario file for `h` starting from the spins in `start_file` (.npy, shape
+    (N, 3)), or from the `[initial]` table text `initial`."""
     kind = "square" if h.cells[2] == 1 else "cubic"
     size = list(h.cells[:2]) if kind == "square" else list(h.cells)
     periodic = "true" if all(h.periodic[: len(size)]) else "false"
     field = [h.field * c for c in h.field_axis]
+    dmi = ""
+    if h.dmi:
+        d, dkind = liemid_dmi(h)
+        dmi = f'dmi = {d!r}\ndmi_kind = "{dkind}"\n'
+    init = initial if initial is not None else f'file = "{start_file}"\n'
     return (
         f'[lattice]\nkind = "{kind}"\nsize = {size}\nperiodic = {periodic}\n'
         f"[hamiltonian]\nexchange = {h.exchange!r}\nanisotropy = {h.anisotropy!r}\n"
         f"anisotropy_axis = [{', '.join(repr(float(c)) for c in h.axis)}]\n"
-        f"field = [{', '.join(repr(float(c)) for c in field)}]\nmu_s = {h.mu_s!r}\n"
-        f'[dynamics]\nt_end = {T_END!r}\ndamping = {h.damping!r}\n[initial]\nfile = "{start_file}"\n'
+        f"field = [{', '.join(repr(float(c)) for c in field)}]\nmu_s = {h.mu_s!r}\n{dmi}"
+        f"[dynamics]\nt_end = {(T_END if t_end is None else t_end)!r}\ndamping = {h.damping!r}\n[initial]\n{init}"
     )
 
 
@@ -151,14 +163,22 @@ def start_spins(n: int) -> np.ndarray:
 
 
 def energy(h: Hamiltonian, spins: np.ndarray) -> float:
-    """E = -J sum_<ij> S_i.S_j - K sum (S.n)^2 - mu_s mu_B B.sum S on the periodic square
-    lattice, in double precision (Spirit's C API returns its energy as a float32)."""
+    """E = -J sum_<ij> S_i.S_j - sum_<ij> D_ij.(S_i x S_j) - K sum (S.n)^2 - mu_s mu_B B.sum S
+    on the periodic square lattice, in double precision (Spirit's C API returns its energy
+    as a float32)."""
     nx, ny = h.cells[0], h.cells[1]
     s = spins.reshape(ny, nx, 3)  # [y, x, component], site index x + nx y
-    bonds = np.sum(s * np.roll(s, -1, axis=1)) + np.sum(s * np.roll(s, -1, axis=0))
+    right, up = np.roll(s, -1, axis=1), np.roll(s, -1, axis=0)
+    bonds = np.sum(s * right) + np.sum(s * up)
     n = np.array(h.axis) / np.linalg.norm(h.axis)
     b = h.field * np.array(h.field_axis)
-    return float(-h.exchange * bonds - h.anisotropy * np.sum((s @ n) ** 2) - h.mu_s * 0.057883817555 * np.sum(s @ b))
+    e = -h.exchange * bonds - h.anisotropy * np.sum((s @ n) ** 2) - h.mu_s * 0.057883817555 * np.sum(s @ b)
+    if h.dmi:
+        d, kind = liemid_dmi(h)
+        for r, nb in (((1.0, 0.0, 0.0), right), ((0.0, 1.0, 0.0), up)):
+            dv = d * (np.array(r) if kind == "bulk" else np.cross((0.0, 0.0, 1.0), r))
+            e -= float(np.sum(np.cross(s, nb) @ dv))
+    return float(e)
 
 
 def trajectory_error(a: np.ndarray, b: np.ndarray) -> float:

@@ -121,6 +121,10 @@ fn main() -> ExitCode {
                 println!("{name:<15} {}", rigid::scenario::describe(name));
             }
             println!("{:<15} {}", rigid::satellite::PROBLEM, rigid::satellite::DESCRIPTION);
+            println!("\nliemid spins --problem NAME:");
+            for name in liemid::spin::problems::NAMES {
+                println!("{name:<15} {}", liemid::spin::problems::describe(name).unwrap_or(""));
+            }
             println!("\nliemid multibody --problem NAME:");
             for name in multibody::scenario::PROBLEMS {
                 println!("{name:<15} {}", multibody::scenario::describe(name));

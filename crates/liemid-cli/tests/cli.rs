@@ -721,6 +721,50 @@ fn spins_input_errors_name_the_key_and_exit_2() {
     let o = run_in(&dir, &["spins", "--problem", "nope"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("square-64"));
+    for (text, expected) in [
+        (
+            "[lattice]\nkind = \"square\"\nsize = [4, 4]\n[hamiltonian]\ndmi = 0.3\ndmi_kind = \"spiral\"\n",
+            "[hamiltonian] dmi_kind",
+        ),
+        (
+            "[lattice]\nkind = \"chain\"\nsize = [8]\n[initial]\nkind = \"skyrmion\"\n",
+            "square lattice",
+        ),
+    ] {
+        let f = write(&dir, "bad.toml", text);
+        let o = run_in(&dir, &["spins", f.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(2), "{text}: {}", stderr(&o));
+        assert!(stderr(&o).contains(expected), "{text}: {}", stderr(&o));
+    }
+}
+
+#[test]
+fn spins_runs_the_skyrmion_problem_and_a_dmi_scenario_keeping_the_charge() {
+    let dir = scratch("spins-skyrmion");
+    let o = run_in(
+        &dir,
+        &["spins", "--problem", "skyrmion", "--t-end", "0.5", "--json", "-"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = json(&stdout(&o));
+    let q = s["topological_charge"].as_array().unwrap();
+    assert!(q.iter().all(|q| (q.as_f64().unwrap() + 1.0).abs() < 1e-6), "{s}");
+    assert_eq!(s["dmi"], true);
+    // The same Hamiltonian from a scenario file, its own relaxed skyrmion, and the listing.
+    let scenario = write(
+        &dir,
+        "sk.toml",
+        "[lattice]\nkind = \"square\"\nsize = [32, 32]\nperiodic = true\n\
+         [hamiltonian]\nexchange = 1.0\ndmi = 0.3\ndmi_kind = \"interfacial\"\nfield = [0.0, 0.0, 1.75]\n\
+         [dynamics]\nstep = 1e-2\nt_end = 0.2\n[initial]\nkind = \"skyrmion\"\nradius = 6.0\n",
+    );
+    let o = run_in(&dir, &["spins", scenario.to_str().unwrap(), "--json", "-"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = json(&stdout(&o));
+    let q = s["topological_charge"].as_array().unwrap();
+    assert!(q.iter().all(|q| (q.as_f64().unwrap() + 1.0).abs() < 1e-6), "{s}");
+    let o = run_in(&dir, &["problems"]);
+    assert!(stdout(&o).contains("skyrmion"));
 }
 
 #[test]

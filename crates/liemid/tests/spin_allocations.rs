@@ -2,7 +2,7 @@
 //! threads): none at all on one thread, and on a team of threads one hand-off per
 //! `advance` call (rayon's broadcast), whatever the number of steps it takes.
 
-use liemid::spin::{problems, SpinIntegrator, SpinMethod};
+use liemid::spin::{problems, DmiKind, SpinIntegrator, SpinMethod};
 
 #[path = "common/counting.rs"]
 mod counting;
@@ -18,12 +18,19 @@ fn spin_steps_allocate_nothing_once_warm() {
         s.damping = 0.1;
         s
     };
-    // Undamped, then damped (the splitting's damped flows keep their constants on the stack).
+    let dmi = p.system.clone().with_dmi(0.3, DmiKind::Interfacial).unwrap();
+    let dmi_damped = damped.clone().with_dmi(0.3, DmiKind::Bulk).unwrap();
+    // Undamped, then damped (the splitting's damped flows keep their constants on the stack),
+    // then with DMI (its bond constants too).
     for (threads, system) in [
         (1, p.system.clone()),
         (2, p.system.clone()),
         (1, damped.clone()),
         (2, damped),
+        (1, dmi.clone()),
+        (2, dmi),
+        (1, dmi_damped.clone()),
+        (2, dmi_damped),
     ] {
         p.system = system;
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();

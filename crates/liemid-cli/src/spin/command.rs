@@ -65,7 +65,7 @@ pub struct SpinsArgs {
 /// Options shared by the run and the study.
 #[derive(clap::Args, Debug)]
 pub struct CommonArgs {
-    /// Built-in problem (`square-64`, `chain-64`) when no file is given.
+    /// Built-in problem (`square-64`, `chain-64`, `skyrmion`) when no file is given.
     #[arg(long)]
     pub problem: Option<String>,
     /// End time (ps) [default: the scenario's].
@@ -207,6 +207,9 @@ pub fn spins(args: SpinsArgs) -> CmdResult {
     let n = system.len();
     let e0 = system.energy(&sc.spins);
     let sz0 = system.total_spin(&sc.spins).z;
+    // The topological charge on square lattices (at the start and the end).
+    let charge = |s: &[Vec3]| liemid::spin::topological_charge(system, s).ok();
+    let q0 = charge(&sc.spins);
     let scale = if e0 != 0.0 { e0.abs() } else { 1.0 };
     let mut writer = match &out {
         Some(p) => Some(TrajectoryWriter::create(p, format, &COLUMNS).map_err(Failure::Run)?),
@@ -295,6 +298,7 @@ pub fn spins(args: SpinsArgs) -> CmdResult {
         .map_err(Failure::Run)?;
     }
     let e1 = system.energy(&spins);
+    let q1 = charge(&spins);
     let m = system.total_spin(&spins) * (1.0 / n as f64);
     let rate = (steps as f64 * n as f64) / seconds;
     let summary = json!({
@@ -315,6 +319,8 @@ pub fn spins(args: SpinsArgs) -> CmdResult {
         "sz_total_change": max_sz,
         "sz_conserved_by_the_hamiltonian": system.conserves_sz() && system.damping == 0.0,
         "magnetisation": m.to_array(),
+        "dmi": system.dmi_vectors().is_some(),
+        "topological_charge": q0.zip(q1).map(|(a, b)| [a, b]),
         "midpoint_iterations_per_step": if sc.method == SpinMethod::Midpoint { json!(integ.iterations as f64 / steps.max(1) as f64) } else { json!(null) },
     });
     match args.json.as_deref() {
@@ -344,6 +350,9 @@ pub fn spins(args: SpinsArgs) -> CmdResult {
             println!("max |sum S_z - sum S_z(0)| (conserved)    {max_sz:.3e}");
         } else {
             println!("change of sum S_z (not conserved here)    {max_sz:.3e}");
+        }
+        if let (Some(a), Some(b)) = (q0, q1) {
+            println!("topological charge {a:.6} -> {b:.6}");
         }
         println!(
             "energy {} -> {} meV, mean spin [{:.6}, {:.6}, {:.6}]",

@@ -11,6 +11,8 @@
 //! anisotropy_axis = [0.0, 0.0, 1.0]
 //! field = [0.0, 0.0, 0.0]    # B, T
 //! mu_s = 1.0                 # Bohr magnetons
+//! dmi = 0.3                  # D, meV: E += -sum_<ij> D_ij.(S_i x S_j) [default 0]
+//! dmi_kind = "interfacial"   # D_ij = D z x r_ij ("interfacial", Spirit's dm_chirality -2) or D r_ij ("bulk", 1)
 //! [dynamics]
 //! damping = 0.0              # Gilbert alpha
 //! method = "split"           # `liemid methods --spins`
@@ -18,6 +20,8 @@
 //! t_end = 10.0               # ps
 //! [initial]
 //! file = "start.npy"         # (N, 3) float64 in site order; or kind = "uniform" | "random" | "near-z"
+//!                            # | "skyrmion" (a Neel skyrmion of `radius` sites at the centre of a square
+//!                            # lattice, relaxed by velocity projection; then tilted by up to `max_tilt`, default 0)
 //! [output]
 //! path = "spins.csv"         # t, energy, mx, my, mz (mean spin); .npy or .csv
 //! every = 10
@@ -25,7 +29,7 @@
 
 use std::path::{Path, PathBuf};
 
-use liemid::spin::{self, problems, Lattice, LatticeKind, SpinMethod, SpinSystem};
+use liemid::spin::{self, problems, DmiKind, Lattice, LatticeKind, SpinMethod, SpinSystem};
 use liemid::Vec3;
 
 use crate::shared::toml_table::{parse_table, Section};
@@ -129,17 +133,31 @@ pub fn parse(text: &str, name: &str, dir: &Path) -> Result<SpinScenario, String>
     let h = Section::new(
         &root,
         "hamiltonian",
-        &["exchange", "anisotropy", "anisotropy_axis", "field", "mu_s"],
+        &[
+            "exchange",
+            "anisotropy",
+            "anisotropy_axis",
+            "field",
+            "mu_s",
+            "dmi",
+            "dmi_kind",
+        ],
         false,
     )?;
     let (mut exchange, mut anisotropy, mut axis, mut field, mut mu_s) =
         (1.0, 0.0, Vec3::new(0.0, 0.0, 1.0), Vec3::ZERO, 1.0);
+    let (mut dmi, mut dmi_kind) = (0.0, DmiKind::Interfacial);
     if let Some(h) = &h {
         exchange = h.number("exchange")?.unwrap_or(exchange);
         anisotropy = h.number("anisotropy")?.unwrap_or(anisotropy);
         axis = h.vec3("anisotropy_axis")?.unwrap_or(axis);
         field = h.vec3("field")?.unwrap_or(field);
         mu_s = h.number("mu_s")?.unwrap_or(mu_s);
+        dmi = h.number("dmi")?.unwrap_or(dmi);
+        if let Some(k) = h.string("dmi_kind")? {
+            dmi_kind = DmiKind::from_key(k)
+                .ok_or_else(|| h.err("dmi_kind", format!("unknown kind \"{k}\" (interfacial, bulk)")))?;
+        }
     }
     let d = Section::new(&root, "dynamics", &["damping", "method", "step", "t_end"], false)?;
     let mut damping = 0.0;
@@ -153,16 +171,18 @@ pub fn parse(text: &str, name: &str, dir: &Path) -> Result<SpinScenario, String>
         step = d.number("step")?.unwrap_or(step);
         t_end = d.number("t_end")?.unwrap_or(t_end);
     }
-    let system = SpinSystem::new(lattice, exchange, anisotropy, axis, field, mu_s, damping).map_err(|e| match &h {
-        Some(h) => h.err("parameters", e),
-        None => format!("[dynamics] {e}"),
-    })?;
+    let system = SpinSystem::new(lattice, exchange, anisotropy, axis, field, mu_s, damping)
+        .and_then(|s| s.with_dmi(dmi, dmi_kind))
+        .map_err(|e| match &h {
+            Some(h) => h.err("parameters", e),
+            None => format!("[dynamics] {e}"),
+        })?;
     let n = system.len();
     let mut inputs = Vec::new();
     let init = Section::new(
         &root,
         "initial",
-        &["file", "kind", "seed", "direction", "max_tilt"],
+        &["file", "kind", "seed", "direction", "max_tilt", "radius"],
         false,
     )?;
     let spins = match &init {
@@ -208,10 +228,33 @@ pub fn parse(text: &str, name: &str, dir: &Path) -> Result<SpinScenario, String>
                         }
                         problems::near_z(n, tilt, seed)
                     }
+                    "skyrmion" => {
+                        let [nx, ny, nz] = system.lattice.size();
+                        if system.lattice.kind() != LatticeKind::Square || nz != 1 {
+                            return Err(init.err("kind", "a skyrmion start needs a square lattice"));
+                        }
+                        let radius = init.number("radius")?.unwrap_or(6.0);
+                        if !(radius.is_finite() && radius > 0.0) {
+                            return Err(
+                                init.err("radius", format!("must be a positive number of sites, found {radius}"))
+                            );
+                        }
+                        let tilt = init.number("max_tilt")?.unwrap_or(0.0);
+                        if !(0.0..=std::f64::consts::PI).contains(&tilt) {
+                            return Err(init.err("max_tilt", format!("must be in [0, pi] rad, found {tilt}")));
+                        }
+                        let mut s = problems::skyrmion_seed(nx, ny, radius, dmi >= 0.0);
+                        spin::relax(&system, &mut s, 1e-10, 1_000_000)
+                            .map_err(|e| init.err("kind", format!("the skyrmion did not relax: {e}")))?;
+                        if tilt > 0.0 {
+                            s = problems::tilted(&s, tilt, seed);
+                        }
+                        s
+                    }
                     other => {
                         return Err(init.err(
                             "kind",
-                            format!("unknown start \"{other}\" (uniform, random, near-z, or file = ...)"),
+                            format!("unknown start \"{other}\" (uniform, random, near-z, skyrmion, or file = ...)"),
                         ))
                     }
                 }

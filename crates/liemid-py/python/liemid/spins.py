@@ -152,7 +152,7 @@ def integrate(
 
 
 def problem(name: str) -> Tuple[System, FloatArray]:
-    """The built-in problem ``name`` (``"square-64"``, ``"chain-64"``): its system and start."""
+    """The built-in problem ``name`` (``"square-64"``, ``"chain-64"``, ``"skyrmion"``): its system and start."""
     inner, flat, _step, _t_end = _liemid.Spins.problem(str(name))
     system = System.__new__(System)
     system._inner = inner

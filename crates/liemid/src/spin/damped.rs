@@ -90,6 +90,22 @@ fn short_ratio_holds(alpha2: f64, e: f64, big_e: f64) -> bool {
     1.01 * bound < ASINH_SHORT_LIMIT
 }
 
+/// The constants of the damped flow over `h` of an exchange bond of damped rate `c`
+/// (`δ = 2cαh`).
+pub(crate) fn bond_step(c: f64, alpha: f64, h: f64) -> BondStep {
+    let delta = 2.0 * c * alpha * h;
+    let e = delta.exp();
+    let big_e = (2.0 * delta).exp_m1() / alpha;
+    let alpha2 = alpha * alpha;
+    BondStep {
+        e,
+        e2: e * e,
+        big_e,
+        alpha2,
+        short: short_ratio_holds(alpha2, e, big_e),
+    }
+}
+
 /// The damped rates of a system (rad/ps, already divided by `1 + α²`).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct DampedRates {
@@ -175,17 +191,7 @@ impl DampedRates {
     }
 
     pub(crate) fn bond_step(&self, h: f64) -> BondStep {
-        let delta = 2.0 * self.exchange * self.alpha * h;
-        let e = delta.exp();
-        let big_e = (2.0 * delta).exp_m1() / self.alpha;
-        let alpha2 = self.alpha * self.alpha;
-        BondStep {
-            e,
-            e2: e * e,
-            big_e,
-            alpha2,
-            short: short_ratio_holds(alpha2, e, big_e),
-        }
+        bond_step(self.exchange, self.alpha, h)
     }
 
     fn zeeman_step(&self, h: f64) -> ZeemanStep {

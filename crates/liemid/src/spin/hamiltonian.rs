@@ -1,14 +1,19 @@
 //! The Hamiltonian of classical unit spins and the Landau-Lifshitz-Gilbert equation.
 //!
 //! ```text
-//! E = −J Σ_<ij> S_i·S_j − K Σ_i (S_i·n)² − μ_s μ_B B·Σ_i S_i           (meV)
-//! B_i = −(1/(μ_s μ_B)) ∂E/∂S_i = (J Σ_{j~i} S_j + 2K (S_i·n) n)/(μ_s μ_B) + B   (T)
+//! E = −J Σ_<ij> S_i·S_j − Σ_<ij> D_ij·(S_i × S_j) − K Σ_i (S_i·n)² − μ_s μ_B B·Σ_i S_i   (meV)
+//! B_i = −(1/(μ_s μ_B)) ∂E/∂S_i
+//!     = (J Σ_{j~i} S_j + Σ_{j~i} S_j × D_ij + 2K (S_i·n) n)/(μ_s μ_B) + B             (T)
 //! dS_i/dt = −γ/(1+α²) [S_i × B_i + α S_i × (S_i × B_i)] = Ω_i × S_i,
 //! Ω_i = γ/(1+α²) (B_i + α S_i × B_i)                                      (rad/ps)
 //! ```
 //!
-//! Each pair of neighbours counts once. Undamped (`α = 0`) the energy, every `|S_i|` and,
-//! when `n` and `B` are parallel to `z` (or zero), `Σ S_z` are conserved; with `α > 0`
+//! Each pair of neighbours counts once; `D_ji = −D_ij`. The Dzyaloshinskii-Moriya vectors
+//! are optional ([`SpinSystem::with_dmi`]): bulk `D_ij = D r̂_ij`, interfacial
+//! `D_ij = D (ẑ × r̂_ij)`, `r̂_ij` the unit vector from site `i` to site `j`, or any vector
+//! per bond ([`SpinSystem::with_dmi_vectors`]). Undamped (`α = 0`) the energy, every `|S_i|` and,
+//! when `n` and `B` are parallel to `z` (or zero) and there is no DMI, `Σ S_z` are
+//! conserved; with `α > 0`
 //! the energy decreases.
 //!
 //! Reference: the units and conventions of Spirit (G. P. Müller et al., Phys. Rev. B 99,
@@ -36,11 +41,73 @@ pub struct SpinSystem {
     pub mu_s: f64,
     /// Gilbert damping `α`.
     pub damping: f64,
+    /// The Dzyaloshinskii-Moriya vectors, if any is non-zero.
+    dmi: Option<Dmi>,
+}
+
+/// Which Dzyaloshinskii-Moriya vectors a chain, square or cubic lattice gets from one
+/// strength `D` (meV).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DmiKind {
+    /// `D_ij = D r̂_ij` (B20 magnets; Bloch skyrmions). Spirit's `dm_chirality 1`.
+    Bulk,
+    /// `D_ij = D (ẑ × r̂_ij)` (a film on a heavy-metal substrate; Néel skyrmions).
+    /// Spirit's `dm_chirality -2` (its `2` is `D r̂_ij × ẑ`, the opposite sign).
+    Interfacial,
+}
+
+impl DmiKind {
+    /// The name in scenario files.
+    #[must_use]
+    pub fn key(self) -> &'static str {
+        match self {
+            DmiKind::Bulk => "bulk",
+            DmiKind::Interfacial => "interfacial",
+        }
+    }
+
+    /// The kind named `key`.
+    #[must_use]
+    pub fn from_key(key: &str) -> Option<Self> {
+        [DmiKind::Bulk, DmiKind::Interfacial]
+            .into_iter()
+            .find(|k| k.key() == key)
+    }
+}
+
+/// The DMI vectors of a system, per bond and per (site, neighbour).
+#[derive(Clone, Debug)]
+struct Dmi {
+    /// `D_ij` (meV) of each bond `[i, j]` of [`Lattice::bonds`], in its order.
+    bond: Vec<Vec3>,
+    /// `D_ij` seen from site `i` for each entry of the neighbour lists (`−D_b` at the
+    /// bond's second site), so that `B_i` adds `Σ_j S_j × D_ij`.
+    neighbour: Vec<Vec3>,
+    /// `D/|D|` of each bond (zero where `D = 0`) and `|D|`.
+    unit: Vec<Vec3>,
+    norm: Vec<f64>,
+    /// The common `|D|` when every bond has the same non-zero `|D|`.
+    uniform: Option<f64>,
+}
+
+/// The DMI of every bond as the splitting uses it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct DmiBonds<'a> {
+    /// `D/|D|` per bond (zero where `D = 0`).
+    pub unit: &'a [Vec3],
+    /// `|D|` per bond.
+    pub norm: &'a [f64],
+    /// The common `|D|` when every bond has the same non-zero one.
+    pub uniform: Option<f64>,
 }
 
 /// The rates the field is made of, in rad/ps.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Rates {
+pub(crate) struct Rates<'a> {
+    /// `γ/(μ_s μ_B)`: the rate per meV of a coupling.
+    pub per_moment: f64,
+    /// The DMI vectors per (site, neighbour) (meV), empty without DMI.
+    pub dmi: &'a [Vec3],
     /// `γ J / (μ_s μ_B)`: precession rate per unit neighbour spin.
     pub exchange: f64,
     /// `γ 2K / (μ_s μ_B)`: anisotropy rate per unit `S·n`.
@@ -120,6 +187,117 @@ impl SpinSystem {
             field,
             mu_s,
             damping,
+            dmi: None,
+        })
+    }
+
+    /// The system with nearest-neighbour Dzyaloshinskii-Moriya interaction of strength
+    /// `strength` (meV) of `kind` on a chain, square or cubic lattice:
+    /// `E_DMI = −Σ_<ij> D_ij·(S_i × S_j)`; `strength = 0` removes it.
+    ///
+    /// # Errors
+    /// A non-finite strength, or a lattice built from a list of bonds (no bond
+    /// directions: use [`SpinSystem::with_dmi_vectors`]).
+    pub fn with_dmi(self, strength: f64, kind: DmiKind) -> Result<Self> {
+        if !strength.is_finite() {
+            return Err(Error::InvalidParameter {
+                name: "dmi",
+                value: strength,
+                reason: "must be finite",
+            });
+        }
+        let mut vectors = Vec::with_capacity(self.lattice.bonds().len());
+        for &b in self.lattice.bonds() {
+            let r = Vec3::from_array(self.lattice.bond_direction(b).ok_or(Error::InvalidParameter {
+                name: "dmi",
+                value: strength,
+                reason: "a lattice given as a list of bonds has no bond directions; give one DMI vector per bond",
+            })?);
+            vectors.push(match kind {
+                DmiKind::Bulk => r * strength,
+                DmiKind::Interfacial => Vec3::new(0.0, 0.0, 1.0).cross(r) * strength,
+            });
+        }
+        self.with_dmi_vectors(&vectors)
+    }
+
+    /// The system with one Dzyaloshinskii-Moriya vector `D_ij` (meV) per bond `[i, j]` of
+    /// [`Lattice::bonds`], in that order; all zero removes the DMI.
+    ///
+    /// # Errors
+    /// A count other than the number of bonds, or a non-finite vector.
+    pub fn with_dmi_vectors(mut self, vectors: &[Vec3]) -> Result<Self> {
+        let bonds = self.lattice.bonds();
+        if vectors.len() != bonds.len() {
+            return Err(Error::InvalidParameter {
+                name: "dmi",
+                value: vectors.len() as f64,
+                reason: "needs one vector per bond of the lattice",
+            });
+        }
+        if let Some(k) = vectors.iter().position(|v| !v.is_finite()) {
+            return Err(Error::InvalidParameter {
+                name: "dmi",
+                value: k as f64,
+                reason: "a DMI vector (of the bond at this index) is not finite",
+            });
+        }
+        if vectors.iter().all(|v| *v == Vec3::ZERO) {
+            self.dmi = None;
+            return Ok(self);
+        }
+        let lattice = &self.lattice;
+        let mut neighbour = vec![Vec3::ZERO; 2 * bonds.len()];
+        for (b, d) in bonds.iter().zip(vectors) {
+            let (i, j) = (b[0] as usize, b[1] as usize);
+            // Neighbour lists are sorted and hold each pair once.
+            let at = |site: usize, other: u32| {
+                lattice.neighbour_offset(site)
+                    + lattice
+                        .neighbours(site)
+                        .binary_search(&other)
+                        .expect("a bond's sites are neighbours")
+            };
+            neighbour[at(i, b[1])] = *d;
+            neighbour[at(j, b[0])] = -*d;
+        }
+        let norm: Vec<f64> = vectors.iter().map(|v| v.norm()).collect();
+        let unit = vectors
+            .iter()
+            .zip(&norm)
+            .map(|(v, &n)| if n > 0.0 { *v * (1.0 / n) } else { Vec3::ZERO })
+            .collect();
+        let uniform = Some(norm[0]).filter(|&n| n > 0.0 && norm.iter().all(|&m| m == n));
+        self.dmi = Some(Dmi {
+            bond: vectors.to_vec(),
+            neighbour,
+            unit,
+            norm,
+            uniform,
+        });
+        Ok(self)
+    }
+
+    /// The DMI vector `D_ij` (meV) of each bond `[i, j]` of [`Lattice::bonds`], or `None`
+    /// without DMI.
+    #[must_use]
+    pub fn dmi_vectors(&self) -> Option<&[Vec3]> {
+        self.dmi.as_ref().map(|d| d.bond.as_slice())
+    }
+
+    /// The DMI per bond for the splitting.
+    pub(crate) fn dmi_bonds(&self) -> Option<DmiBonds<'_>> {
+        self.dmi.as_ref().map(|d| DmiBonds {
+            unit: &d.unit,
+            norm: &d.norm,
+            uniform: d.uniform,
+        })
+    }
+
+    /// Whether the DMI table still matches the lattice (the lattice is a public field).
+    pub(crate) fn dmi_matches_lattice(&self) -> bool {
+        self.dmi.as_ref().is_none_or(|d| {
+            d.bond.len() == self.lattice.bonds().len() && d.neighbour.len() == 2 * self.lattice.bonds().len()
         })
     }
 
@@ -135,9 +313,11 @@ impl SpinSystem {
         self.lattice.sites() == 0
     }
 
-    pub(crate) fn rates(&self) -> Rates {
+    pub(crate) fn rates(&self) -> Rates<'_> {
         let per_moment = GYROMAGNETIC_RATIO / (self.mu_s * MU_B);
         Rates {
+            per_moment,
+            dmi: self.dmi.as_ref().map_or(&[], |d| d.neighbour.as_slice()),
             exchange: per_moment * self.exchange,
             anisotropy: per_moment * 2.0 * self.anisotropy,
             axis: self.anisotropy_axis,
@@ -153,11 +333,11 @@ impl SpinSystem {
         self.anisotropy == 0.0 || self.field.cross(self.anisotropy_axis).max_abs() <= 1e-15 * self.field.max_abs()
     }
 
-    /// Whether `Σ S_z` is conserved (undamped, `n` and `B` along `z` or zero).
+    /// Whether `Σ S_z` is conserved (undamped, `n` and `B` along `z` or zero, no DMI).
     #[must_use]
     pub fn conserves_sz(&self) -> bool {
         let along_z = |v: Vec3| v.x == 0.0 && v.y == 0.0;
-        (self.anisotropy == 0.0 || along_z(self.anisotropy_axis)) && along_z(self.field)
+        self.dmi.is_none() && (self.anisotropy == 0.0 || along_z(self.anisotropy_axis)) && along_z(self.field)
     }
 
     /// The energy `E` (meV), summed in index order.
@@ -174,7 +354,17 @@ impl SpinSystem {
             anisotropy += d * d;
             total += *s;
         }
-        -self.exchange * exchange - self.anisotropy * anisotropy - self.mu_s * MU_B * self.field.dot(total)
+        let e = -self.exchange * exchange - self.anisotropy * anisotropy - self.mu_s * MU_B * self.field.dot(total);
+        match &self.dmi {
+            None => e,
+            Some(d) => {
+                let mut dmi = 0.0;
+                for (b, v) in self.lattice.bonds().iter().zip(&d.bond) {
+                    dmi += v.dot(spins[b[0] as usize].cross(spins[b[1] as usize]));
+                }
+                e - dmi
+            }
+        }
     }
 
     /// `Σ S_i`, summed in index order.
@@ -190,7 +380,7 @@ impl SpinSystem {
     }
 }
 
-impl Rates {
+impl Rates<'_> {
     /// `γ B_i`: the undamped angular velocity of spin `i`.
     #[inline]
     pub fn precession(&self, lattice: &Lattice, spins: &[Vec3], i: usize) -> Vec3 {
@@ -199,7 +389,16 @@ impl Rates {
             sum += spins[j as usize];
         }
         let s = spins[i];
-        sum * self.exchange + self.axis * (self.anisotropy * s.dot(self.axis)) + self.field
+        let b = sum * self.exchange + self.axis * (self.anisotropy * s.dot(self.axis)) + self.field;
+        if self.dmi.is_empty() {
+            return b;
+        }
+        let start = lattice.neighbour_offset(i);
+        let mut dmi = Vec3::ZERO;
+        for (&j, d) in lattice.neighbours(i).iter().zip(&self.dmi[start..]) {
+            dmi += spins[j as usize].cross(*d);
+        }
+        b + dmi * self.per_moment
     }
 
     /// `Ω_i = γ/(1+α²) (B_i + α S_i × B_i)`, evaluated at `spins` (any lengths).

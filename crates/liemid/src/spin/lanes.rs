@@ -257,10 +257,10 @@ pub(crate) fn damped_bond_flow<T: Real>(
     const SQRT_2: f64 = std::f64::consts::SQRT_2;
     let l = si.add(sj);
     let d = si.sub(sj).scale(T::from(0.5));
-    // `p = |L|²/2` and `q = 2|d|²` from `u = S_i·S_j` (unit spins): their absolute errors
-    // are round-off, and they enter only `W`, `Φ²` and the asinh argument additively.
-    let u = si.dot(sj);
-    let (p, q) = (T::from(1.0) + u, T::from(1.0) - u);
+    // `p = |L|²/2` and `q = 2|d|²` from the vectors themselves (not `1 ± S_i·S_j`): then
+    // `|S_i'|² = (e² p + q)/W²` is 1 to round-off for spins off the sphere by round-off.
+    let p = T::from(0.5) * l.dot(l);
+    let q = T::from(2.0) * d.dot(d);
     let w = (q + p * e2).sqrt();
     // One division for `1/(√2 e + w)` and `1/w`.
     let m = T::from(SQRT_2) * e + w;
@@ -320,6 +320,98 @@ pub(crate) fn damped_anisotropy_flow<T: Real>(
     turned.add(axis.scale(w0 * expm1g)).scale(m * r)
 }
 
+/// `(sin θ/θ, cos θ)` from `t = θ²` by the first 5 and 6 terms of their series, for
+/// `t < 0.009` (first omitted terms `t⁵/11!` and `t⁶/12!`, below `2e-18` and `2e-21`): the
+/// small rotations of a DMI bond's Ising part.
+#[inline(always)]
+pub(crate) fn sinc_cos_short<T: Lane>(t: T) -> (T, T) {
+    let k = T::from;
+    let t2 = t * t;
+    let f = &SINC;
+    let g = &COS;
+    let sinc = (k(f[0]) - t * k(f[1])) + t2 * ((k(f[2]) - t * k(f[3])) + t2 * k(f[4]));
+    let cos = (k(g[0]) - t * k(g[1])) + t2 * ((k(g[2]) - t * k(g[3])) + t2 * (k(g[4]) - t * k(g[5])));
+    (sinc, cos)
+}
+
+/// Where [`sinc_cos_short`] holds: `θ² < 0.009`.
+pub(crate) const SHORT_LIMIT: f64 = 0.009;
+
+/// `rot(u, θ) s = cos θ s + sin θ (u × s) + (1 − cos θ)(u·s) u` for a unit `u`, `(sin θ/θ,
+/// cos θ)` from `coefficients`.
+#[inline(always)]
+fn rotate_about<T: Lane>(u: V<T>, theta: T, s: V<T>, coefficients: &mut impl FnMut(T) -> (T, T)) -> V<T> {
+    let (sinc, cos) = coefficients(theta * theta);
+    s.scale(cos)
+        .add(u.cross(s).scale(theta * sinc))
+        .add(u.scale((T::from(1.0) - cos) * u.dot(s)))
+}
+
+/// The constants of a DMI bond flow over a time `h` (`spin::dmi`): `Q = rot(u, −φ)` by
+/// `cos φ`, `sin φ`, `1 − cos φ`; `rho_h = kρh`, `ising_half = k g h/2`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct DmiStep {
+    pub(crate) cos: f64,
+    pub(crate) sin: f64,
+    pub(crate) versine: f64,
+    pub(crate) rho_h: f64,
+    pub(crate) ising_half: f64,
+    /// Whether every Ising angle is below √[`SHORT_LIMIT`] (`|a| ≤ 1`).
+    pub(crate) short: bool,
+}
+
+/// The undamped Ising flow of a DMI bond: `S_i` about `u` by `−angle a_j`, `S_j` by
+/// `−angle a_i`.
+#[inline(always)]
+pub(crate) fn dmi_ising<T: Lane>(
+    u: V<T>,
+    angle: T,
+    si: V<T>,
+    sj: V<T>,
+    coefficients: &mut impl FnMut(T) -> (T, T),
+) -> (V<T>, V<T>) {
+    let (ai, aj) = (si.dot(u), sj.dot(u));
+    let zero = T::from(0.0);
+    (
+        rotate_about(u, zero - angle * aj, si, coefficients),
+        rotate_about(u, zero - angle * ai, sj, coefficients),
+    )
+}
+
+/// `Q v = rot(u, −φ) v` (`sign = −1`) or `Qᵀ v` (`sign = 1`), by `cos φ`, `sin φ`, `1 − cos φ`.
+#[inline(always)]
+pub(crate) fn dmi_q<T: Lane>(u: V<T>, cos: T, sin: T, versine: T, v: V<T>) -> V<T> {
+    v.scale(cos).sub(u.cross(v).scale(sin)).add(u.scale(versine * u.dot(v)))
+}
+
+/// `Qᵀ v = rot(u, φ) v`.
+#[inline(always)]
+pub(crate) fn dmi_q_t<T: Lane>(u: V<T>, cos: T, sin: T, versine: T, v: V<T>) -> V<T> {
+    v.scale(cos).add(u.cross(v).scale(sin)).add(u.scale(versine * u.dot(v)))
+}
+
+/// The exact undamped flow of one DMI bond over `h`, Strang within the bond: Ising `h/2`,
+/// the exchange flow of `(S_i, Q S_j)` at `kρ`, `S_j = Qᵀ T`, Ising `h/2` (`spin::dmi`).
+/// `ising` gives `(sin θ/θ, cos θ)` of the Ising angles, `coefficients` of the exchange's.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn dmi_bond_flow<T: Lane>(
+    u: V<T>,
+    cos: T,
+    sin: T,
+    versine: T,
+    rho_h: T,
+    ising_half: T,
+    si: V<T>,
+    sj: V<T>,
+    mut ising: impl FnMut(T) -> (T, T),
+    coefficients: impl FnMut(T) -> (T, T),
+) -> (V<T>, V<T>) {
+    let (si, sj) = dmi_ising(u, ising_half, si, sj, &mut ising);
+    let (si, t) = bond_flow(rho_h, si, dmi_q(u, cos, sin, versine, sj), coefficients);
+    dmi_ising(u, ising_half, si, dmi_q_t(u, cos, sin, versine, t), &mut ising)
+}
+
 /// `s (3 − |s|²)/2`: one Newton step towards `|s| = 1`.
 #[inline(always)]
 pub(crate) fn unit<T: Lane>(s: V<T>) -> V<T> {
@@ -327,7 +419,7 @@ pub(crate) fn unit<T: Lane>(s: V<T>) -> V<T> {
 }
 
 #[cfg(all(feature = "simd", target_arch = "x86_64"))]
-pub(crate) use avx::{sweep_avx, sweep_avx_damped, use_avx};
+pub(crate) use avx::{sweep_avx, sweep_avx_damped, sweep_avx_dmi, use_avx};
 
 #[cfg(all(feature = "simd", target_arch = "x86_64"))]
 mod avx {
@@ -339,7 +431,8 @@ mod avx {
 
     use super::{
         asinh_ratio_series, asinh_ratio_short, bond_flow, damped_anisotropy_flow, damped_bond_flow, damped_zeeman_flow,
-        rodrigues_series, sinc_cos_series, site_flow, unit, Real, ASINH_LIMIT, SERIES_LIMIT, V,
+        dmi_bond_flow, rodrigues_series, sinc_cos_series, sinc_cos_short, site_flow, unit, DmiStep, Real, ASINH_LIMIT,
+        SERIES_LIMIT, V,
     };
     use crate::linalg::Vec3;
     use crate::spin::damped::SiteStep;
@@ -471,6 +564,129 @@ mod avx {
             }
         }
         (site_ok && bond_ok).then(|| (scatter(a), scatter(b)))
+    }
+
+    /// [`group`] for DMI bonds of one `|D|`: `steps[k]` holds the constants of piece `k`
+    /// when it is a bond piece, `u` the four bonds' unit vectors.
+    #[target_feature(enable = "avx")]
+    #[inline]
+    fn group_dmi(
+        kernel: &Kernel,
+        pieces: &[Piece],
+        steps: &[Option<DmiStep>],
+        u: [Vec3; 4],
+        si: [Vec3; 4],
+        sj: [Vec3; 4],
+    ) -> Option<([Vec3; 4], [Vec3; 4])> {
+        let (mut a, mut b) = (gather(si), gather(sj));
+        let u = gather(u);
+        let (mut site_ok, mut bond_ok) = (true, true);
+        let (axis, field) = (splat(kernel.axis), splat(kernel.field));
+        let k = F::from(kernel.anisotropy);
+        let mut site = |t2: F| {
+            site_ok &= t2.all_below(SERIES_LIMIT);
+            rodrigues_series(t2)
+        };
+        for (n, p) in pieces.iter().enumerate() {
+            match *p {
+                Piece::Site(t) if kernel.onsite_terms => {
+                    a = site_flow(axis, k, field, F::from(t), a, &mut site);
+                    b = site_flow(axis, k, field, F::from(t), b, &mut site);
+                }
+                Piece::Site(_) => {}
+                Piece::Bond(_) => {
+                    let c = steps[n]?;
+                    let mut ising_ok = true;
+                    (a, b) = dmi_bond_flow(
+                        u,
+                        F::from(c.cos),
+                        F::from(c.sin),
+                        F::from(c.versine),
+                        F::from(c.rho_h),
+                        F::from(c.ising_half),
+                        a,
+                        b,
+                        |t2: F| {
+                            if c.short {
+                                sinc_cos_short(t2)
+                            } else {
+                                ising_ok &= t2.all_below(SERIES_LIMIT);
+                                sinc_cos_series(t2)
+                            }
+                        },
+                        |t2: F| {
+                            bond_ok &= t2.all_below(SERIES_LIMIT);
+                            sinc_cos_series(t2)
+                        },
+                    );
+                    bond_ok &= ising_ok;
+                }
+                Piece::Unit => (a, b) = (unit(a), unit(b)),
+            }
+        }
+        (site_ok && bond_ok).then(|| (scatter(a), scatter(b)))
+    }
+
+    /// [`sweep_avx`] for DMI bonds of one `|D|`: `units[k]` is the unit DMI vector of
+    /// `bonds[k]`, which is bond `base + k` of the lattice (the index `scalar` takes).
+    ///
+    /// # Safety
+    /// As for [`sweep_avx`]; `units` as long as `bonds`.
+    #[target_feature(enable = "avx")]
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) unsafe fn sweep_avx_dmi(
+        spins: *mut Vec3,
+        len: usize,
+        bonds: &[[u32; 2]],
+        base: usize,
+        units: &[Vec3],
+        kernel: &Kernel,
+        pieces: &[Piece],
+        steps: &[Option<DmiStep>],
+        scalar: &impl Fn(usize, Vec3, Vec3) -> (Vec3, Vec3),
+    ) {
+        assert_eq!(units.len(), bonds.len());
+        let mut groups = bonds.chunks_exact(4);
+        let mut at = 0;
+        for g in &mut groups {
+            let idx: [(usize, usize); 4] = std::array::from_fn(|k| (g[k][0] as usize, g[k][1] as usize));
+            for &(i, j) in &idx {
+                assert!(i < len && j < len && i != j);
+            }
+            let u: [Vec3; 4] = std::array::from_fn(|k| units[at + k]);
+            // SAFETY: as in `sweep_avx`.
+            unsafe {
+                let si = idx.map(|(i, _)| *spins.add(i));
+                let sj = idx.map(|(_, j)| *spins.add(j));
+                match group_dmi(kernel, pieces, steps, u, si, sj) {
+                    Some((a, b)) => {
+                        for k in 0..4 {
+                            *spins.add(idx[k].0) = a[k];
+                            *spins.add(idx[k].1) = b[k];
+                        }
+                    }
+                    None => {
+                        for k in 0..4 {
+                            let (a, b) = scalar(base + at + k, si[k], sj[k]);
+                            *spins.add(idx[k].0) = a;
+                            *spins.add(idx[k].1) = b;
+                        }
+                    }
+                }
+            }
+            at += 4;
+        }
+        for b in groups.remainder() {
+            let (i, j) = (b[0] as usize, b[1] as usize);
+            assert!(i < len && j < len && i != j);
+            // SAFETY: as above.
+            unsafe {
+                let (a, c) = scalar(base + at, *spins.add(i), *spins.add(j));
+                *spins.add(i) = a;
+                *spins.add(j) = c;
+            }
+            at += 1;
+        }
     }
 
     #[inline(always)]

@@ -285,4 +285,38 @@ impl Lattice {
     pub fn neighbours(&self, i: usize) -> &[u32] {
         &self.neighbours[self.neighbour_start[i]..self.neighbour_start[i + 1]]
     }
+
+    /// Where the neighbours of site `i` start in the list of all sites' neighbours (for
+    /// tables with one entry per (site, neighbour)).
+    pub(crate) fn neighbour_offset(&self, i: usize) -> usize {
+        self.neighbour_start[i]
+    }
+
+    /// Where colour `c` starts in [`Lattice::bonds`].
+    pub(crate) fn colour_offset(&self, c: usize) -> usize {
+        self.colour_start[c]
+    }
+
+    /// The unit vector from site `b[0]` to site `b[1]` of a bond of a chain, square or
+    /// cubic lattice (across the boundary for a periodic wrap bond); `None` for a graph.
+    #[must_use]
+    pub fn bond_direction(&self, b: [u32; 2]) -> Option<[f64; 3]> {
+        if self.kind == LatticeKind::Graph {
+            return None;
+        }
+        let n = self.size;
+        let coords = |i: usize| [i % n[0], (i / n[0]) % n[1], i / (n[0] * n[1])];
+        let (ci, cj) = (coords(b[0] as usize), coords(b[1] as usize));
+        let mut r = [0.0; 3];
+        for axis in 0..3 {
+            if ci[axis] != cj[axis] {
+                r[axis] = if cj[axis] == (ci[axis] + 1) % n[axis] {
+                    1.0
+                } else {
+                    -1.0
+                };
+            }
+        }
+        Some(r)
+    }
 }

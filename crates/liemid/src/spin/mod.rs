@@ -7,14 +7,16 @@
 //!
 //! - [`lattice`]: sites, bonds (each pair once), neighbours, and a colouring of the bonds
 //!   into matchings;
-//! - [`hamiltonian`]: [`SpinSystem`] (exchange `J`, uniaxial anisotropy `K` along `n`,
-//!   field `B`, moment `μ_s`, damping `α`), the energy and the effective field;
+//! - [`hamiltonian`]: [`SpinSystem`] (exchange `J`, Dzyaloshinskii-Moriya vectors `D_ij`,
+//!   uniaxial anisotropy `K` along `n`, field `B`, moment `μ_s`, damping `α`), the energy
+//!   and the effective field;
 //! - the methods, one file each: `splitting` (explicit, symplectic: exact flows of bond
 //!   colours and of the on-site terms, composed to orders 2, 4, 6, 8; with damping the
-//!   exact damped flows of `damped`), `midpoint` (the
+//!   exact damped flows of `damped`; a DMI bond by the exact flows of `dmi`), `midpoint` (the
 //!   implicit midpoint rule in Cayley form: exact energy and `Σ S_z`; damping), and the
 //!   baselines of the field in `explicit` (Heun, Depondt-Mertens, RK4);
-//! - [`problems`]: named benchmarks.
+//! - [`problems`]: named benchmarks (`skyrmion`: a relaxed Néel skyrmion);
+//! - [`topological_charge`] (Berg-Lüscher) and [`relax`] (velocity projection).
 //!
 //! Units: meV, T, ps, Bohr magnetons, with Spirit's constants, so a run with the same
 //! inputs as Spirit follows the same equation.
@@ -24,15 +26,18 @@ pub mod lattice;
 pub mod problems;
 
 mod damped;
+mod dmi;
 mod explicit;
 mod lanes;
 mod midpoint;
 mod splitting;
 mod sweep;
+mod topology;
 
-pub use hamiltonian::SpinSystem;
+pub use hamiltonian::{DmiKind, SpinSystem};
 pub use lattice::{Lattice, LatticeKind};
 pub use sweep::CHUNK;
+pub use topology::{relax, topological_charge, Relaxation};
 
 use crate::composition::Scheme;
 use crate::error::{Error, Result};
@@ -166,6 +171,24 @@ pub fn splitting_unfused(system: &SpinSystem, spins: &mut [Vec3], h: f64, gammas
     splitting::composed_unfused(system, spins, h, gammas);
 }
 
+/// One piece of a DMI bond's flow (0 Ising, 1 rotated exchange, 2 the Strang bond flow)
+/// over `h`, damped for `alpha > 0` (for tests against a reference integration).
+#[doc(hidden)]
+#[allow(clippy::too_many_arguments)]
+#[must_use]
+pub fn dmi_piece_flow(
+    which: u8,
+    d: Vec3,
+    exchange: f64,
+    k: f64,
+    alpha: f64,
+    si: Vec3,
+    sj: Vec3,
+    h: f64,
+) -> (Vec3, Vec3) {
+    dmi::piece_flow(which, d, exchange, k, alpha, si, sj, h)
+}
+
 /// A spin integrator with its scratch buffers (allocated on the first step, reused after:
 /// stepping allocates nothing once warm).
 #[derive(Clone, Debug)]
@@ -220,6 +243,13 @@ impl SpinIntegrator {
         }
         if !(h.is_finite() && h != 0.0) {
             return Err(Error::InvalidStep { h });
+        }
+        if !system.dmi_matches_lattice() {
+            return Err(Error::InvalidParameter {
+                name: "dmi",
+                value: system.lattice.bonds().len() as f64,
+                reason: "the DMI vectors were set for another lattice (bond count given); set them again",
+            });
         }
         let [a, b, c] = &mut self.buffers;
         match self.method {

@@ -28,7 +28,9 @@
 //! *Symplectic integrators for spin systems*, Phys. Rev. E 89 (2014).
 
 use super::damped::{self, DampedRates};
+use super::dmi::{self, DmiBond, DmiShape};
 use super::hamiltonian::{Rates, SpinSystem};
+use super::lanes::DmiStep;
 use super::lanes::{bond_flow, rodrigues_series, sinc_cos_series, site_flow, unit, SERIES_LIMIT};
 use super::sweep::{team, Shared};
 use crate::linalg::Vec3;
@@ -332,9 +334,11 @@ fn run(
     };
     // Four bonds at a time in AVX lanes (the same bits), where the processor has AVX and
     // the on-site flow is one rotation; the unfused path (for tests) stays scalar.
-    let lanes = fuse && (commute || !onsite_terms) && damped.is_none() && avx_available();
+    // Bonds with DMI run on their own path (`dmi`); without DMI the paths are unchanged.
+    let dmi_vectors = system.dmi_bonds();
+    let lanes = fuse && (commute || !onsite_terms) && damped.is_none() && dmi_vectors.is_none() && avx_available();
     // The damped flows run in lanes too (they have no branch on the terms' directions).
-    let damped_lanes = fuse && damped.is_some() && avx_available();
+    let damped_lanes = fuse && damped.is_some() && dmi_vectors.is_none() && avx_available();
     let _ = damped_lanes;
     // Adjacent on-site half flows join only where the on-site flow is exact (one rotation);
     // a Strang-split field and anisotropy is not a one-parameter group (with damping, not
@@ -343,7 +347,72 @@ fn run(
         Some(d) => d.onsite_is_group(),
         None => commute || !onsite_terms,
     };
-    let bond_sweep = |shared: &Shared, bonds: &[[u32; 2]], pieces: &[Piece]| {
+    let (exchange, k_dmi, alpha) = (system.exchange, rates.per_moment * rates.damping_factor, rates.damping);
+    // Bonds of one |D| share their constants; undamped, they run in lanes under the same
+    // conditions as the bonds without DMI.
+    let dmi_shape = dmi_vectors
+        .and_then(|d| d.uniform)
+        .map(|dn| DmiShape::new(dn, exchange, k_dmi));
+    let dmi_lanes = fuse && dmi_shape.is_some() && damped.is_none() && (commute || !onsite_terms) && avx_available();
+    let _ = dmi_lanes;
+    // `bonds` starts at index `base` of the lattice's bonds.
+    let bond_sweep = |shared: &Shared, bonds: &[[u32; 2]], base: usize, pieces: &[Piece]| {
+        if let Some(db) = dmi_vectors {
+            // The damped on-site constants and the DMI bond constants once per sweep.
+            let mut sites: [Option<damped::SiteStep>; 6] = [None; 6];
+            let mut steps: [Option<DmiStep>; 6] = [None; 6];
+            for (k, p) in pieces.iter().enumerate() {
+                match (*p, &damped, &dmi_shape) {
+                    (Piece::Site(t), Some(d), _) => sites[k] = Some(d.site_step(t)),
+                    (Piece::Bond(t), None, Some(shape)) => steps[k] = Some(shape.step(t)),
+                    _ => {}
+                }
+            }
+            let steps = &steps[..pieces.len()];
+            let scalar = |index: usize, mut si: Vec3, mut sj: Vec3| {
+                let (unit, norm) = (db.unit[index], db.norm[index]);
+                for (k, p) in pieces.iter().enumerate() {
+                    match *p {
+                        Piece::Site(t) if onsite_terms => match &sites[k] {
+                            Some(c) => (si, sj) = (damped::site(c, si), damped::site(c, sj)),
+                            None => {
+                                si = onsite_turn(rates, commute, si, t);
+                                sj = onsite_turn(rates, commute, sj, t);
+                            }
+                        },
+                        Piece::Site(_) => {}
+                        Piece::Bond(t) => {
+                            (si, sj) = match &damped {
+                                None if norm == 0.0 => bond_turn(rate, si, sj, t),
+                                Some(d) if norm == 0.0 => damped::bond(&d.bond_step(t), si, sj),
+                                None => {
+                                    let c = steps[k].unwrap_or_else(|| DmiShape::new(norm, exchange, k_dmi).step(t));
+                                    dmi::flow(unit, &c, si, sj)
+                                }
+                                Some(_) => {
+                                    let shape = dmi_shape.unwrap_or_else(|| DmiShape::new(norm, exchange, k_dmi));
+                                    dmi::damped_flow(&DmiBond { unit, shape }, alpha, si, sj, t)
+                                }
+                            }
+                        }
+                        Piece::Unit => (si, sj) = (renormalize(si), renormalize(sj)),
+                    }
+                }
+                (si, sj)
+            };
+            #[cfg(all(feature = "simd", target_arch = "x86_64"))]
+            if dmi_lanes {
+                let (ptr, len) = shared.raw();
+                let units = &db.unit[base..base + bonds.len()];
+                // SAFETY: AVX was detected; the pointer and length are the spins'; the bonds
+                // are this part's share of a matching, alone until the barrier.
+                unsafe { super::lanes::sweep_avx_dmi(ptr, len, bonds, base, units, &kernel, pieces, steps, &scalar) };
+                return;
+            }
+            // SAFETY: this part's bonds of a matching, alone until the barrier.
+            unsafe { shared.update_bond_range_indexed(bonds, base, &scalar) };
+            return;
+        }
         if let Some(d) = &damped {
             // Each piece's constants once per sweep, then the damped flows per bond.
             let mut steps = [DampedPiece::Unit; 6];
@@ -428,11 +497,15 @@ fn run(
                 }
                 Sweep::Colour(c, t) => {
                     let bonds = lattice.colour(c);
-                    bond_sweep(&shared, &bonds[part.range(bonds.len())], &[Piece::Bond(t)]);
+                    let range = part.range(bonds.len());
+                    let base = lattice.colour_offset(c) + range.start;
+                    bond_sweep(&shared, &bonds[range], base, &[Piece::Bond(t)]);
                 }
                 Sweep::Fused(pieces) => {
                     let bonds = lattice.colour(0);
-                    bond_sweep(&shared, &bonds[part.range(bonds.len())], pieces);
+                    let range = part.range(bonds.len());
+                    let base = lattice.colour_offset(0) + range.start;
+                    bond_sweep(&shared, &bonds[range], base, pieces);
                 }
             }
             barrier.wait();

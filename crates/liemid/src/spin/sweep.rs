@@ -110,6 +110,31 @@ impl Shared {
         }
     }
 
+    /// `(s[i], s[j]) ← f(base + k, s[i], s[j])` for the `k`-th bond of a matching, which
+    /// is bond `base + k` of the lattice.
+    ///
+    /// # Safety
+    /// As for [`Shared::update_bond_range`].
+    #[inline]
+    pub(crate) unsafe fn update_bond_range_indexed(
+        &self,
+        bonds: &[[u32; 2]],
+        base: usize,
+        f: &impl Fn(usize, Vec3, Vec3) -> (Vec3, Vec3),
+    ) {
+        for (k, b) in bonds.iter().enumerate() {
+            let (i, j) = (b[0] as usize, b[1] as usize);
+            assert!(i < self.1 && j < self.1 && i != j);
+            // SAFETY: in bounds (checked), distinct, and owned by this worker (the caller's
+            // contract).
+            unsafe {
+                let (a, c) = f(base + k, *self.0.add(i), *self.0.add(j));
+                *self.0.add(i) = a;
+                *self.0.add(j) = c;
+            }
+        }
+    }
+
     /// `s[i] ← f(s[i])` for `i` in `range`.
     ///
     /// # Safety
