@@ -52,6 +52,12 @@ fn mass_scaled_splitting_is_second_order() {
         .collect();
     let orders: Vec<f64> = errors.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
     println!("liemid-sms: errors {errors:?}, orders {orders:?}");
+    let mut s = start.clone();
+    for _ in 0..100 {
+        s.step_with(BeamMethod::MassScaled, h0).unwrap();
+    }
+    let taken = s.stretch_iterations() - start.stretch_iterations();
+    println!("{} stretch iterations per step", taken as f64 / 100.0);
     for p in orders {
         assert!((p - 2.0).abs() < 0.2, "order {p}");
     }
