@@ -38,10 +38,11 @@
 //! (one unknown per element) are solved by Newton's method with the matrix
 //! `A = Gᵀ M₀⁻¹ G + diag(1/(β m_e))` at `x₀`, symmetric positive definite and banded in
 //! element order (elements couple through shared nodes); each iteration costs one
-//! evaluation of the chord lengths and a banded solve. It stops when the estimated
-//! remaining correction `θ/(1 − θ) |δμ|` (`θ` the observed contraction) is below 1e-13 of
-//! the element lengths (E. Hairer, G. Wanner, *Solving Ordinary Differential Equations
-//! II*, section IV.8): two iterations per step on the right-angle cantilever. The step is a symmetric composition of symplectic maps: symplectic, time
+//! evaluation of the chord lengths and a banded solve. It stops when the last correction
+//! is below 1e-13 of the element lengths: three iterations per step on the right-angle
+//! cantilever. (Stopping one iteration earlier by Hairer and Wanner's contraction
+//! estimate, θ/(1 − θ)|δμ| below the tolerance, was tried: a step forward and back then
+//! missed the start by 1e-9 instead of 2e-12.) The step is a symmetric composition of symplectic maps: symplectic, time
 //! reversible (to the solve's tolerance), order 2; `L_d` is invariant under rigid motions,
 //! so a free structure keeps its total linear and angular momentum. The momenta `p` are the
 //! canonical ones, `p = M(x) v`; the kinetic energy is `pᵀ M⁻¹ p/2 = Σ |p_i|²/(2 m_i) −
@@ -294,7 +295,7 @@ impl BeamSystem {
         ms.mu.iter_mut().for_each(|m| *m = 0.0);
         let ne = ms.mu.len();
         let mut iterations = 0;
-        let (mut largest, mut previous) = (f64::INFINITY, f64::INFINITY);
+        let mut largest = f64::INFINITY;
         let mut converged = false;
         loop {
             // x(μ) = drift − M₀⁻¹ G(x₀) μ.
@@ -319,12 +320,7 @@ impl BeamSystem {
                 largest = largest.max(d);
             }
             iterations += 1;
-            // The simplified Newton iteration contracts by θ = |δ_k|/|δ_{k−1}|: what is left
-            // after δ_k is at most θ/(1 − θ) |δ_k| (Hairer and Wanner's stopping rule).
-            let theta = largest / previous;
-            converged =
-                largest <= TOLERANCE || (iterations > 1 && theta < 1.0 && theta / (1.0 - theta) * largest <= TOLERANCE);
-            previous = largest;
+            converged = largest <= TOLERANCE;
         }
         ms.iterations += u64::from(iterations);
         if !converged || !largest.is_finite() {
