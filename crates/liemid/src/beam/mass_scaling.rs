@@ -317,7 +317,12 @@ impl BeamSystem {
             for k in 0..ne {
                 ms.mu[k] += ms.residual[k];
                 let d = ms.residual[k].abs() / (ms.beta * ms.element_mass[k] * s.elements[k].stiffness.length);
-                largest = largest.max(d);
+                // A NaN (a chord of zero length) must not pass as converged.
+                largest = if d.is_nan() || largest.is_nan() {
+                    f64::NAN
+                } else {
+                    largest.max(d)
+                };
             }
             iterations += 1;
             converged = largest <= TOLERANCE;
