@@ -33,7 +33,8 @@ pub struct BeamArgs {
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..100_000))]
     pub elements_per_member: Option<u64>,
     /// liemid (order 2), liemid4 (order 4), liemid-mts (order 2, axial forces in
-    /// substeps) or newmark [default: the file's, else liemid].
+    /// substeps), liemid-sms (order 2, selective mass scaling of the axial waves) or
+    /// newmark [default: the file's, else liemid].
     #[arg(long)]
     pub method: Option<String>,
     /// Step [default: 0.9 of the critical step; 0.05 for newmark].
@@ -268,6 +269,9 @@ pub fn beam(args: BeamArgs) -> CmdResult {
             "critical step of the explicit splitting {:.4e} (omega_max <= {:.4e})",
             run.critical_step, run.omega_bound
         );
+        if let Some(beta) = run.axial_mass {
+            println!("axial mass scaling: stretch inertia {beta:.4} times the element mass");
+        }
         if let Some(it) = run.newton_iterations {
             println!(
                 "Newton iterations {it} ({:.2} per step)",
@@ -381,7 +385,7 @@ fn work_precision(args: &WorkPrecisionArgs) -> CmdResult {
     let mut targets = serde_json::Map::new();
     for target in [1e-2, 1e-3] {
         let mut row = serde_json::Map::new();
-        for m in ["liemid", "liemid4", "newmark"] {
+        for m in ["liemid", "liemid4", "liemid-mts", "liemid-sms", "newmark"] {
             let v = study::time_to_error(&points, m, target);
             say(format!(
                 "CPU time to {target:e}: {m:<8} {}",

@@ -33,7 +33,7 @@
 //!
 //! [run]
 //! gravity = [0.0, 0.0, 0.0]
-//! method = "liemid"           # "liemid" | "liemid4" | "liemid-mts" | "newmark"
+//! method = "liemid"           # "liemid" | "liemid4" | "liemid-mts" | "liemid-sms" | "newmark"
 //! step = 1e-3                 # default: 0.9 of the critical step (explicit), 0.05 (newmark)
 //! t_end = 30.0
 //! sample = 0.05               # output interval (time)
@@ -56,10 +56,11 @@ pub enum BeamIntegrator {
 
 impl BeamIntegrator {
     /// Every integrator.
-    pub const ALL: [BeamIntegrator; 4] = [
+    pub const ALL: [BeamIntegrator; 5] = [
         BeamIntegrator::Explicit(liemid::beam::BeamMethod::Splitting),
         BeamIntegrator::Explicit(liemid::beam::BeamMethod::Splitting4),
         BeamIntegrator::Explicit(liemid::beam::BeamMethod::Impulse),
+        BeamIntegrator::Explicit(liemid::beam::BeamMethod::MassScaled),
         BeamIntegrator::Newmark,
     ];
 

@@ -32,6 +32,9 @@ pub struct Stability {
     pub omega_axial_bound: f64,
     /// Upper bound of the bending and torsion waves' `ω` (the impulse method's outer step).
     pub omega_bending_bound: f64,
+    /// The added stretch inertia `β` of [`BeamMethod::MassScaled`] (its axial bound is
+    /// `omega_axial_bound/√(1 + 4β)`).
+    pub axial_mass: f64,
 }
 
 impl Stability {
@@ -45,7 +48,20 @@ impl Stability {
             // the right-angle cantilever: energy bounded at h ω_a = 3.2, drifting at 4.0,
             // unstable from 5.3).
             BeamMethod::Impulse => (2.0 / self.omega_bending_bound).min(std::f64::consts::PI / self.omega_axial_bound),
+            BeamMethod::MassScaled => 2.0 / self.omega_bound_of(method),
             _ => composition_limit(method.scheme()) / self.omega_bound,
+        }
+    }
+
+    /// The bound of `ω_max` that sets `method`'s step: the element bound, or for
+    /// [`BeamMethod::MassScaled`] the larger of the bending bound and the scaled axial one.
+    #[must_use]
+    pub fn omega_bound_of(&self, method: BeamMethod) -> f64 {
+        match method {
+            BeamMethod::MassScaled => self
+                .omega_bending_bound
+                .max(self.omega_axial_bound / (1.0 + 4.0 * self.axial_mass).sqrt()),
+            _ => self.omega_bound,
         }
     }
 
@@ -66,7 +82,7 @@ impl Stability {
             return Err(Error::UnstableStep {
                 h,
                 critical,
-                omega: self.omega_bound,
+                omega: self.omega_bound_of(method),
             });
         }
         Ok(())
@@ -141,6 +157,7 @@ impl BeamSystem {
             omega_bound: axial.max(bending).sqrt(),
             omega_axial_bound: axial.sqrt(),
             omega_bending_bound: bending.sqrt(),
+            axial_mass: self.mass_scaling.beta,
             omega_estimate: (power_iterations > 0).then(|| self.power_iteration(power_iterations).sqrt()),
         }
     }

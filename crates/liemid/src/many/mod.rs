@@ -407,6 +407,9 @@ struct Motion<'a> {
     h: f64,
     /// The time at the start of the step (for error messages).
     t: f64,
+    /// Whether free bodies drift (`x ← x + h p/m`); `false` when the caller moves the
+    /// translations itself ([`Bodies::kick_rotate`]).
+    drift: bool,
 }
 
 impl Motion<'_> {
@@ -426,9 +429,11 @@ impl Motion<'_> {
         );
         let (p, pi, x, r) = (&mut *c.momentum, &mut *c.pi, &mut *c.position, &mut *c.rotation);
         kick_chunk(free, p, pi, c.force, c.torque, hh);
-        for k in 0..n {
-            if free[k] {
-                x[k] += p[k] * (h / mass[k]);
+        if self.drift {
+            for k in 0..n {
+                if free[k] {
+                    x[k] += p[k] * (h / mass[k]);
+                }
             }
         }
         if let Some(flows) = self.exact {
@@ -602,6 +607,7 @@ impl Bodies {
             lanes: lanes_available(),
             h,
             t: self.t,
+            drift: true,
         };
         let state = Chunk {
             momentum: &mut self.momentum,
@@ -667,6 +673,41 @@ impl Bodies {
             self.kick(h);
         }
         Ok(())
+    }
+
+    /// The first half of a step whose translations the caller moves: the start impulse
+    /// `p ← p + (h/2) F`, `Π ← Π + (h/2) T` and the torque-free rotation over `h`, no drift
+    /// (forces evaluated first if they are stale). [`Bodies::finish_step`] completes it.
+    ///
+    /// # Errors
+    /// A bad step, or a body whose midpoint equation fails.
+    pub(crate) fn kick_rotate<I: Interaction + ?Sized>(&mut self, interaction: &I, h: f64) -> Result<()> {
+        if !(h.is_finite() && h != 0.0) {
+            return Err(Error::InvalidStep { h });
+        }
+        if !self.forces_valid {
+            self.evaluate(interaction);
+        }
+        let failure: Mutex<Option<(usize, Error)>> = Mutex::new(None);
+        let failure_ref = &failure;
+        let (mut motion, all) = self.split(h);
+        motion.drift = false;
+        for_each_chunk(all, |start, mut c| {
+            motion.move_chunk(start, &mut c, failure_ref);
+        });
+        if let Some((_, e)) = failure.into_inner().expect("not poisoned") {
+            self.forces_valid = false;
+            return Err(e);
+        }
+        Ok(())
+    }
+
+    /// The end of a step begun by [`Bodies::kick_rotate`], once the translations have
+    /// moved: `t ← t + h`, the forces at the new configuration, the end impulse.
+    pub(crate) fn finish_step<I: Interaction + ?Sized>(&mut self, interaction: &I, h: f64) {
+        self.t += h;
+        self.evaluate(interaction);
+        self.kick(h);
     }
 
     /// One step of a symmetric composition of the splitting integrator.
