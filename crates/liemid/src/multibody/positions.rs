@@ -110,7 +110,9 @@ impl MultibodySystem {
         let mut factored = false;
         let mut it = 0;
         loop {
-            self.drift(state, h, it > 0)?;
+            // Warm midpoint starts once the corrections are small (a long step's first
+            // corrections can move Ψ farther than the predictor's error).
+            self.drift(state, h, prev <= 1e-6)?;
             Self::rows_at(
                 &self.joints,
                 &self.limit,

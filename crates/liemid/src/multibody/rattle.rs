@@ -484,11 +484,25 @@ impl MultibodySystem {
             self.pb[i] = state.p[i] + (self.force[i] + df) * hh;
             self.pib[i] = state.pi[i] + (self.torque[i] + dt) * hh;
         }
-        self.start_multipliers(h, stage);
+        let mut extrapolated = self.start_multipliers(h, stage);
         let limit_changes = report.limit_changes;
         let mut passes = 0;
         loop {
-            self.solve_positions(state, h, report)?;
+            if let Err(e) = self.solve_positions(state, h, report) {
+                if !extrapolated {
+                    return Err(e);
+                }
+                // An extrapolated start far from the root (steps too long for the
+                // extrapolation) can lead the iteration astray: again from the last `λ`,
+                // and no extrapolation until the histories are rebuilt.
+                extrapolated = false;
+                for (l, prev) in self.lambda.iter_mut().zip(&self.lambda_prev) {
+                    *l = prev[0];
+                }
+                self.lambda_steps = [f64::NAN; 4];
+                self.scheme_steps = [f64::NAN; 4];
+                continue;
+            }
             if !self.update_limits_after_positions() {
                 break;
             }
@@ -568,10 +582,12 @@ impl MultibodySystem {
     ///   previous `λ` after fewer than two).
     ///
     /// Steps count as the same when they agree to `1e-9` relative (a driver's steps
-    /// `t_{k+1} − t_k` differ from `h` in the last bits). On the spacecraft (liemid6,
+    /// `t_{k+1} − t_k` differ from `h` in the last bits). Returns whether the start is an
+    /// extrapolation (the last `λ` is then in `lambda_prev[..][0]`: a position solve that
+    /// fails from the extrapolation is restarted from it). On the spacecraft (liemid6,
     /// `h = 2.5e-3`) the cubic start took 3.1 quasi-Newton iterations per stage, the
     /// quadratic 3.7 and the previous stage's `λ` 4.6 (`examples/profile_multibody.rs`).
-    fn start_multipliers(&mut self, h: f64, stage: Option<(usize, f64)>) {
+    fn start_multipliers(&mut self, h: f64, stage: Option<(usize, f64)>) -> bool {
         if let Some((k, step)) = stage {
             let same = same_steps(&self.scheme_steps, step);
             if same > 0 {
@@ -581,7 +597,7 @@ impl MultibodySystem {
                     *prev = [*l, prev[0], prev[1]];
                     *l = extrapolate(same, hist);
                 }
-                return;
+                return true;
             }
         }
         let same = same_steps(&self.lambda_steps, h);
@@ -592,6 +608,7 @@ impl MultibodySystem {
                 *l = extrapolate(same, &hist);
             }
         }
+        same >= 2
     }
 
     fn velocities(&mut self, p: &[Vec3], pi: &[Vec3]) {
