@@ -1,7 +1,9 @@
 //! Body-steps per second of the multibody step (RATTLE with EA's rotation): a 1000-link
-//! ball-joint chain (one system, O(bodies) constraint solve), and an ensemble of 1000
+//! ball-joint chain (one system, O(bodies) constraint solve), an ensemble of 1000
 //! independent 10-link chains on 1 and 2 threads (bitwise the same results; only the time
-//! differs). Throughput is in body-steps.
+//! differs), and the small systems whose cost is the fixed part of a step (the spacecraft
+//! and the double pendulum, by the base step and its compositions). Throughput is in
+//! body-steps.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use liemid::multibody::{problems, MultibodyEnsemble, MultibodyMethod, MultibodySystem};
@@ -21,6 +23,35 @@ fn bench(c: &mut Criterion) {
             }
         });
     });
+
+    for (name, model, method, h) in [
+        ("spacecraft", problems::spacecraft(), MultibodyMethod::Liemid, 1e-4),
+        ("spacecraft", problems::spacecraft(), MultibodyMethod::Liemid6, 2.5e-3),
+        (
+            "double-pendulum",
+            problems::double_pendulum(),
+            MultibodyMethod::Liemid,
+            1e-4,
+        ),
+        (
+            "double-pendulum",
+            problems::double_pendulum(),
+            MultibodyMethod::Liemid4,
+            1e-2,
+        ),
+    ] {
+        let mut system = MultibodySystem::new(&model, method).expect("the model builds");
+        let mut state = model.initial_state().expect("the model starts");
+        let bodies = state.len() as u64;
+        group.throughput(Throughput::Elements(bodies * 100));
+        group.bench_function(format!("{name}, {}, 100 steps of {h:e}", method.name()), |b| {
+            b.iter(|| {
+                for _ in 0..100 {
+                    system.step(&mut state, h).expect("the step converges");
+                }
+            });
+        });
+    }
 
     let ten = problems::chain(10);
     for threads in [1, 2] {

@@ -26,8 +26,11 @@ use super::rattle::{add_impulse, pose, Matrix, MAX_ITERATIONS};
 use super::{MultibodyState, MultibodySystem};
 
 impl MultibodySystem {
-    /// The drift with multipliers `self.lambda`: `p½`, `P`, then `c⁺`, `R⁺`, `Π'`.
-    pub(super) fn drift(&mut self, state: &MultibodyState, h: f64) -> Result<()> {
+    /// The drift with multipliers `self.lambda`: `p½`, `P`, then `c⁺`, `R⁺`, `Π'`. With
+    /// `warm`, the midpoint solves start from the last drift's `Ψ₁`, `Ψ₂` (the same stage,
+    /// `λ` changed by a quasi-Newton correction) instead of the predictor: one Newton
+    /// iteration each instead of two on the spacecraft's hub.
+    pub(super) fn drift(&mut self, state: &MultibodyState, h: f64, warm: bool) -> Result<()> {
         let hh = 0.5 * h;
         self.p_half.copy_from_slice(&self.pb);
         self.big_p.copy_from_slice(&self.pib);
@@ -43,11 +46,17 @@ impl MultibodySystem {
         for i in 0..self.mass.len() {
             self.c_new[i] = state.c[i] + self.p_half[i] * (h / self.mass[i]);
             let inertia = &self.inertia[i];
-            let (inc1, _) = midpoint::solve_increment(inertia, self.big_p[i], hh)
-                .map_err(|e| newton_error(name, "midpoint equation (M)", state.t, h, e))?;
+            let solve = |p, guess| {
+                if warm {
+                    midpoint::solve_increment_from(inertia, p, hh, guess)
+                } else {
+                    midpoint::solve_increment(inertia, p, hh)
+                }
+                .map_err(|e| newton_error(name, "midpoint equation (M)", state.t, h, e))
+            };
+            let (inc1, _) = solve(self.big_p[i], self.psi1[i])?;
             let pa = inc1.inverse_apply(self.big_p[i]);
-            let (inc2, _) = midpoint::solve_increment(inertia, pa, hh)
-                .map_err(|e| newton_error(name, "midpoint equation (M)", state.t, h, e))?;
+            let (inc2, _) = solve(pa, self.psi2[i])?;
             self.psi1[i] = inc1.psi();
             self.psi2[i] = inc2.psi();
             self.pi_a[i] = pa;
@@ -101,7 +110,9 @@ impl MultibodySystem {
         let mut factored = false;
         let mut it = 0;
         loop {
-            self.drift(state, h)?;
+            // Warm midpoint starts once the corrections are small (a long step's first
+            // corrections can move Ψ farther than the predictor's error).
+            self.drift(state, h, prev <= 1e-6)?;
             Self::rows_at(
                 &self.joints,
                 &self.limit,

@@ -187,6 +187,31 @@ pub(crate) fn solve_increment<I: InertiaOperator + ?Sized>(
     }
 }
 
+/// [`solve_increment`] from the guess `guess` instead of the predictor: the same Newton
+/// iteration and stopping rule. For an outer iteration that solves (M) again with a
+/// momentum `P` changed by a small correction (the multibody position solve): the last
+/// root is then within the change, and Newton's first correction is already below the
+/// quadratic stopping rule, where the predictor's `O(|Ψ|³)` error takes two.
+#[inline(always)]
+pub(crate) fn solve_increment_from<I: InertiaOperator + ?Sized>(
+    inertia: &I,
+    p: Vec3,
+    h: f64,
+    guess: Vec3,
+) -> Result<(so3::Increment, u32), NotConverged> {
+    match inertia.diagonal() {
+        Some((d, _)) => {
+            let hn = h * inertia.inverse_norm_bound();
+            let quadratic2 = p.norm_squared() * hn * hn;
+            lean_newton(p, h, guess, quadratic2, |psi| diagonal_newton_terms(d, p, h, psi))
+        }
+        None => {
+            let quadratic2 = p.norm_squared() * h * h * inertia.inverse_norm_bound().powi(2);
+            lean_newton(p, h, guess, quadratic2, |psi| general_newton_terms(inertia, p, h, psi))
+        }
+    }
+}
+
 /// [`solve_increment`] for a full tensor.
 #[inline(never)]
 fn solve_general<I: InertiaOperator + ?Sized>(
@@ -201,20 +226,29 @@ fn solve_general<I: InertiaOperator + ?Sized>(
     let psi = inertia.apply_inverse(p + p.cross(psi0) * 0.5) * h;
     // The stopping rule h|P| |δ|² / λ_min ≤ u |Ψ|, squared to avoid square roots.
     let quadratic2 = p.norm_squared() * h * h * inertia.inverse_norm_bound().powi(2);
-    lean_newton(p, h, psi, quadratic2, |psi| {
-        let (v, q, [t2, a, b, c]) = half_rotation(p, psi);
-        let g = inertia.apply(psi) - q * h;
-        // J = I − (h/2) hat(Q) Jl(v), Jl(v) = I + b hat(v) + c hat(v)²; columns q × Jl e_k.
-        let jl = so3::i_plus_hat_plus_hat2(v, b, c);
-        let s = -0.5 * h;
-        let (c0, c1, c2) = (q.cross(jl.col(0)) * s, q.cross(jl.col(1)) * s, q.cross(jl.col(2)) * s);
-        let j = inertia.plus(&Mat3::from_rows([
-            [c0.x, c1.x, c2.x],
-            [c0.y, c1.y, c2.y],
-            [c0.z, c1.z, c2.z],
-        ]));
-        (g, j, [t2, a, b, c])
-    })
+    lean_newton(p, h, psi, quadratic2, |psi| general_newton_terms(inertia, p, h, psi))
+}
+
+/// The residual, Jacobian and half-angle coefficients of (M) at `psi` for a full tensor.
+#[inline(always)]
+fn general_newton_terms<I: InertiaOperator + ?Sized>(
+    inertia: &I,
+    p: Vec3,
+    h: f64,
+    psi: Vec3,
+) -> (Vec3, Mat3, [f64; 4]) {
+    let (v, q, [t2, a, b, c]) = half_rotation(p, psi);
+    let g = inertia.apply(psi) - q * h;
+    // J = I − (h/2) hat(Q) Jl(v), Jl(v) = I + b hat(v) + c hat(v)²; columns q × Jl e_k.
+    let jl = so3::i_plus_hat_plus_hat2(v, b, c);
+    let s = -0.5 * h;
+    let (c0, c1, c2) = (q.cross(jl.col(0)) * s, q.cross(jl.col(1)) * s, q.cross(jl.col(2)) * s);
+    let j = inertia.plus(&Mat3::from_rows([
+        [c0.x, c1.x, c2.x],
+        [c0.y, c1.y, c2.y],
+        [c0.z, c1.z, c2.z],
+    ]));
+    (g, j, [t2, a, b, c])
 }
 
 /// `v = −Ψ/2`, `Q = exp(v) P = P + a v × P + b v × (v × P)` and the coefficients
@@ -302,33 +336,38 @@ fn solve_diagonal(
     let pp = Vec3::new(p.y * p.z, p.z * p.x, p.x * p.y);
     let psi = hd.component_mul(p) + hd.component_mul(k).component_mul(pp);
     let quadratic2 = p.norm_squared() * (h * inverse_norm) * (h * inverse_norm);
+    lean_newton(p, h, psi, quadratic2, |psi| diagonal_newton_terms(d, p, h, psi))
+}
+
+/// The residual, Jacobian and half-angle coefficients of (M) at `psi` for `D = diag(d)`
+/// (see [`solve_diagonal`]).
+#[inline(always)]
+fn diagonal_newton_terms(d: Vec3, p: Vec3, h: f64, psi: Vec3) -> (Vec3, Mat3, [f64; 4]) {
     let s = 0.5 * h;
-    lean_newton(p, h, psi, quadratic2, |psi| {
-        let (v, q, [t2, a, b, c]) = half_rotation(p, psi);
-        let g = d.component_mul(psi) - q * h;
-        let w = q.cross(v);
-        let (alpha, beta, gamma) = (s * (1.0 - c * t2), s * b, s * c);
-        let diag = beta * q.dot(v);
-        let (bv, gw, aq) = (v * beta, w * gamma, q * alpha);
-        let j = Mat3::from_rows([
-            [
-                d.x + diag - bv.x * q.x - gw.x * v.x,
-                aq.z - bv.x * q.y - gw.x * v.y,
-                -aq.y - bv.x * q.z - gw.x * v.z,
-            ],
-            [
-                -aq.z - bv.y * q.x - gw.y * v.x,
-                d.y + diag - bv.y * q.y - gw.y * v.y,
-                aq.x - bv.y * q.z - gw.y * v.z,
-            ],
-            [
-                aq.y - bv.z * q.x - gw.z * v.x,
-                -aq.x - bv.z * q.y - gw.z * v.y,
-                d.z + diag - bv.z * q.z - gw.z * v.z,
-            ],
-        ]);
-        (g, j, [t2, a, b, c])
-    })
+    let (v, q, [t2, a, b, c]) = half_rotation(p, psi);
+    let g = d.component_mul(psi) - q * h;
+    let w = q.cross(v);
+    let (alpha, beta, gamma) = (s * (1.0 - c * t2), s * b, s * c);
+    let diag = beta * q.dot(v);
+    let (bv, gw, aq) = (v * beta, w * gamma, q * alpha);
+    let j = Mat3::from_rows([
+        [
+            d.x + diag - bv.x * q.x - gw.x * v.x,
+            aq.z - bv.x * q.y - gw.x * v.y,
+            -aq.y - bv.x * q.z - gw.x * v.z,
+        ],
+        [
+            -aq.z - bv.y * q.x - gw.y * v.x,
+            d.y + diag - bv.y * q.y - gw.y * v.y,
+            aq.x - bv.y * q.z - gw.y * v.z,
+        ],
+        [
+            aq.y - bv.z * q.x - gw.z * v.x,
+            -aq.x - bv.z * q.y - gw.z * v.y,
+            d.z + diag - bv.z * q.z - gw.z * v.z,
+        ],
+    ]);
+    (g, j, [t2, a, b, c])
 }
 
 #[cfg(test)]

@@ -1,0 +1,85 @@
+//! Steps the built-in multibody problems and prints, per problem and method, the CPU time
+//! per step, the position-solve iterations and factorizations per stage, and the largest
+//! constraint violations: `cargo run --release -p liemid --example profile_multibody
+//! [PROBLEM [METHOD [STEP [STEPS]]]]` (for profilers: one case when arguments are given).
+use liemid::multibody::{problems, MultibodyMethod, MultibodySystem};
+
+fn cpu() -> f64 {
+    // Process CPU time, so that a loaded machine does not inflate the figures.
+    let mut ts = std::mem::MaybeUninit::<[i64; 2]>::uninit();
+    // SAFETY: clock_gettime writes a timespec (two 64-bit fields on x86-64 Linux).
+    unsafe {
+        clock_gettime(2, ts.as_mut_ptr());
+        let [s, ns] = ts.assume_init();
+        s as f64 + ns as f64 * 1e-9
+    }
+}
+
+extern "C" {
+    fn clock_gettime(clock: i32, ts: *mut [i64; 2]) -> i32;
+}
+
+fn run(name: &str, method: MultibodyMethod, h: f64, steps: u64) {
+    let model = match name {
+        "spacecraft" => problems::spacecraft(),
+        "double-pendulum" => problems::double_pendulum(),
+        "chain-10" => problems::chain(10),
+        "chain-100" => problems::chain(100),
+        "chain-1000" => problems::chain(1000),
+        other => panic!("unknown problem {other}"),
+    };
+    let mut system = MultibodySystem::new(&model, method).expect("the model builds");
+    let mut state = model.initial_state().expect("the model starts");
+    let (mut it, mut fac, mut pos, mut vel) = (0u64, 0u64, 0.0f64, 0.0f64);
+    let c0 = cpu();
+    for _ in 0..steps {
+        let r = system.step(&mut state, h).expect("the step converges");
+        it += u64::from(r.iterations);
+        fac += u64::from(r.factorizations);
+        pos = pos.max(r.position_violation);
+        vel = vel.max(r.velocity_violation);
+    }
+    let c = cpu() - c0;
+    let stages = steps as f64 * method.scheme().map_or(1, |s| s.stages()) as f64;
+    let nb = state.len() as f64;
+    println!(
+        "{name:<16} {:<11} h = {h:.1e} {steps:>7} steps: {:>9.3} us/step, {:>7.3} us/stage, {:>7.4} us/body-stage; \
+         iterations/stage {:.2}, factorizations/stage {:.2}; max violation pos {pos:.1e} vel {vel:.1e}; c0 {:.15e}",
+        method.name(),
+        c / steps as f64 * 1e6,
+        c / stages * 1e6,
+        c / stages / nb * 1e6,
+        it as f64 / stages,
+        fac as f64 / stages,
+        state.c[0].x,
+    );
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let method = |s: &str| match s {
+        "liemid" => MultibodyMethod::Liemid,
+        "liemid4" => MultibodyMethod::Liemid4,
+        "liemid6" => MultibodyMethod::Liemid6,
+        _ => panic!("unknown method {s}"),
+    };
+    if let Some(p) = args.first() {
+        let m = method(args.get(1).map_or("liemid", String::as_str));
+        let h = args.get(2).map_or(1e-4, |s| s.parse().expect("a step"));
+        let n = args.get(3).map_or(100_000, |s| s.parse().expect("a step count"));
+        run(p, m, h, n);
+        return;
+    }
+    for (p, m, h, n) in [
+        ("spacecraft", "liemid", 1e-4, 100_000),
+        ("spacecraft", "liemid4", 1e-3, 10_000),
+        ("spacecraft", "liemid6", 2.5e-3, 4_000),
+        ("double-pendulum", "liemid", 1e-4, 100_000),
+        ("double-pendulum", "liemid4", 1e-2, 1_000),
+        ("chain-10", "liemid", 1e-4, 20_000),
+        ("chain-100", "liemid", 1e-4, 2_000),
+        ("chain-1000", "liemid", 1e-4, 200),
+    ] {
+        run(p, method(m), h, n);
+    }
+}
