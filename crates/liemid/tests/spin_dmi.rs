@@ -111,7 +111,12 @@ fn each_piece_of_a_dmi_bond_flows_exactly() {
                         let err = (x - rx).norm().max((y - ry).norm());
                         worst = worst.max(err);
                         assert!(err < 1e-12, "piece {which}, J {j}, alpha {alpha}, h {h}: {err:e}");
-                        assert!((x.norm() - 1.0).abs() < 1e-15 && (y.norm() - 1.0).abs() < 1e-15, "norms {:e} {:e}", x.norm() - 1.0, y.norm() - 1.0);
+                        assert!(
+                            (x.norm() - 1.0).abs() < 1e-15 && (y.norm() - 1.0).abs() < 1e-15,
+                            "norms {:e} {:e}",
+                            x.norm() - 1.0,
+                            y.norm() - 1.0
+                        );
                     }
                     // Each piece is an exact flow: backwards undoes it.
                     for which in 0..3 {
