@@ -105,20 +105,6 @@ impl OutputPlan {
         if path.as_os_str().is_empty() {
             return Err(format!("{what}: the path is empty"));
         }
-        // `--json` takes an optional value: `--json scenario.toml` would read the scenario as
-        // the JSON target and replace it.
-        let model_like = ["toml", "xml", "urdf", "npy"];
-        if what == "--json"
-            && path
-                .extension()
-                .and_then(|e| e.to_str())
-                .is_some_and(|e| model_like.contains(&e.to_ascii_lowercase().as_str()))
-        {
-            return Err(format!(
-                "--json {shown}: that looks like a scenario or model file, not a JSON target; give the \
-                 scenario first (`liemid ... {shown} --json [FILE.json|-]`)"
-            ));
-        }
         for (label, candidate) in [("", path.to_path_buf()), (" (its .partial file)", partial_path(path))] {
             if let Some(kind) = not_regular(&candidate) {
                 return Err(format!(
@@ -145,6 +131,20 @@ impl OutputPlan {
                     ));
                 }
             }
+        }
+        // `--json` takes an optional value: `--json scenario.toml` would read the scenario as
+        // the JSON target and replace it.
+        let model_like = ["toml", "xml", "urdf", "npy"];
+        if what == "--json"
+            && path
+                .extension()
+                .and_then(|e| e.to_str())
+                .is_some_and(|e| model_like.contains(&e.to_ascii_lowercase().as_str()))
+        {
+            return Err(format!(
+                "--json {shown}: that looks like a scenario or model file, not a JSON target; give the \
+                 scenario first (`liemid ... {shown} --json [FILE.json|-]`)"
+            ));
         }
         let dir = match path.parent() {
             Some(p) if !p.as_os_str().is_empty() => p,
