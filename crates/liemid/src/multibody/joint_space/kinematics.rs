@@ -32,6 +32,17 @@ impl JointSpaceModel {
                         r: n.t0 + n.e0 * b - e * b,
                     }
                 }
+                Kind::Universal(a, a2) => {
+                    let second = exp(a2 * qj[1]);
+                    let a1 = second.tr_mul_vec(a);
+                    s[0] = sv(a1, b.cross(a1));
+                    s[1] = sv(a2, b.cross(a2));
+                    let e = n.e0 * exp(a * qj[0]) * second;
+                    Xform {
+                        e,
+                        r: n.t0 + n.e0 * b - e * b,
+                    }
+                }
                 Kind::Slide(u) => {
                     s[0] = sv(Vec3::ZERO, u);
                     Xform {
@@ -95,6 +106,15 @@ impl JointSpaceModel {
             };
             let vi = add6(&vp, &vjs);
             let mut c = cross_motion(&vi, &vjs);
+            if let Kind::Universal(_, a2) = n.kind {
+                // S̊ q̇ = θ̇₁ θ̇₂ (d; b × d), d = −a₂ × a'.
+                let d = a2.cross(ang(&w.s[i][0])) * (-vj[0] * vj[1]);
+                let bd = n.anchor.cross(d);
+                for k in 0..3 {
+                    c[k] += d[k];
+                    c[k + 3] += bd[k];
+                }
+            }
             if n.kind == Kind::Free {
                 // S̊ q̇ = (0; −ω × Eᵀ ṗ).
                 let om = Vec3::new(vj[3], vj[4], vj[5]);
@@ -111,7 +131,7 @@ impl JointSpaceModel {
     }
 
     /// The time derivative of the coordinates, `q̇ = Q(q) v` (into `qdot`, length `nq`):
-    /// hinge and slide `q̇ = v`, ball `Q̇ = ½ Q ⊗ (0, ω)`, free `ṗ` then `Q̇ = ½ Q ⊗ (0, ω)`
+    /// hinge, slide and universal `q̇ = v`, ball `Q̇ = ½ Q ⊗ (0, ω)`, free `ṗ` then `Q̇ = ½ Q ⊗ (0, ω)`
     /// (on the quaternion as given, not normalised, so that the flow keeps `|Q|`).
     ///
     /// ## Reference
@@ -132,6 +152,7 @@ impl JointSpaceModel {
             match n.kind {
                 Kind::Weld => {}
                 Kind::Hinge(_) | Kind::Slide(_) => qdot[iq] = v[iv],
+                Kind::Universal(..) => qdot[iq..iq + 2].copy_from_slice(&v[iv..iv + 2]),
                 Kind::Ball => {
                     let d = quat_rate(&q[iq..iq + 4], Vec3::new(v[iv], v[iv + 1], v[iv + 2]));
                     qdot[iq..iq + 4].copy_from_slice(&d);

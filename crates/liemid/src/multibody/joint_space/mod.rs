@@ -20,6 +20,7 @@
 //! |---|---|---|
 //! | weld | `E₀` | `t₀` |
 //! | hinge, angle `θ` | `E₀ exp(θ û)` | `t₀ + E₀ b − E b` |
+//! | universal, axes `a`, `a₂`, angles `θ₁`, `θ₂` | `E₀ exp(θ₁ â) exp(θ₂ â₂)` | `t₀ + E₀ b − E b` |
 //! | ball, quaternion `Q` | `E₀ R(Q)` | `t₀ + E₀ b − E b` |
 //! | slide, offset `s` | `E₀` | `t₀ + s E₀ u` |
 //! | free, `(p, Q)` | `R(Q)` | `p` |
@@ -32,7 +33,8 @@
 //!
 //! ## Velocities
 //!
-//! Hinge, slide: the rate. Ball: the angular velocity `ω` of the child relative to the
+//! Hinge, slide: the rate. Universal: the two rates, the child's angular velocity relative
+//! to its parent being `exp(−θ₂ â₂) a θ̇₁ + a₂ θ̇₂` in child coordinates. Ball: the angular velocity `ω` of the child relative to the
 //! parent in child coordinates, `Q̇ = ½ Q ⊗ (0, ω)`. Free: the velocity `ṗ` of the child
 //! frame's origin in parent coordinates, then `ω` in child coordinates (MuJoCo's
 //! convention), `Q̇ = ½ Q ⊗ (0, ω)`.
@@ -42,9 +44,10 @@
 //! Spatial motion vectors `(ω; v)` and force vectors `(n; f)`, angular part first, in the
 //! coordinates of each body's frame (origin at the frame origin, axes the body's). The
 //! joint's motion subspace `S` (6 × `nv` of the joint), in child coordinates:
-//! hinge `(u; b × u)`, slide `(0; u)`, ball `(1; b̂)`, free `[[0, 1]; [Eᵀ, 0]]`; the first
-//! three are constant in child coordinates, the free joint's has the apparent derivative
-//! `S̊ q̇ = (0; −ω × Eᵀ ṗ)`.
+//! hinge `(u; b × u)`, slide `(0; u)`, ball `(1; b̂)`, universal `[(a'; b × a'), (a₂; b × a₂)]`
+//! with `a' = exp(−θ₂ â₂) a`, free `[[0, 1]; [Eᵀ, 0]]`; hinge, slide and ball are
+//! constant in child coordinates, the universal's first column has the apparent derivative
+//! `S̊ q̇ = θ̇₁ θ̇₂ (d; b × d)`, `d = −a₂ × a'`, and the free joint's `S̊ q̇ = (0; −ω × Eᵀ ṗ)`.
 //!
 //! ## Passive forces
 //!
@@ -75,6 +78,8 @@ use spatial::{Xform, M6, SV, ZERO6, ZERO66};
 enum Kind {
     Weld,
     Hinge(Vec3),
+    /// First and second axis, child coordinates at the reference.
+    Universal(Vec3, Vec3),
     Slide(Vec3),
     Ball,
     Free,
@@ -282,6 +287,7 @@ impl JointSpaceModel {
                 JointKind::Weld => (Kind::Weld, 0, 0),
                 JointKind::Hinge { axis } => (Kind::Hinge(unit(axis)?), 1, 1),
                 JointKind::Slide { axis } => (Kind::Slide(unit(axis)?), 1, 1),
+                JointKind::Universal { first, second } => (Kind::Universal(unit(first)?, unit(second)?), 2, 2),
                 JointKind::Ball => (Kind::Ball, 4, 3),
                 JointKind::Free => (Kind::Free, 7, 6),
             };
@@ -318,6 +324,7 @@ impl JointSpaceModel {
             match kind {
                 Kind::Weld => {}
                 Kind::Hinge(_) | Kind::Slide(_) => qpos0.push(0.0),
+                Kind::Universal(..) => qpos0.extend([0.0, 0.0]),
                 Kind::Ball => qpos0.extend([1.0, 0.0, 0.0, 0.0]),
                 Kind::Free => {
                     let qt = Quaternion::from_matrix(&e0);
