@@ -668,7 +668,7 @@ impl<'a, 'i> State<'a, 'i> {
         } else {
             axes[0].dot(axes[1].cross(axes[2])).abs()
         };
-        if !(independence >= AXIS_INDEPENDENCE) {
+        if independence < AXIS_INDEPENDENCE {
             return Err(cx.err(
                 node,
                 format!(
