@@ -379,3 +379,21 @@ fn other_combinations_are_refused_naming_body_and_joints() {
     );
     mjcf::parse(&classed.replace("<joint range=\"-1 1\"/>", ""), "r.xml").unwrap();
 }
+
+#[test]
+fn a_universal_joint_in_code_is_validated() {
+    let mut m = load(UNIVERSAL).model;
+    m.joints[1].kind = JointKind::Universal {
+        first: Vec3::new(0.0, 1.0, 0.0),
+        second: Vec3::new(0.0, -1.0, 1e-8) * (1.0 / (1.0f64 + 1e-16).sqrt()),
+    };
+    let err = m.validate().unwrap_err().to_string();
+    assert!(err.contains("v1+v2") && err.contains("parallel"), "{err}");
+    assert!(MultibodySystem::new(&m, MultibodyMethod::Liemid).is_err());
+    m.joints[1].kind = JointKind::Universal {
+        first: Vec3::new(0.0, 1.0, 0.0),
+        second: Vec3::new(0.0, 0.0, 2.0),
+    };
+    assert!(m.validate().unwrap_err().to_string().contains("unit"));
+    assert!(JointSpaceModel::new(&m).is_err());
+}
