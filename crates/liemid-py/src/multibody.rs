@@ -41,13 +41,7 @@ impl MultibodyModel {
             .joints
             .iter()
             .map(|j| {
-                let kind = match j.kind {
-                    JointKind::Ball => "ball",
-                    JointKind::Hinge { .. } => "hinge",
-                    JointKind::Slide { .. } => "slide",
-                    JointKind::Weld => "weld",
-                    JointKind::Free => "free",
-                };
+                let kind = j.kind.name();
                 (j.name.clone(), kind.to_string())
             })
             .collect()

@@ -521,7 +521,9 @@ fn refuses_broken_urdf_trees() {
 
 #[test]
 fn refuses_what_maximal_coordinates_cannot_hold() {
-    let t = one_body("<joint name=\"x\" axis=\"1 0 0\"/>\n<joint name=\"y\" axis=\"0 1 0\"/>\n<geom size=\"1\"/>");
+    let t = one_body(
+        "<joint name=\"x\" axis=\"1 0 0\"/>\n<joint name=\"y\" type=\"slide\" axis=\"0 1 0\"/>\n<geom size=\"1\"/>",
+    );
     refused(mjcf::parse(&t, "u.xml"), 3, "body name=\"b\"", "2 joints");
     let t = one_body("<joint/>\n<geom type=\"mesh\" mesh=\"shell\"/>");
     refused(mjcf::parse(&t, "u.xml"), 5, "geom", "mesh geom `shell`");

@@ -235,6 +235,33 @@ fn chain(rng: &mut Rng, dissipative: bool) -> Model {
     model("chain", bodies, joints, Vec3::new(0.0, 0.0, -G))
 }
 
+/// Two bodies on universal joints with random (oblique) axes, off-axis centres of mass, full
+/// inertia tensors.
+fn universal_chain(rng: &mut Rng) -> Model {
+    let mut bodies = Vec::new();
+    for (k, x) in [Vec3::new(0.0, 0.1, -0.3), Vec3::new(0.2, -0.1, -0.7)]
+        .iter()
+        .enumerate()
+    {
+        let com = Vec3::new(0.1 * rng.normal(), 0.1 * rng.normal(), 0.1 * rng.normal());
+        let m = 0.5 + rng.uniform();
+        let inertia = full_inertia(rng, 0.05 * m);
+        bodies.push(body(&format!("u{k}"), m, com, inertia, *x, rng.rotation()));
+    }
+    let mut kinds = Vec::new();
+    for _ in 0..2 {
+        kinds.push(JointKind::Universal {
+            first: rng.unit_vector(),
+            second: rng.unit_vector(),
+        });
+    }
+    let joints = vec![
+        joint(&bodies, "u0", kinds[0], Link::World, 0, Vec3::new(0.0, 0.0, 0.1)),
+        joint(&bodies, "u1", kinds[1], Link::Body(0), 1, Vec3::new(0.1, 0.0, -0.5)),
+    ];
+    model("universal", bodies, joints, Vec3::new(0.0, 0.0, -G))
+}
+
 /// A free-floating base with two hinged children (one of them with a weld-attached body).
 fn floating_base(rng: &mut Rng, gravity: Vec3) -> Model {
     let mut bodies = Vec::new();
@@ -302,6 +329,7 @@ fn random_state(rng: &mut Rng, m: &Model, js: &JointSpaceModel) -> (Vec<f64>, Ve
     for (k, j) in m.joints.iter().enumerate() {
         match j.kind {
             JointKind::Hinge { .. } | JointKind::Slide { .. } => q.push(3.0 * rng.uniform() - 1.5),
+            JointKind::Universal { .. } => q.extend([3.0 * rng.uniform() - 1.5, 3.0 * rng.uniform() - 1.5]),
             JointKind::Ball => q.extend(random_quat(rng)),
             JointKind::Free => {
                 let x = m.bodies[j.child].position;
@@ -328,7 +356,11 @@ fn matvec(m: &[f64], x: &[f64]) -> Vec<f64> {
 #[test]
 fn aba_agrees_with_crba_rnea_and_the_kinetic_energy() {
     let mut rng = Rng::new(5);
-    let models = [chain(&mut rng, true), floating_base(&mut rng, Vec3::new(0.0, 0.0, -G))];
+    let models = [
+        chain(&mut rng, true),
+        floating_base(&mut rng, Vec3::new(0.0, 0.0, -G)),
+        universal_chain(&mut rng),
+    ];
     for m in &models {
         let mut js = JointSpaceModel::new(m).unwrap();
         let nv = js.nv();
@@ -394,7 +426,11 @@ fn aba_agrees_with_crba_rnea_and_the_kinetic_energy() {
 #[test]
 fn kinematics_obeys_the_joints_and_velocities_differentiate_it() {
     let mut rng = Rng::new(23);
-    let models = [chain(&mut rng, false), floating_base(&mut rng, Vec3::new(0.0, 0.0, -G))];
+    let models = [
+        chain(&mut rng, false),
+        floating_base(&mut rng, Vec3::new(0.0, 0.0, -G)),
+        universal_chain(&mut rng),
+    ];
     for m in &models {
         let mut js = JointSpaceModel::new(m).unwrap();
         for _ in 0..20 {
@@ -426,6 +462,12 @@ fn kinematics_obeys_the_joints_and_velocities_differentiate_it() {
                         let d = rp.tr_mul_vec(xc + rc * j.anchor_child - xp - rp * j.anchor_parent);
                         let along = j.reference_rotation * axis;
                         assert!((d - along * d.dot(along)).max_abs() < 1e-14);
+                    }
+                    JointKind::Universal { first, second } => {
+                        // The anchor is shared and (Q a)·(rel b) = a·b.
+                        assert!(gap < 1e-14, "{}: {gap:e}", j.name);
+                        let dot = (j.reference_rotation * first).dot(rel * second) - first.dot(second);
+                        assert!(dot.abs() < 1e-14, "{}: {dot:e}", j.name);
                     }
                     JointKind::Free => {}
                 }

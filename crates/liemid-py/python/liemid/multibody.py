@@ -1,5 +1,6 @@
 """Jointed rigid bodies (``liemid multibody``): chains, trees and loops of bodies on ball,
-hinge, slide, weld and free joints, read from the MJCF and URDF files people already have.
+universal, hinge, slide, weld and free joints, read from the MJCF and URDF files people
+already have (two or three hinges of one MJCF body merged into a universal or ball joint).
 
 The bodies move in maximal coordinates by RATTLE with EA's rotation (``"liemid"``, order 2,
 symplectic, constraints kept to round-off at every step, momenta kept for a free system)
@@ -103,7 +104,7 @@ class Model:
 
     @property
     def joints(self) -> List[Tuple[str, str]]:
-        """The joints as (name, kind): ball, hinge, slide, weld or free."""
+        """The joints as (name, kind): ball, universal, hinge, slide, weld or free."""
         return list(self._core.joints)
 
     @property

@@ -9,13 +9,18 @@
 //! ball      c_i + R_i a − c_j − R_j b                       ∂θ_i = −R_i hat(a), ∂θ_j = R_j hat(b)
 //! dot(A,B)  (R_i A)·(R_j B)                                 ∂θ_i = A × R_iᵀR_j B, ∂θ_j = B × R_jᵀR_i A
 //! hinge     ball and dot(e_k, u_j), e_k ⊥ u_i = Q u_j (k = 1, 2)
+//! universal ball and dot(Q a, b) − a·b (a, b the first and second axis, child frame)
 //! slide     dot(Q e_a, e_b) for (a, b) = (2,3), (3,1), (1,2), and (R_i e_k)·d,
 //!           d = c_j + R_j b − c_i − R_i a:  ∂c = ∓R_i e_k, ∂θ_i = e_k × (R_iᵀ d + a), ∂θ_j = b × R_jᵀR_i e_k
 //! weld      ball and the three dot rows of the slide
 //! ```
 //!
 //! `Q` is the joint's reference rotation (child in parent at zero coordinate), so the dot
-//! rows vanish at the reference attitude. Joint readouts (hinge angle, slide offset) are
+//! rows vanish at the reference attitude. The universal row: with `M = Qᵀ R_iᵀ R_j`,
+//! `(R_i Q a)·(R_j b) = a·M b`, and `a·M b = a·b` holds exactly on the rotations
+//! `M = exp(θ₁ a) exp(θ₂ b)` (`M b` must lie on the cone about `a` through `b`: turn `b`
+//! onto it about `a`, and what is left fixes `b`); its gradient (the dot row's) vanishes
+//! only where `M b ∥ a`, impossible for independent axes, so the joint has no gimbal lock. Joint readouts (hinge angle, slide offset) are
 //! functions of the bodies with exact gradients, used for springs, dampers and limits.
 //!
 //! Reference: E. Hairer, C. Lubich, G. Wanner, *Geometric Numerical Integration*, 2nd ed.,
@@ -98,9 +103,10 @@ pub struct JointGeometry {
     pub b: Vec3,
     /// `Q`, the child's attitude in the parent frame at zero coordinate.
     pub q: Mat3,
-    /// The axis in the child frame `u_j` (zero for ball, weld, free).
+    /// The axis in the child frame `u_j` (`e_z` for ball, weld, free; a universal's second
+    /// axis `b`).
     pub u_child: Vec3,
-    /// The axis in the parent frame `u_i = Q u_j`.
+    /// The axis in the parent frame `u_i = Q u_j` (a universal's first axis, `Q a`).
     pub u_parent: Vec3,
     /// `e_1, e_2 ⊥ u_i` in the parent frame, `e_1 × e_2 = u_i`.
     pub e_parent: [Vec3; 2],
@@ -133,8 +139,13 @@ impl JointGeometry {
             Link::World => (None, j.anchor_parent),
             Link::Body(p) => (Some(p), j.anchor_parent - model.bodies[p].com),
         };
-        let u_child = j.kind.axis().unwrap_or(Vec3::new(0.0, 0.0, 1.0));
-        let u_parent = j.reference_rotation * u_child;
+        let (u_child, u_parent) = match j.kind {
+            JointKind::Universal { first, second } => (second, j.reference_rotation * first),
+            kind => {
+                let u = kind.axis().unwrap_or(Vec3::new(0.0, 0.0, 1.0));
+                (u, j.reference_rotation * u)
+            }
+        };
         JointGeometry {
             kind: j.kind,
             parent,
@@ -161,6 +172,11 @@ impl JointGeometry {
                 for e in self.e_parent {
                     dot_row(e, self.u_child, ri, rj, out);
                 }
+            }
+            JointKind::Universal { first, second } => {
+                self.ball(ci, ri, cj, rj, out);
+                dot_row(self.u_parent, self.u_child, ri, rj, out);
+                out.value[out.n - 1] -= first.dot(second);
             }
             JointKind::Weld => {
                 self.ball(ci, ri, cj, rj, out);

@@ -3,8 +3,8 @@
 //!
 //! **Model.** Each body `i` carries its centre of mass `c_i`, linear momentum `p_i`,
 //! attitude `R_i` and body angular momentum `Π_i` about the centre of mass
-//! ([`MultibodyState`]); joints (ball, hinge, slide, weld, free) are holonomic constraints
-//! `g(c, R) = 0` whose gradients act through body-frame rotation increments
+//! ([`MultibodyState`]); joints (ball, universal, hinge, slide, weld, free) are holonomic
+//! constraints `g(c, R) = 0` whose gradients act through body-frame rotation increments
 //! ([`constraints`]). A [`Model`] (from code, [`problems`], or a file loader) lists bodies,
 //! tree joints in body order, loop-closing joints, gravity and MuJoCo-layout joint
 //! coordinates; [`Model::initial_state`] does the forward kinematics.

@@ -50,6 +50,20 @@ pub enum JointKind {
         /// Unit axis in the child frame.
         axis: Vec3,
     },
+    /// Two rotations about axes through the anchor (a universal or Cardan joint): the
+    /// relative attitude is `Qᵀ R_iᵀ R_j = exp(θ₁ first) exp(θ₂ second)`, `Q` the joint's
+    /// reference rotation. Both axes are unit vectors in the **child** frame at the
+    /// reference configuration (as MJCF gives two hinges of one body); `first` (nearer the
+    /// parent) then stays fixed in the parent (`Q first` in the parent frame) and `second`
+    /// fixed in the child. The axes must be independent (`|first × second| ≥`
+    /// [`AXIS_INDEPENDENCE`]); the joint has no gimbal lock. (qpos, qvel: the two angles
+    /// and their rates.)
+    Universal {
+        /// The first axis (child frame at the reference configuration; fixed in the parent).
+        first: Vec3,
+        /// The second axis (child frame; fixed in the child).
+        second: Vec3,
+    },
     /// No relative motion.
     Weld,
     /// Six degrees of freedom, no constraint rows (qpos: position of the child frame's
@@ -119,44 +133,53 @@ use super::MultibodyState;
 /// Largest accepted `|‖u‖ − 1|` of a joint axis and `‖RᵀR − I‖_F` of a model rotation.
 pub const UNIT_TOLERANCE: f64 = 1e-9;
 
+/// Smallest accepted `|first × second|` of a universal joint's axes, and `|det(a, b, c)|`
+/// of three hinge axes merged into a ball by the MJCF loader: nearly parallel axes leave
+/// a nearly singular joint.
+pub const AXIS_INDEPENDENCE: f64 = 1e-6;
+
 impl JointKind {
-    /// Joint coordinates in MuJoCo's `qpos` layout: free 7, ball 4, hinge 1, slide 1,
-    /// weld 0 (MuJoCo documentation, "Joint").
+    /// Joint coordinates in MuJoCo's `qpos` layout: free 7, ball 4, universal 2 (its two
+    /// angles, as MuJoCo's two hinges), hinge 1, slide 1, weld 0 (MuJoCo documentation,
+    /// "Joint").
     #[must_use]
     pub fn nq(&self) -> usize {
         match self {
             JointKind::Free => 7,
             JointKind::Ball => 4,
+            JointKind::Universal { .. } => 2,
             JointKind::Hinge { .. } | JointKind::Slide { .. } => 1,
             JointKind::Weld => 0,
         }
     }
 
-    /// Joint velocities in MuJoCo's `qvel` layout: free 6, ball 3, hinge 1, slide 1,
-    /// weld 0.
+    /// Joint velocities in MuJoCo's `qvel` layout: free 6, ball 3, universal 2, hinge 1,
+    /// slide 1, weld 0.
     #[must_use]
     pub fn nv(&self) -> usize {
         match self {
             JointKind::Free => 6,
             JointKind::Ball => 3,
+            JointKind::Universal { .. } => 2,
             JointKind::Hinge { .. } | JointKind::Slide { .. } => 1,
             JointKind::Weld => 0,
         }
     }
 
-    /// Holonomic constraint rows (multibody spec section 2): ball 3, hinge 5, slide 5,
-    /// weld 6, free 0; that is `6 − nv`.
+    /// Holonomic constraint rows (multibody spec section 2): ball 3, universal 4, hinge 5,
+    /// slide 5, weld 6, free 0; that is `6 − nv`.
     #[must_use]
     pub fn rows(&self) -> usize {
         6 - self.nv()
     }
 
-    /// The short kind name (`ball`, `hinge`, `slide`, `weld`, `free`).
+    /// The short kind name (`ball`, `universal`, `hinge`, `slide`, `weld`, `free`).
     #[must_use]
     pub fn name(&self) -> &'static str {
         match self {
             JointKind::Free => "free",
             JointKind::Ball => "ball",
+            JointKind::Universal { .. } => "universal",
             JointKind::Hinge { .. } => "hinge",
             JointKind::Slide { .. } => "slide",
             JointKind::Weld => "weld",
@@ -318,11 +341,24 @@ impl Model {
                     "{name}: a free joint cannot close a loop (it has no rows)"
                 )));
             }
-            if let Some(u) = j.kind.axis() {
+            let axes = match j.kind {
+                JointKind::Universal { first, second } => vec![first, second],
+                kind => kind.axis().into_iter().collect(),
+            };
+            for u in &axes {
                 if !u.is_finite() || (u.norm() - 1.0).abs() > UNIT_TOLERANCE {
                     return Err(invalid(format!(
                         "{name}: axis {u:?} is not a finite unit vector (|u| = {})",
                         u.norm()
+                    )));
+                }
+            }
+            if let JointKind::Universal { first, second } = j.kind {
+                let sine = first.cross(second).norm();
+                if sine < AXIS_INDEPENDENCE {
+                    return Err(invalid(format!(
+                        "{name}: universal axes {first:?} and {second:?} are parallel (|first x second| = \
+                         {sine:.3e}, at least {AXIS_INDEPENDENCE:e})"
                     )));
                 }
             }
@@ -385,6 +421,7 @@ impl Model {
         for j in self.joints.iter().take(self.bodies.len()) {
             match j.kind {
                 JointKind::Hinge { .. } | JointKind::Slide { .. } => q.push(0.0),
+                JointKind::Universal { .. } => q.extend([0.0, 0.0]),
                 JointKind::Ball => q.extend([1.0, 0.0, 0.0, 0.0]),
                 JointKind::Weld => {}
                 JointKind::Free => {
@@ -405,11 +442,13 @@ impl Model {
     /// The bodies' state from the joint coordinates (forward kinematics over the tree,
     /// parents first, MuJoCo's conventions):
     ///
-    /// - attitudes: hinge `R_j = R_i Q exp(q u)`, ball `R_j = R_i Q R(quat)`, slide and weld
-    ///   `R_j = R_i Q`, free `R_j = R_i R(quat)` (`Q` the joint's reference rotation);
+    /// - attitudes: hinge `R_j = R_i Q exp(q u)`, universal `R_j = R_i Q exp(q₁ a) exp(q₂ b)`,
+    ///   ball `R_j = R_i Q R(quat)`, slide and weld `R_j = R_i Q`, free `R_j = R_i R(quat)`
+    ///   (`Q` the joint's reference rotation);
     /// - frame origins: the anchor `A = x_i + R_i o_i` is shared, `x_j = A − R_j o_j`, plus
     ///   `q R_j u` for a slide; a free joint puts `x_j = x_i + R_i pos`;
-    /// - velocities: `ω_j = ω_i + R_j u q̇` (hinge), `ω_i + R_j w` (ball, free; `w` in the
+    /// - velocities: `ω_j = ω_i + R_j u q̇` (hinge), `ω_i + R_i Q a q̇₁ + R_j b q̇₂`
+    ///   (universal), `ω_i + R_j w` (ball, free; `w` in the
     ///   child frame), `ω_i` (slide, weld); the anchor moves with the parent and the child's
     ///   centre of mass with `v_A + ω_j × (c_j − A)`, plus `R_j u q̇` for a slide; a free
     ///   joint's linear velocity is that of the child frame origin, in the parent frame.
@@ -475,6 +514,12 @@ impl Model {
                     rj = ri * q_ref * so3::exp(axis * qpos[iq]);
                     xj = anchor - rj * jt.anchor_child;
                     wj = wi + rj * axis * qvel[iv];
+                    vcj = v_at(anchor) + wj.cross(xj + rj * s - anchor);
+                }
+                JointKind::Universal { first, second } => {
+                    rj = ri * q_ref * so3::exp(first * qpos[iq]) * so3::exp(second * qpos[iq + 1]);
+                    xj = anchor - rj * jt.anchor_child;
+                    wj = wi + ri * (q_ref * first) * qvel[iv] + rj * second * qvel[iv + 1];
                     vcj = v_at(anchor) + wj.cross(xj + rj * s - anchor);
                 }
                 JointKind::Slide { axis } => {

@@ -368,6 +368,8 @@ pub(crate) enum RawKind {
     Ball,
     Hinge(Vec3),
     Slide(Vec3),
+    /// First and second axis (MJCF: two hinges of one body merged).
+    Universal(Vec3, Vec3),
 }
 
 /// When a body is merged into its parent.
@@ -522,6 +524,7 @@ pub(crate) fn build(file: &str, mut raw: Vec<RawBody>) -> Result<Built> {
             RawKind::Ball => JointKind::Ball,
             RawKind::Hinge(axis) => JointKind::Hinge { axis },
             RawKind::Slide(axis) => JointKind::Slide { axis },
+            RawKind::Universal(first, second) => JointKind::Universal { first, second },
         };
         let name = b.joint_name.clone().unwrap_or_else(|| {
             let stem = format!("{}_{}", b.name, if b.kind == RawKind::Weld { "weld" } else { "joint" });

@@ -16,8 +16,23 @@
 //! Decisions:
 //! - A body without a joint is welded to its parent (a `Weld` joint); if it has no mass
 //!   at all it is merged into its parent (or the world) instead, see [`Loaded::merged`].
-//! - Several joints in one body are refused, naming the body: MuJoCo composes them through
-//!   massless intermediate frames, which maximal coordinates cannot integrate.
+//! - Several joints in one body: MuJoCo composes them through massless intermediate
+//!   frames, which maximal coordinates cannot integrate as such. Two or three **hinges
+//!   through one point** (their `pos` equal to `1e-9` of the body's size) are exactly a
+//!   joint of their own: two with independent axes `a` (first, nearer the parent) and `b`
+//!   a [`JointKind::Universal`](super::model::JointKind::Universal) (`exp(θ₁ a) exp(θ₂ b)`),
+//!   three with independent axes `a`, `b`, `c` a ball (`exp(θ₁ a) exp(θ₂ b) exp(θ₃ c)`
+//!   covers a neighbourhood of every rotation the chain reaches, and the ball has no
+//!   gimbal lock where the chain has one). The merged joint is named `a+b(+c)` after the
+//!   hinges. Keyframe `qpos`/`qvel` give per-hinge angles and rates (MuJoCo's layout) and
+//!   are converted: a universal keeps its two angles, a ball gets the quaternion of the
+//!   product and the angular velocity `exp(−θ₃c)exp(−θ₂b) a θ̇₁ + exp(−θ₃c) b θ̇₂ + c θ̇₃`
+//!   (child frame). Per-hinge limits, springs, dampers and armature on merged hinges have
+//!   no exact form on the merged joint and are refused, naming the body and the joint; so
+//!   is any other combination (a hinge and a slide on one axis, a ball or a free joint with
+//!   others, four hinges, parallel axes, different anchors), naming the body and its
+//!   joints. Actuators are not simulated (listed in [`Loaded::ignored`]), on merged joints
+//!   as on any other.
 //! - Hinge and slide `ref`: MuJoCo's `qpos0 = ref`, i.e. the body pose in the file is the
 //!   pose at joint value `ref`. The model's reference is the body pose in the file at joint
 //!   coordinate 0, so the model's coordinate is MuJoCo's `qpos − ref`: `range`,
@@ -43,6 +58,11 @@ use super::xml::{
 };
 use crate::error::Result;
 use crate::linalg::{Mat3, Vec3};
+
+mod geom;
+mod merge;
+
+use merge::KeyMap;
 
 pub use super::xml::Loaded;
 
@@ -174,8 +194,8 @@ struct State<'a, 'i> {
     classes: HashMap<&'a str, Class<'a>>,
     ignored: Ignored,
     raw: Vec<RawBody>,
-    /// Per raw body: its joint's kind and `ref` (model coordinate = MuJoCo's − ref).
-    refs: Vec<(RawKind, f64)>,
+    /// Per raw body: how its joints map a keyframe.
+    refs: Vec<KeyMap>,
     body_names: HashMap<String, Node<'a, 'i>>,
     joint_names: HashMap<&'a str, Node<'a, 'i>>,
 }
@@ -403,17 +423,6 @@ impl<'a, 'i> State<'a, 'i> {
             .children()
             .filter(|c| c.has_tag_name("joint") || c.has_tag_name("freejoint"))
             .collect();
-        if joints.len() > 1 {
-            return Err(cx.err(
-                node,
-                format!(
-                    "body `{name}` has {} joints; several joints in one body need massless intermediate bodies, \
-                     which maximal coordinates cannot integrate: use one joint per body (a ball joint for a \
-                     spherical pair)",
-                    joints.len()
-                ),
-            ));
-        }
         let inertials: Vec<Node> = node.children().filter(|c| c.has_tag_name("inertial")).collect();
         if inertials.len() > 1 {
             return Err(cx.err(inertials[1], "a second <inertial> in one body"));
@@ -453,7 +462,11 @@ impl<'a, 'i> State<'a, 'i> {
             element: super::xml::describe(node),
         };
         let mut reference = 0.0;
-        if let Some(&j) = joints.first() {
+        let mut merged_hinges = None;
+        if joints.len() > 1 {
+            body.merge = Merge::Never;
+            merged_hinges = Some(self.read_merged(node, &joints, childclass, &mut body)?);
+        } else if let Some(&j) = joints.first() {
             body.merge = Merge::Never;
             if let Some(n) = j.attribute("name") {
                 if let Some(first) = self.joint_names.insert(n, j) {
@@ -473,8 +486,12 @@ impl<'a, 'i> State<'a, 'i> {
                 reference = self.read_joint(Elem { node: j, defaults }, &mut body)?;
             }
         }
+        let map = match merged_hinges {
+            Some(h) => KeyMap::Merged(h),
+            None => KeyMap::One(body.kind, reference),
+        };
         self.raw.push(body);
-        self.refs.push((self.raw[index].kind, reference));
+        self.refs.push(map);
         self.read_children(node, Some(index), childclass)
     }
 
@@ -620,164 +637,5 @@ impl<'a, 'i> State<'a, 'i> {
         } else {
             0.0
         })
-    }
-
-    /// The mass properties of a geom in its body's frame (zero for a massless geom).
-    fn geom_mass(&mut self, g: Elem<'a, 'i>) -> Result<MassProps> {
-        let cx = self.cx;
-        let node = g.node;
-        self.ignored.note("geom contacts");
-        let ty = g.get("type").unwrap_or("sphere");
-        let mass_attr = g.get("mass").map(|v| cx.array_of::<1>(node, "mass", v)).transpose()?;
-        let density = g
-            .get("density")
-            .map(|v| cx.array_of::<1>(node, "density", v))
-            .transpose()?;
-        if let Some([m]) = mass_attr {
-            if m < 0.0 {
-                return Err(cx.err(node, format!("mass {m} is negative")));
-            }
-        }
-        if let Some([d]) = density {
-            if d < 0.0 {
-                return Err(cx.err(node, format!("density {d} is negative")));
-            }
-        }
-        if mass_attr == Some([0.0]) || (mass_attr.is_none() && density == Some([0.0])) {
-            return Ok(MassProps::ZERO);
-        }
-        match ty {
-            "sphere" | "capsule" | "cylinder" | "box" | "ellipsoid" => {}
-            "mesh" | "hfield" | "sdf" => {
-                let what = g.get("mesh").or(g.get("hfield")).unwrap_or("(unnamed)");
-                return Err(cx.err(
-                    node,
-                    format!(
-                        "the body has no <inertial>, so its mass would come from this {ty} geom `{what}`, whose \
-                         file is not read: give the body an <inertial>"
-                    ),
-                ));
-            }
-            "plane" => return Err(cx.err(node, "a plane has no finite mass: planes belong in <worldbody>")),
-            other => return Err(cx.err(node, format!("unknown geom type `{other}`"))),
-        }
-        let size = match g.get("size") {
-            Some(v) => cx.floats(node, "size", v, 1, 3)?,
-            None => Vec::new(),
-        };
-        let (mut pos, mut rot) = self.frame(node, &|a| g.get(a))?;
-        let mut half_length = None;
-        if let Some(v) = g.get("fromto") {
-            let f = cx.array_of::<6>(node, "fromto", v)?;
-            let (a, b) = (Vec3::new(f[0], f[1], f[2]), Vec3::new(f[3], f[4], f[5]));
-            let d = b - a;
-            rot = rotation_to_z(cx.unit(node, "fromto", d.to_array())?);
-            pos = (a + b) * 0.5;
-            half_length = Some(0.5 * d.norm());
-        }
-        let needed = match (ty, half_length) {
-            ("sphere", _) => 1,
-            ("capsule" | "cylinder", None) => 2,
-            ("capsule" | "cylinder", Some(_)) => 1,
-            (_, None) => 3,
-            (_, Some(_)) => 2,
-        };
-        if size.len() < needed || size[..needed].iter().any(|&s| s <= 0.0) {
-            return Err(cx.err(node, format!("a {ty} geom needs {needed} positive size values")));
-        }
-        let s = |k: usize| {
-            if k == needed && half_length.is_some() {
-                half_length.unwrap_or(0.0)
-            } else {
-                size[k]
-            }
-        };
-        use std::f64::consts::PI;
-        let (volume, unit_inertia): (f64, Box<dyn Fn(f64) -> Vec3>) = match ty {
-            "sphere" => {
-                let r = s(0);
-                (
-                    4.0 / 3.0 * PI * r.powi(3),
-                    Box::new(move |m| Vec3::new(1.0, 1.0, 1.0) * (0.4 * m * r * r)),
-                )
-            }
-            "box" | "ellipsoid" => {
-                let (a, b, c) = (s(0), s(1), s(2));
-                let (v, k) = if ty == "box" {
-                    (8.0 * a * b * c, 1.0 / 3.0)
-                } else {
-                    (4.0 / 3.0 * PI * a * b * c, 0.2)
-                };
-                (
-                    v,
-                    Box::new(move |m| Vec3::new(b * b + c * c, a * a + c * c, a * a + b * b) * (k * m)),
-                )
-            }
-            "cylinder" => {
-                let (r, h) = (s(0), 2.0 * s(1));
-                (
-                    PI * r * r * h,
-                    Box::new(move |m| {
-                        let t = m * (3.0 * r * r + h * h) / 12.0;
-                        Vec3::new(t, t, 0.5 * m * r * r)
-                    }),
-                )
-            }
-            _ => {
-                let (r, h) = (s(0), 2.0 * s(1));
-                let (v_cyl, v_sph) = (PI * r * r * h, 4.0 / 3.0 * PI * r.powi(3));
-                (
-                    v_cyl + v_sph,
-                    Box::new(move |m| {
-                        let (mc, ms) = (m * v_cyl / (v_cyl + v_sph), m * v_sph / (v_cyl + v_sph));
-                        let t = mc * (3.0 * r * r + h * h) / 12.0 + ms * (0.4 * r * r + 0.25 * h * h + 0.375 * h * r);
-                        Vec3::new(t, t, 0.5 * mc * r * r + 0.4 * ms * r * r)
-                    }),
-                )
-            }
-        };
-        let m = match mass_attr {
-            Some([m]) => m,
-            None => density.map_or(1000.0, |d| d[0]) * volume,
-        };
-        let local = MassProps {
-            mass: m,
-            com: Vec3::ZERO,
-            inertia: Mat3::from_diagonal(unit_inertia(m)),
-        };
-        Ok(local.transformed(pos, &rot))
-    }
-
-    /// The first keyframe's `qpos` and `qvel`, shifted by each hinge's and slide's `ref`.
-    fn read_key(&mut self, key: Node<'a, 'i>) -> Result<KeyState> {
-        let cx = self.cx;
-        let dims = |k: RawKind| match k {
-            RawKind::Weld => (0, 0),
-            RawKind::Free => (7, 6),
-            RawKind::Ball => (4, 3),
-            RawKind::Hinge(_) | RawKind::Slide(_) => (1, 1),
-        };
-        let nq: usize = self.refs.iter().map(|&(k, _)| dims(k).0).sum();
-        let nv: usize = self.refs.iter().map(|&(k, _)| dims(k).1).sum();
-        let qpos = match key.attribute("qpos") {
-            None => None,
-            Some(v) => {
-                let mut q = cx.floats(key, "qpos", v, nq, nq)?;
-                let mut at = 0;
-                for &(k, r) in &self.refs {
-                    if matches!(k, RawKind::Hinge(_) | RawKind::Slide(_)) {
-                        q[at] -= r;
-                    }
-                    at += dims(k).0;
-                }
-                Some(q)
-            }
-        };
-        let qvel = key
-            .attribute("qvel")
-            .map(|v| cx.floats(key, "qvel", v, nv, nv))
-            .transpose()?;
-        self.note_other_attributes(key, &["name", "qpos", "qvel", "time"]);
-        Ok((qpos, qvel))
     }
 }
