@@ -317,17 +317,22 @@ def main() -> None:
                 line += f"ratio {ratio:.1f}x" if ratio else "ratio -"
                 summary.append(line)
                 print(line)
-        plot(results, ref_err)
+        plot(results, "vs_spirit", PNG, 6,
+             f"64x64 ferromagnet, J = 1 meV, K = 0.1 meV, 10 ps: liemid (solid) vs Spirit (dashed); "
+             f"reference split8, error {ref_err:.0e}")
 
 
-def plot(results: dict[str, list[tuple[float, float, float, float]]], ref_err: float) -> None:
+def plot(results: dict[str, list[tuple[float, float, float, float]]], script: str, png: Path, ncol: int,
+         suptitle: str) -> None:
+    """The two-panel work-precision figure (energy error, trajectory error against CPU time) of
+    a Spirit comparison, written to `png`."""
     try:
         import matplotlib
 
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError:
-        print("vs_spirit: matplotlib is not installed; no figure")
+        print(f"{script}: matplotlib is not installed; no figure")
         return
     fig, axes = plt.subplots(1, 2, figsize=(12, 5.6), layout="constrained")
     for ax, col, title in [(axes[0], 2, "relative energy error at 10 ps"),
@@ -344,12 +349,11 @@ def plot(results: dict[str, list[tuple[float, float, float, float]]], ref_err: f
         ax.set_title(title)
         ax.grid(True, which="major", alpha=0.3)
     handles, labels = axes[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="outside lower center", ncol=6, fontsize=8)
-    fig.suptitle(f"64x64 ferromagnet, J = 1 meV, K = 0.1 meV, 10 ps: liemid (solid) vs Spirit (dashed); "
-                 f"reference split8, error {ref_err:.0e}")
-    PNG.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(PNG, dpi=110)
-    print(f"figure: {PNG}")
+    fig.legend(handles, labels, loc="outside lower center", ncol=ncol, fontsize=8)
+    fig.suptitle(suptitle)
+    png.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(png, dpi=110)
+    print(f"figure: {png}")
 
 
 if __name__ == "__main__":

@@ -202,7 +202,9 @@ def main() -> None:
                 a, b = best_of["Spirit"], best_of["liemid"]
                 line += f"ratio {a[0] / b[0]:.1f}x" if a and b else "ratio -"
                 print(line)
-        plot(results, ref_err)
+        vs.plot(results, "vs_spirit_skyrmion", PNG, 5,
+                f"skyrmion, 48x48, J = 1, D = 0.3 meV, B = 1.75 T, 10 ps: liemid (solid) vs Spirit (dashed); "
+                f"reference split8, error {ref_err:.0e}")
 
 
 def picture(spins: np.ndarray) -> None:
@@ -228,38 +230,6 @@ def picture(spins: np.ndarray) -> None:
     PICTURE.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(PICTURE, dpi=110)
     print(f"picture: {PICTURE}")
-
-
-def plot(results: dict[str, list[tuple[float, float, float, float]]], ref_err: float) -> None:
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        print("vs_spirit_skyrmion: matplotlib is not installed; no figure")
-        return
-    fig, axes = plt.subplots(1, 2, figsize=(12, 5.6), layout="constrained")
-    for ax, col, title in [(axes[0], 2, "relative energy error at 10 ps"),
-                           (axes[1], 3, "trajectory error max_i |S_i - S_ref,i| at 10 ps")]:
-        for name, rows in results.items():
-            rows = sorted(rows, key=lambda r: r[1])
-            spirit = name.startswith("Spirit")
-            ax.loglog([r[1] for r in rows], [max(r[col], 1e-16) for r in rows], "--o" if spirit else "-s",
-                      label=name, markersize=4, alpha=0.85 if spirit else 1.0)
-        for level in LEVELS:
-            ax.axhline(level, color="0.8", lw=0.8, zorder=0)
-        ax.set_xlabel("CPU seconds (one thread)")
-        ax.set_ylabel(title)
-        ax.set_title(title)
-        ax.grid(True, which="major", alpha=0.3)
-    handles, labels = axes[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="outside lower center", ncol=5, fontsize=8)
-    fig.suptitle(f"skyrmion, 48x48, J = 1, D = 0.3 meV, B = 1.75 T, 10 ps: liemid (solid) vs Spirit (dashed); "
-                 f"reference split8, error {ref_err:.0e}")
-    PNG.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(PNG, dpi=110)
-    print(f"figure: {PNG}")
 
 
 if __name__ == "__main__":
