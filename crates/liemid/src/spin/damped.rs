@@ -35,40 +35,13 @@
 //! relaxation of LLG in the form of G. P. Müller et al., Phys. Rev. B 99, 224414 (2019).
 
 use super::hamiltonian::Rates;
+use super::lanes::{asinh_ratio, sinc_cos};
 use super::lanes::{
-    asinh_ratio_series, asinh_ratio_short, damped_anisotropy_flow, damped_bond_flow, damped_zeeman_flow,
-    rodrigues_series, sinc_cos_series, ASINH_LIMIT, ASINH_SHORT_LIMIT, SERIES_LIMIT,
+    asinh_ratio_short, damped_anisotropy_flow, damped_bond_flow, damped_zeeman_flow, rodrigues_series,
+    ASINH_SHORT_LIMIT, SERIES_LIMIT,
 };
 use crate::linalg::Vec3;
 use crate::so3::rodrigues;
-
-/// `asinh(x)/x` from `x²`: the series below `x² = 0.01`, `asinh` itself beyond.
-#[inline(always)]
-fn asinh_ratio(x2: f64) -> f64 {
-    if x2 < ASINH_LIMIT {
-        asinh_ratio_series(x2)
-    } else {
-        asinh_ratio_closed(x2)
-    }
-}
-
-#[inline(never)]
-fn asinh_ratio_closed(x2: f64) -> f64 {
-    let x = x2.sqrt();
-    x.asinh() / x
-}
-
-/// `(sin θ/θ, cos θ)` from `θ²`.
-#[inline(always)]
-fn sinc_cos(t: f64) -> (f64, f64) {
-    if t < SERIES_LIMIT {
-        sinc_cos_series(t)
-    } else {
-        let theta = t.sqrt();
-        let (s, c) = theta.sin_cos();
-        (s / theta, c)
-    }
-}
 
 /// Rodrigues' `(sin θ/θ, (1 − cos θ)/θ²)` from `θ²`.
 #[inline(always)]
@@ -304,7 +277,7 @@ mod tests {
     fn the_short_asinh_series_holds_where_the_sweep_bound_chooses_it() {
         for k in 0..=1000 {
             let x2 = ASINH_SHORT_LIMIT * k as f64 / 1000.0;
-            let closed = if x2 == 0.0 { 1.0 } else { asinh_ratio_closed(x2) };
+            let closed = if x2 == 0.0 { 1.0 } else { x2.sqrt().asinh() / x2.sqrt() };
             assert!(
                 (asinh_ratio_short(x2) - closed).abs() <= 2.0 * f64::EPSILON,
                 "x² = {x2}"

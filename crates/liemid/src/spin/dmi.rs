@@ -38,9 +38,10 @@
 //! the form of G. P. Müller et al., Phys. Rev. B 99, 224414 (2019).
 
 use super::damped;
+use super::lanes::{asinh_ratio, sinc_cos};
 use super::lanes::{
-    asinh_ratio_series, bond_flow, dmi_bond_flow, dmi_ising, dmi_q, dmi_q_t, rodrigues_series, sinc_cos_series,
-    sinc_cos_short, DmiStep, ASINH_LIMIT, SERIES_LIMIT, SHORT_LIMIT, V,
+    bond_flow, dmi_bond_flow, dmi_ising, dmi_q, dmi_q_t, rodrigues_series, sinc_cos_short, DmiStep, SERIES_LIMIT,
+    SHORT_LIMIT, V,
 };
 use crate::linalg::Vec3;
 use crate::so3::rodrigues;
@@ -134,18 +135,6 @@ impl DmiBond {
     }
 }
 
-/// `(sin θ/θ, cos θ)` from `θ²`.
-#[inline(always)]
-pub(crate) fn sinc_cos(t: f64) -> (f64, f64) {
-    if t < SERIES_LIMIT {
-        sinc_cos_series(t)
-    } else {
-        let theta = t.sqrt();
-        let (s, c) = theta.sin_cos();
-        (s / theta, c)
-    }
-}
-
 /// `rot(u, θ) s` for a unit `u` (Rodrigues), for the damped flows.
 #[inline(always)]
 fn rotate(u: Vec3, theta: f64, s: Vec3) -> Vec3 {
@@ -178,17 +167,6 @@ pub(crate) fn flow(u: Vec3, c: &DmiStep, si: Vec3, sj: Vec3) -> (Vec3, Vec3) {
         sinc_cos,
     );
     (a.into(), b.into())
-}
-
-/// `asinh(x)/x` from `x²`.
-#[inline(always)]
-fn asinh_ratio(x2: f64) -> f64 {
-    if x2 < ASINH_LIMIT {
-        asinh_ratio_series(x2)
-    } else {
-        let x = x2.sqrt();
-        x.asinh() / x
-    }
 }
 
 /// One spin of the damped Ising flow (module docs): `a` its own `S·u`, `other` the other's,

@@ -138,6 +138,24 @@ fn series10<T: Lane>(t: T, f: &[f64; 10]) -> T {
 /// Where [`sinc_cos_series`] and [`rodrigues_series`] hold: `θ² < 1`.
 pub(crate) const SERIES_LIMIT: f64 = 1.0;
 
+/// `(sin θ/θ, cos θ)` from `t = θ²` on the scalar path: the inline series below `θ = 1`,
+/// one `sin_cos` beyond (no cancellation there).
+#[inline(always)]
+pub(crate) fn sinc_cos(t: f64) -> (f64, f64) {
+    if t < SERIES_LIMIT {
+        sinc_cos_series(t)
+    } else {
+        sinc_cos_closed(t)
+    }
+}
+
+#[inline(never)]
+fn sinc_cos_closed(t: f64) -> (f64, f64) {
+    let theta = t.sqrt();
+    let (s, c) = theta.sin_cos();
+    (s / theta, c)
+}
+
 /// `1/(2k+1)!` and `1/(2k)!`.
 const SINC: [f64; 10] = reciprocal_factorials::<10>(1);
 const COS: [f64; 11] = reciprocal_factorials::<11>(0);
@@ -224,6 +242,23 @@ pub(crate) fn asinh_ratio_series<T: Lane>(x2: T) -> T {
     let (x4, x8) = (x2 * x2, (x2 * x2) * (x2 * x2));
     ((k(C[0]) + x2 * k(C[1])) + x4 * (k(C[2]) + x2 * k(C[3])))
         + x8 * ((k(C[4]) + x2 * k(C[5])) + x4 * (k(C[6]) + x2 * k(C[7])))
+}
+
+/// `asinh(x)/x` from `x²` on the scalar path: the series below `x² = 0.01`, `asinh`
+/// itself beyond.
+#[inline(always)]
+pub(crate) fn asinh_ratio(x2: f64) -> f64 {
+    if x2 < ASINH_LIMIT {
+        asinh_ratio_series(x2)
+    } else {
+        asinh_ratio_closed(x2)
+    }
+}
+
+#[inline(never)]
+fn asinh_ratio_closed(x2: f64) -> f64 {
+    let x = x2.sqrt();
+    x.asinh() / x
 }
 
 /// Where [`asinh_ratio_short`] holds: `x² < 1e-4`.

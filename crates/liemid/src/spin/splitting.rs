@@ -30,8 +30,9 @@
 use super::damped::{self, DampedRates};
 use super::dmi::{self, DmiBond, DmiShape};
 use super::hamiltonian::{Rates, SpinSystem};
+use super::lanes::sinc_cos;
 use super::lanes::DmiStep;
-use super::lanes::{bond_flow, rodrigues_series, sinc_cos_series, site_flow, unit, SERIES_LIMIT};
+use super::lanes::{bond_flow, rodrigues_series, site_flow, unit, SERIES_LIMIT};
 use super::sweep::{team, Shared};
 use crate::linalg::Vec3;
 use crate::so3::rodrigues;
@@ -64,24 +65,6 @@ fn onsite_turn(rates: &Rates, commute: bool, s: Vec3, h: f64) -> Vec3 {
         let (ca, cb) = rodrigues(v.norm_squared());
         turn(half, za, zb, turn(v, ca, cb, s))
     }
-}
-
-/// `(sin θ/θ, cos θ)` from `t = θ²`: the inline series below `θ = 1`, one `sin_cos` beyond.
-#[inline(always)]
-fn sinc_cos(t: f64) -> (f64, f64) {
-    if t < SERIES_LIMIT {
-        sinc_cos_series(t)
-    } else {
-        sinc_cos_closed(t)
-    }
-}
-
-/// `(sin θ/θ, cos θ)` by `sin_cos`, for `θ ≥ 1` (no cancellation there).
-#[inline(never)]
-fn sinc_cos_closed(t: f64) -> (f64, f64) {
-    let theta = t.sqrt();
-    let (s, c) = theta.sin_cos();
-    (s / theta, c)
 }
 
 /// The exact flow of one bond over `h` ([`bond_flow`] on the scalar path).
