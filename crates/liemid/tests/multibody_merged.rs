@@ -4,12 +4,15 @@
 //! universal and of a three-hinge pendulum against the joint-space reference (RK4 at a
 //! small step); constraints at round-off; order 2 of `liemid`; each refusal.
 
+#[path = "common/model_files.rs"]
+mod model_files;
 use liemid::linalg::{Mat3, Vec3};
 use liemid::multibody::constraints::{JointGeometry, JointRows, Row};
 use liemid::multibody::joint_space::JointSpaceModel;
 use liemid::multibody::{mjcf, JointKind, Loaded, Model, MultibodyMethod, MultibodyState, MultibodySystem};
 use liemid::random::Rng;
-use liemid::{so3, Error};
+use liemid::so3;
+use model_files::refused;
 
 /// Two links on universal joints (the second pair of axes not perpendicular, one `ref`),
 /// off-axis centres of mass, full inertia tensors, started from a keyframe.
@@ -51,25 +54,6 @@ const THREE_HINGES: &str = r#"<mujoco model="three-hinges">
 
 fn load(text: &str) -> Loaded {
     mjcf::parse(text, "merged.xml").unwrap()
-}
-
-fn refused(r: liemid::Result<Loaded>, line: u32, element: &str, words: &[&str]) {
-    match r {
-        Err(Error::ModelFile {
-            line: l,
-            element: e,
-            message,
-            ..
-        }) => {
-            let shown = format!("{l} <{e}> {message}");
-            assert_eq!(l, line, "{shown}");
-            assert!(e.contains(element), "{shown}");
-            for w in words {
-                assert!(message.contains(w), "missing `{w}`: {shown}");
-            }
-        }
-        other => panic!("expected a ModelFile error, got {other:?}"),
-    }
 }
 
 #[test]
