@@ -2,7 +2,7 @@
 //! final spins, the built-in problems and the method list. The Python layer
 //! (`python/liemid/spins.py`) checks shapes and reshapes the flat arrays.
 
-use liemid::spin::{self, problems, Lattice, LatticeKind, SpinIntegrator, SpinMethod, SpinSystem};
+use liemid::spin::{self, problems, DmiKind, Lattice, LatticeKind, SpinIntegrator, SpinMethod, SpinSystem};
 use liemid::Vec3;
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1};
 use pyo3::exceptions::PyValueError;
@@ -20,7 +20,7 @@ pub struct Spins {
 impl Spins {
     #[new]
     #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (kind, size, periodic, exchange, anisotropy, anisotropy_axis, field, mu_s, damping))]
+    #[pyo3(signature = (kind, size, periodic, exchange, anisotropy, anisotropy_axis, field, mu_s, damping, dmi=0.0, dmi_kind="interfacial"))]
     fn new(
         kind: &str,
         size: Vec<usize>,
@@ -31,7 +31,14 @@ impl Spins {
         field: Triple,
         mu_s: f64,
         damping: f64,
+        dmi: f64,
+        dmi_kind: &str,
     ) -> PyResult<Self> {
+        let dmi_kind = DmiKind::from_key(dmi_kind).ok_or_else(|| {
+            PyValueError::new_err(format!(
+                "dmi_kind: unknown kind {dmi_kind:?} (\"interfacial\", \"bulk\")"
+            ))
+        })?;
         let kind = match kind {
             "chain" => LatticeKind::Chain,
             "square" => LatticeKind::Square,
@@ -52,6 +59,7 @@ impl Spins {
             mu_s,
             damping,
         )
+        .and_then(|s| s.with_dmi(dmi, dmi_kind))
         .map_err(|e| PyValueError::new_err(e.to_string()))?;
         Ok(Spins { system })
     }

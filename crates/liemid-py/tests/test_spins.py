@@ -57,6 +57,26 @@ def test_damping_lowers_the_energy_and_errors_name_the_argument() -> None:
     assert "split" in names and "midpoint" in names and "rk4" in names
 
 
+def test_dmi_enters_the_energy_by_its_kind_and_bad_kinds_are_named() -> None:
+    # One bond along x, S_0 = x, S_1 = z: S_0 x S_1 = -y. Interfacial D_01 = D (z x x) = D y
+    # gives -D_01 . (S_0 x S_1) = +-D; bulk D_01 = D x is perpendicular to it: no energy.
+    spins_xz = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    plain = spins.System("chain", (2,), periodic=False).energy(spins_xz)
+    chiral = spins.System("chain", (2,), periodic=False, dmi=0.3).energy(spins_xz)
+    bulk = spins.System("chain", (2,), periodic=False, dmi=0.3, dmi_kind="bulk").energy(spins_xz)
+    assert plain == 0.0
+    assert abs(abs(chiral - plain) - 0.3) < 1e-15
+    assert abs(bulk - plain) < 1e-15
+    with pytest.raises(ValueError, match="dmi_kind"):
+        spins.System("chain", (2,), dmi=0.3, dmi_kind="helical")
+    # The splitting with DMI keeps |S| and bounds the energy on a chiral lattice.
+    system = spins.System("square", (8, 8), dmi=0.5, field=(0.0, 0.0, 0.5))
+    start = spins.near_z(64, max_tilt=0.5, seed=3)
+    run = spins.integrate(system, start, t_end=1.0, step=1e-2, method="split4", every=10)
+    assert np.max(np.abs(np.linalg.norm(run.final, axis=1) - 1.0)) < 1e-13
+    assert np.max(np.abs(run.energy - run.energy[0])) < 1e-6 * abs(run.energy[0])
+
+
 def test_the_python_run_equals_the_cli_run(tmp_path: Path, liemid_cli: str) -> None:
     system, start = spins.problem("square-64")
     run = spins.integrate(system, start, t_end=0.5, step=1e-2, method="split4")

@@ -93,6 +93,8 @@ class Spins:
         field: Triple,
         mu_s: float,
         damping: float,
+        dmi: float = ...,
+        dmi_kind: str = ...,
     ) -> None: ...
     @staticmethod
     def problem(name: str) -> Tuple["Spins", NDArray[np.float64], float, float]: ...

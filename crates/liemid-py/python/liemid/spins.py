@@ -46,6 +46,11 @@ class System:
         Moment per spin in Bohr magnetons.
     damping : float
         Gilbert ``alpha`` (every method, the splitting by the exact damped flows of its parts).
+    dmi : float
+        Dzyaloshinskii-Moriya strength ``D`` in meV, each bond ``-D_ij . (S_i x S_j)``.
+    dmi_kind : {"interfacial", "bulk"}
+        ``D_ij = D (z x r_ij)`` (a film: Neel skyrmions; Spirit's ``dm_chirality -2``) or
+        ``D_ij = D r_ij`` (B20 magnets: Bloch skyrmions; Spirit's ``1``).
     """
 
     def __init__(
@@ -60,6 +65,8 @@ class System:
         field: ArrayLike = (0.0, 0.0, 0.0),
         mu_s: float = 1.0,
         damping: float = 0.0,
+        dmi: float = 0.0,
+        dmi_kind: str = "interfacial",
     ) -> None:
         if not isinstance(kind, str):
             raise TypeError(f"kind: expected a string, found {type(kind).__name__}")
@@ -78,6 +85,8 @@ class System:
             (float(b[0]), float(b[1]), float(b[2])),
             _number("mu_s", mu_s),
             _number("damping", damping),
+            _number("dmi", dmi),
+            str(dmi_kind),
         )
 
     def __len__(self) -> int:
