@@ -662,6 +662,64 @@ mod avx {
         (site_ok && bond_ok).then(|| (scatter(a), scatter(b)))
     }
 
+    /// The loop every lane sweep shares: each group of four bonds gathered, `lanes(at, si,
+    /// sj)` applied (`at` the group's first position in `bonds`), its result scattered back,
+    /// or, where it gives `None`, each bond by `scalar(at, si, sj)`; the remainder by
+    /// `scalar`.
+    ///
+    /// # Safety
+    /// As for [`sweep_avx`].
+    #[inline(always)]
+    unsafe fn sweep_groups(
+        spins: *mut Vec3,
+        len: usize,
+        bonds: &[[u32; 2]],
+        lanes: impl Fn(usize, [Vec3; 4], [Vec3; 4]) -> Option<([Vec3; 4], [Vec3; 4])>,
+        scalar: impl Fn(usize, Vec3, Vec3) -> (Vec3, Vec3),
+    ) {
+        let mut groups = bonds.chunks_exact(4);
+        let mut at = 0;
+        for g in &mut groups {
+            let idx: [(usize, usize); 4] = std::array::from_fn(|k| (g[k][0] as usize, g[k][1] as usize));
+            for &(i, j) in &idx {
+                assert!(i < len && j < len && i != j);
+            }
+            // SAFETY: in bounds (checked), distinct within a bond, and the bonds of a
+            // matching are disjoint and owned by this worker (the caller's contract).
+            unsafe {
+                let si = idx.map(|(i, _)| *spins.add(i));
+                let sj = idx.map(|(_, j)| *spins.add(j));
+                match lanes(at, si, sj) {
+                    Some((a, b)) => {
+                        for k in 0..4 {
+                            *spins.add(idx[k].0) = a[k];
+                            *spins.add(idx[k].1) = b[k];
+                        }
+                    }
+                    None => {
+                        for k in 0..4 {
+                            let (a, b) = scalar(at + k, si[k], sj[k]);
+                            *spins.add(idx[k].0) = a;
+                            *spins.add(idx[k].1) = b;
+                        }
+                    }
+                }
+            }
+            at += 4;
+        }
+        for b in groups.remainder() {
+            let (i, j) = (b[0] as usize, b[1] as usize);
+            assert!(i < len && j < len && i != j);
+            // SAFETY: as above.
+            unsafe {
+                let (a, c) = scalar(at, *spins.add(i), *spins.add(j));
+                *spins.add(i) = a;
+                *spins.add(j) = c;
+            }
+            at += 1;
+        }
+    }
+
     /// [`sweep_avx`] for DMI bonds of one `|D|`: `units[k]` is the unit DMI vector of
     /// `bonds[k]`, which is bond `base + k` of the lattice (the index `scalar` takes).
     ///
@@ -681,46 +739,18 @@ mod avx {
         scalar: &impl Fn(usize, Vec3, Vec3) -> (Vec3, Vec3),
     ) {
         assert_eq!(units.len(), bonds.len());
-        let mut groups = bonds.chunks_exact(4);
-        let mut at = 0;
-        for g in &mut groups {
-            let idx: [(usize, usize); 4] = std::array::from_fn(|k| (g[k][0] as usize, g[k][1] as usize));
-            for &(i, j) in &idx {
-                assert!(i < len && j < len && i != j);
-            }
-            let u: [Vec3; 4] = std::array::from_fn(|k| units[at + k]);
-            // SAFETY: as in `sweep_avx`.
-            unsafe {
-                let si = idx.map(|(i, _)| *spins.add(i));
-                let sj = idx.map(|(_, j)| *spins.add(j));
-                match group_dmi(kernel, pieces, steps, u, si, sj) {
-                    Some((a, b)) => {
-                        for k in 0..4 {
-                            *spins.add(idx[k].0) = a[k];
-                            *spins.add(idx[k].1) = b[k];
-                        }
-                    }
-                    None => {
-                        for k in 0..4 {
-                            let (a, b) = scalar(base + at + k, si[k], sj[k]);
-                            *spins.add(idx[k].0) = a;
-                            *spins.add(idx[k].1) = b;
-                        }
-                    }
-                }
-            }
-            at += 4;
-        }
-        for b in groups.remainder() {
-            let (i, j) = (b[0] as usize, b[1] as usize);
-            assert!(i < len && j < len && i != j);
-            // SAFETY: as above.
-            unsafe {
-                let (a, c) = scalar(base + at, *spins.add(i), *spins.add(j));
-                *spins.add(i) = a;
-                *spins.add(j) = c;
-            }
-            at += 1;
+        // SAFETY: the caller's contract, passed on.
+        unsafe {
+            sweep_groups(
+                spins,
+                len,
+                bonds,
+                |at, si, sj| {
+                    let u: [Vec3; 4] = std::array::from_fn(|k| units[at + k]);
+                    group_dmi(kernel, pieces, steps, u, si, sj)
+                },
+                |at, si, sj| scalar(base + at, si, sj),
+            )
         }
     }
 
@@ -841,42 +871,15 @@ mod avx {
         pieces: &[DampedPiece],
         scalar: &impl Fn(Vec3, Vec3) -> (Vec3, Vec3),
     ) {
-        let mut groups = bonds.chunks_exact(4);
-        for g in &mut groups {
-            let idx: [(usize, usize); 4] = std::array::from_fn(|k| (g[k][0] as usize, g[k][1] as usize));
-            for &(i, j) in &idx {
-                assert!(i < len && j < len && i != j);
-            }
-            // SAFETY: as in `sweep_avx`.
-            unsafe {
-                let si = idx.map(|(i, _)| *spins.add(i));
-                let sj = idx.map(|(_, j)| *spins.add(j));
-                match group_damped(pieces, si, sj) {
-                    Some((a, b)) => {
-                        for k in 0..4 {
-                            *spins.add(idx[k].0) = a[k];
-                            *spins.add(idx[k].1) = b[k];
-                        }
-                    }
-                    None => {
-                        for k in 0..4 {
-                            let (a, b) = scalar(si[k], sj[k]);
-                            *spins.add(idx[k].0) = a;
-                            *spins.add(idx[k].1) = b;
-                        }
-                    }
-                }
-            }
-        }
-        for b in groups.remainder() {
-            let (i, j) = (b[0] as usize, b[1] as usize);
-            assert!(i < len && j < len && i != j);
-            // SAFETY: as above.
-            unsafe {
-                let (a, c) = scalar(*spins.add(i), *spins.add(j));
-                *spins.add(i) = a;
-                *spins.add(j) = c;
-            }
+        // SAFETY: the caller's contract, passed on.
+        unsafe {
+            sweep_groups(
+                spins,
+                len,
+                bonds,
+                |_, si, sj| group_damped(pieces, si, sj),
+                |_, si, sj| scalar(si, sj),
+            )
         }
     }
 
@@ -898,43 +901,15 @@ mod avx {
         pieces: &[Piece],
         scalar: &impl Fn(Vec3, Vec3) -> (Vec3, Vec3),
     ) {
-        let mut groups = bonds.chunks_exact(4);
-        for g in &mut groups {
-            let idx: [(usize, usize); 4] = std::array::from_fn(|k| (g[k][0] as usize, g[k][1] as usize));
-            for &(i, j) in &idx {
-                assert!(i < len && j < len && i != j);
-            }
-            // SAFETY: in bounds (checked), distinct within a bond, and the bonds of a
-            // matching are disjoint and owned by this worker (the caller's contract).
-            unsafe {
-                let si = idx.map(|(i, _)| *spins.add(i));
-                let sj = idx.map(|(_, j)| *spins.add(j));
-                match group(kernel, pieces, si, sj) {
-                    Some((a, b)) => {
-                        for k in 0..4 {
-                            *spins.add(idx[k].0) = a[k];
-                            *spins.add(idx[k].1) = b[k];
-                        }
-                    }
-                    None => {
-                        for k in 0..4 {
-                            let (a, b) = scalar(si[k], sj[k]);
-                            *spins.add(idx[k].0) = a;
-                            *spins.add(idx[k].1) = b;
-                        }
-                    }
-                }
-            }
-        }
-        for b in groups.remainder() {
-            let (i, j) = (b[0] as usize, b[1] as usize);
-            assert!(i < len && j < len && i != j);
-            // SAFETY: as above.
-            unsafe {
-                let (a, c) = scalar(*spins.add(i), *spins.add(j));
-                *spins.add(i) = a;
-                *spins.add(j) = c;
-            }
+        // SAFETY: the caller's contract, passed on.
+        unsafe {
+            sweep_groups(
+                spins,
+                len,
+                bonds,
+                |_, si, sj| group(kernel, pieces, si, sj),
+                |_, si, sj| scalar(si, sj),
+            )
         }
     }
 }
