@@ -46,7 +46,7 @@ pub(crate) struct V<T> {
 
 impl<T: Lane> V<T> {
     #[inline(always)]
-    fn add(self, b: Self) -> Self {
+    pub(crate) fn add(self, b: Self) -> Self {
         V {
             x: self.x + b.x,
             y: self.y + b.y,
@@ -54,7 +54,7 @@ impl<T: Lane> V<T> {
         }
     }
     #[inline(always)]
-    fn sub(self, b: Self) -> Self {
+    pub(crate) fn sub(self, b: Self) -> Self {
         V {
             x: self.x - b.x,
             y: self.y - b.y,
@@ -62,7 +62,7 @@ impl<T: Lane> V<T> {
         }
     }
     #[inline(always)]
-    fn scale(self, s: T) -> Self {
+    pub(crate) fn scale(self, s: T) -> Self {
         V {
             x: self.x * s,
             y: self.y * s,
@@ -70,11 +70,11 @@ impl<T: Lane> V<T> {
         }
     }
     #[inline(always)]
-    fn dot(self, b: Self) -> T {
+    pub(crate) fn dot(self, b: Self) -> T {
         self.x * b.x + self.y * b.y + self.z * b.z
     }
     #[inline(always)]
-    fn cross(self, b: Self) -> Self {
+    pub(crate) fn cross(self, b: Self) -> Self {
         V {
             x: self.y * b.z - self.z * b.y,
             y: self.z * b.x - self.x * b.z,
@@ -372,81 +372,6 @@ pub(crate) fn sinc_cos_short<T: Lane>(t: T) -> (T, T) {
 /// Where [`sinc_cos_short`] holds: `θ² < 0.009`.
 pub(crate) const SHORT_LIMIT: f64 = 0.009;
 
-/// `rot(u, θ) s = cos θ s + sin θ (u × s) + (1 − cos θ)(u·s) u` for a unit `u`, `(sin θ/θ,
-/// cos θ)` from `coefficients`.
-#[inline(always)]
-fn rotate_about<T: Lane>(u: V<T>, theta: T, s: V<T>, coefficients: &mut impl FnMut(T) -> (T, T)) -> V<T> {
-    let (sinc, cos) = coefficients(theta * theta);
-    s.scale(cos)
-        .add(u.cross(s).scale(theta * sinc))
-        .add(u.scale((T::from(1.0) - cos) * u.dot(s)))
-}
-
-/// The constants of a DMI bond flow over a time `h` (`spin::dmi`): `Q = rot(u, −φ)` by
-/// `cos φ`, `sin φ`, `1 − cos φ`; `rho_h = kρh`, `ising_half = k g h/2`.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct DmiStep {
-    pub(crate) cos: f64,
-    pub(crate) sin: f64,
-    pub(crate) versine: f64,
-    pub(crate) rho_h: f64,
-    pub(crate) ising_half: f64,
-    /// Whether every Ising angle is below √[`SHORT_LIMIT`] (`|a| ≤ 1`).
-    pub(crate) short: bool,
-}
-
-/// The undamped Ising flow of a DMI bond: `S_i` about `u` by `−angle a_j`, `S_j` by
-/// `−angle a_i`.
-#[inline(always)]
-pub(crate) fn dmi_ising<T: Lane>(
-    u: V<T>,
-    angle: T,
-    si: V<T>,
-    sj: V<T>,
-    coefficients: &mut impl FnMut(T) -> (T, T),
-) -> (V<T>, V<T>) {
-    let (ai, aj) = (si.dot(u), sj.dot(u));
-    let zero = T::from(0.0);
-    (
-        rotate_about(u, zero - angle * aj, si, coefficients),
-        rotate_about(u, zero - angle * ai, sj, coefficients),
-    )
-}
-
-/// `Q v = rot(u, −φ) v` (`sign = −1`) or `Qᵀ v` (`sign = 1`), by `cos φ`, `sin φ`, `1 − cos φ`.
-#[inline(always)]
-pub(crate) fn dmi_q<T: Lane>(u: V<T>, cos: T, sin: T, versine: T, v: V<T>) -> V<T> {
-    v.scale(cos).sub(u.cross(v).scale(sin)).add(u.scale(versine * u.dot(v)))
-}
-
-/// `Qᵀ v = rot(u, φ) v`.
-#[inline(always)]
-pub(crate) fn dmi_q_t<T: Lane>(u: V<T>, cos: T, sin: T, versine: T, v: V<T>) -> V<T> {
-    v.scale(cos).add(u.cross(v).scale(sin)).add(u.scale(versine * u.dot(v)))
-}
-
-/// The exact undamped flow of one DMI bond over `h`, Strang within the bond: Ising `h/2`,
-/// the exchange flow of `(S_i, Q S_j)` at `kρ`, `S_j = Qᵀ T`, Ising `h/2` (`spin::dmi`).
-/// `ising` gives `(sin θ/θ, cos θ)` of the Ising angles, `coefficients` of the exchange's.
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn dmi_bond_flow<T: Lane>(
-    u: V<T>,
-    cos: T,
-    sin: T,
-    versine: T,
-    rho_h: T,
-    ising_half: T,
-    si: V<T>,
-    sj: V<T>,
-    mut ising: impl FnMut(T) -> (T, T),
-    coefficients: impl FnMut(T) -> (T, T),
-) -> (V<T>, V<T>) {
-    let (si, sj) = dmi_ising(u, ising_half, si, sj, &mut ising);
-    let (si, t) = bond_flow(rho_h, si, dmi_q(u, cos, sin, versine, sj), coefficients);
-    dmi_ising(u, ising_half, si, dmi_q_t(u, cos, sin, versine, t), &mut ising)
-}
-
 /// `s (3 − |s|²)/2`: one Newton step towards `|s| = 1`.
 #[inline(always)]
 pub(crate) fn unit<T: Lane>(s: V<T>) -> V<T> {
@@ -466,11 +391,11 @@ mod avx {
 
     use super::{
         asinh_ratio_series, asinh_ratio_short, bond_flow, damped_anisotropy_flow, damped_bond_flow, damped_zeeman_flow,
-        dmi_bond_flow, rodrigues_series, sinc_cos_series, sinc_cos_short, site_flow, unit, DmiStep, Real, ASINH_LIMIT,
-        SERIES_LIMIT, V,
+        rodrigues_series, sinc_cos_series, sinc_cos_short, site_flow, unit, Real, ASINH_LIMIT, SERIES_LIMIT, V,
     };
     use crate::linalg::Vec3;
     use crate::spin::damped::SiteStep;
+    use crate::spin::dmi::{coordinate_axis, dmi_bond_flow, AnyAxis, CoordinateAxis, DmiStep, TurnAxis};
     use crate::spin::splitting::{DampedPiece, Kernel, Piece};
 
     // SAFETY (every `unsafe` block in this module): the AVX intrinsics are reached only
@@ -605,16 +530,15 @@ mod avx {
     /// when it is a bond piece, `u` the four bonds' unit vectors.
     #[target_feature(enable = "avx")]
     #[inline]
-    fn group_dmi(
+    fn group_dmi<A: TurnAxis<F>>(
         kernel: &Kernel,
         pieces: &[Piece],
         steps: &[Option<DmiStep>],
-        u: [Vec3; 4],
+        u: A,
         si: [Vec3; 4],
         sj: [Vec3; 4],
     ) -> Option<([Vec3; 4], [Vec3; 4])> {
         let (mut a, mut b) = (gather(si), gather(sj));
-        let u = gather(u);
         let (mut site_ok, mut bond_ok) = (true, true);
         let (axis, field) = (splat(kernel.axis), splat(kernel.field));
         let k = F::from(kernel.anisotropy);
@@ -636,7 +560,6 @@ mod avx {
                         u,
                         F::from(c.cos),
                         F::from(c.sin),
-                        F::from(c.versine),
                         F::from(c.rho_h),
                         F::from(c.ising_half),
                         a,
@@ -747,7 +670,23 @@ mod avx {
                 bonds,
                 |at, si, sj| {
                     let u: [Vec3; 4] = std::array::from_fn(|k| units[at + k]);
-                    group_dmi(kernel, pieces, steps, u, si, sj)
+                    // One coordinate axis in all four lanes (signs may differ): the turns
+                    // in its plane, as the scalar path takes them for such a bond.
+                    let axes = u.map(coordinate_axis);
+                    let shared = match axes {
+                        [Some((k, _)), ..] if axes.iter().all(|a| matches!(a, Some((j, _)) if *j == k)) => Some(k),
+                        _ => None,
+                    };
+                    let sign = || {
+                        let s = axes.map(|a| a.map_or(1.0, |(_, s)| s));
+                        F(_mm256_set_pd(s[3], s[2], s[1], s[0]))
+                    };
+                    match shared {
+                        Some(0) => group_dmi(kernel, pieces, steps, CoordinateAxis::<0, F> { sign: sign() }, si, sj),
+                        Some(1) => group_dmi(kernel, pieces, steps, CoordinateAxis::<1, F> { sign: sign() }, si, sj),
+                        Some(_) => group_dmi(kernel, pieces, steps, CoordinateAxis::<2, F> { sign: sign() }, si, sj),
+                        None => group_dmi(kernel, pieces, steps, AnyAxis(gather(u)), si, sj),
+                    }
                 },
                 |at, si, sj| scalar(base + at, si, sj),
             )

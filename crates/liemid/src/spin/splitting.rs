@@ -28,10 +28,10 @@
 //! *Symplectic integrators for spin systems*, Phys. Rev. E 89 (2014).
 
 use super::damped::{self, DampedRates};
+use super::dmi::DmiStep;
 use super::dmi::{self, DmiBond, DmiShape};
 use super::hamiltonian::{Rates, SpinSystem};
 use super::lanes::sinc_cos;
-use super::lanes::DmiStep;
 use super::lanes::{bond_flow, rodrigues_series, site_flow, unit, SERIES_LIMIT};
 use super::sweep::{team, Shared};
 use crate::linalg::Vec3;
