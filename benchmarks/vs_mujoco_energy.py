@@ -395,7 +395,7 @@ def main():
         fig.tight_layout()
         out = Path(tempfile.gettempdir()) / "multibody-energy-quick.png" if QUICK else DOCS / "multibody-energy.png"
         fig.savefig(out, dpi=100)
-        say(f"  figure: {out}")
+        say(f"  figure: {out.relative_to(ROOT) if not QUICK else out}")
     if not QUICK:
         (DOCS / "vs-mujoco-energy.txt").write_text("\n".join(OUT_LINES) + "\n")
         print("wrote docs/vs-mujoco-energy.txt")
