@@ -23,7 +23,8 @@ link length (stated per case). CPU time: MuJoCo's `mj_step(m, d, nstep=N)` by
 process, less the same command run for a single step (start-up and model reading).
 
 Run:  python benchmarks/vs_mujoco.py [--quick]      (LIEMID_BIN to point at the binary)
-Writes docs/vs-mujoco.txt, docs/multibody-energy.png, docs/multibody-double-pendulum.png.
+Writes docs/vs-mujoco.txt, docs/multibody-double-pendulum.png (and benchmarks/models/*.xml);
+chain-10's long-run energy against RK4 is benchmarks/vs_mujoco_energy.py.
 Peers: pip install mujoco==4.0.0 pin numpy scipy matplotlib (in a venv of your own).
 """
 
@@ -704,106 +705,6 @@ def rk4_vs_liemid4(rows_dp):
                 f" liemid4 / RK4 = {l4[0] / r4[0]:.3g}")
 
 
-def energy_study(m10, model10):
-    """chain-10: 10^6 steps of liemid at h = 1e-4 (and h = 2e-4 for the step halving), and
-    MuJoCo's RK4 at the step that costs the same CPU per unit time."""
-    steps = int(os.environ.get("VS_MUJOCO_ENERGY_STEPS", 10**4 if QUICK else 10**6))
-    h = 1e-4
-    t_end = steps * h
-    every = max(steps // 2000, 1)
-    say(f"\nEnergy over {steps} steps of chain-10 (h = {h}, t = {t_end:g}):")
-    traces = {}
-    with tempfile.TemporaryDirectory() as tmp:
-        for hh in (h, 2 * h):
-            p = Path(tmp) / f"e{hh}.csv"
-            js, cpu, _ = liemid_run(model10, "liemid", hh, t_end, out=p, every=max(int(every * h / hh), 1))
-            rows = np.loadtxt(p, delimiter=",", skiprows=1, ndmin=2)
-            e = rows[:, 1]
-            rel = (e - e[0]) / abs(e[0])
-            traces[f"liemid h={hh:g}"] = (rows[:, 0], rel, cpu)
-            say(f"  liemid h = {hh:g}: {js['steps']} steps, CPU {cpu:.2f} s, max |dE/E| "
-                f"{np.max(np.abs(rel)):.3e}; max in first/last tenth "
-                f"{np.max(np.abs(rel[: len(rel) // 10])):.3e} / {np.max(np.abs(rel[-len(rel) // 10:])):.3e}")
-    (t1, r1, cpu1), (t2, r2, _) = traces[f"liemid h={h:g}"], traces[f"liemid h={2 * h:g}"]
-    # same-CPU MuJoCo step: measure CPU per RK4 step
-    m10.opt.integrator = INTEGRATORS["rk4"]
-    m10.opt.timestep = h
-    d = mj_start(m10)
-    n_probe = 20000
-    c0 = time.process_time()
-    mujoco.mj_step(m10, d, nstep=n_probe)
-    per_step = (time.process_time() - c0) / n_probe
-    lie_per_step = cpu1 / steps
-    h_mj = h * per_step / lie_per_step
-    n_mj = int(round(t_end / h_mj))
-    h_mj = t_end / n_mj
-    say(f"  CPU per step: liemid {lie_per_step * 1e6:.2f} us (incl. its per-step energy/momentum"
-        f" readouts), MuJoCo RK4 {per_step * 1e6:.2f} us -> MuJoCo RK4 at h = {h_mj:.3e}"
-        f" ({n_mj} steps) costs the same CPU to t = {t_end:g}")
-    mj_tr = {}
-    for integ, hh, nn in (("rk4", h_mj, n_mj), ("rk4", h, steps)):
-        m10.opt.integrator = INTEGRATORS[integ]
-        m10.opt.timestep = hh
-        d = mj_start(m10)
-        e0 = mj_energy(m10, d)
-        chunk = max(nn // 2000, 1)
-        ts, es, cpu, done = [0.0], [0.0], 0.0, 0
-        while done < nn:
-            k = min(chunk, nn - done)
-            c0 = time.process_time()
-            mujoco.mj_step(m10, d, nstep=k)
-            cpu += time.process_time() - c0
-            done += k
-            mujoco.mj_forward(m10, d)
-            ts.append(done * hh)
-            es.append((mj_energy(m10, d) - e0) / abs(e0))
-        es = np.array(es)
-        mj_tr[(integ, hh)] = (np.array(ts), es, cpu)
-        say(f"  MuJoCo {integ} h = {hh:.3e}: CPU {cpu:.2f} s, max |dE/E| {np.max(np.abs(es)):.3e};"
-            f" first/last tenth {np.max(np.abs(es[: len(es) // 10])):.3e} /"
-            f" {np.max(np.abs(es[-len(es) // 10:])):.3e}; final dE/E {es[-1]:.3e}")
-    # drift or oscillation: liemid's error / h^2 at the two steps
-    n = min(len(r1), len(r2))
-    a, b = r1 / h**2, r2 / (2 * h) ** 2
-    bi = np.interp(t1, t2, b)
-    say(f"  step halving: max |dE/E| at h = {2 * h:g} / at h = {h:g} = "
-        f"{np.max(np.abs(r2)) / np.max(np.abs(r1)):.3f} (4 for O(h^2)); "
-        f"max |dE/E/h^2| over t: {np.max(np.abs(a)):.3g} (h) and {np.max(np.abs(b)):.3g} (2h); "
-        f"the two scaled curves differ by {np.max(np.abs(a - bi)) / np.max(np.abs(a)):.2f} of their max")
-    # linear trend of liemid's error (a drift would be a trend growing with t)
-    for lab, (t, r, _c) in traces.items():
-        tenth = len(r) // 10
-        means = [np.mean(r[k * tenth:(k + 1) * tenth]) for k in range(10)]
-        maxs = [np.max(np.abs(r[k * tenth:(k + 1) * tenth])) for k in range(10)]
-        say(f"  {lab}: mean dE/E per tenth of the run: " + " ".join(f"{x:.2e}" for x in means))
-        say(f"  {lab}: max |dE/E| per tenth:          " + " ".join(f"{x:.2e}" for x in maxs))
-    try:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-        fig, ax = plt.subplots(1, 2, figsize=(12, 4.2))
-        for lab, (t, r, cpu) in traces.items():
-            ax[0].plot(t, np.abs(r), lw=0.6, label=f"{lab} (CPU {cpu:.1f} s)")
-        for (integ, hh), (t, r, cpu) in mj_tr.items():
-            ax[0].plot(t, np.abs(r), lw=0.8, label=f"MuJoCo {integ} h={hh:.2e} (CPU {cpu:.1f} s)")
-        ax[0].set_yscale("log")
-        ax[0].set_xlabel("t (s)")
-        ax[0].set_ylabel("|relative energy error|")
-        ax[0].set_title(f"chain-10 (10 ball joints), {steps} liemid steps")
-        ax[0].legend(fontsize=7)
-        ax[1].plot(t1, a, lw=0.5, label=f"liemid h={h:g}")
-        ax[1].plot(t2, b, lw=0.5, alpha=0.7, label=f"liemid h={2 * h:g}")
-        ax[1].set_xlabel("t (s)")
-        ax[1].set_ylabel("relative energy error / h²")
-        ax[1].set_title("step halving: a symplectic error scales h² and does not drift")
-        ax[1].legend(fontsize=7)
-        fig.tight_layout()
-        fig.savefig(DOCS / "multibody-energy.png", dpi=120)
-        say("  figure: docs/multibody-energy.png")
-    except ImportError:
-        say("  (matplotlib missing: no figure)")
-
-
 def double_pendulum_figure(m, model_arg, P, t_end=10.0, h=1e-3, t_long=100.0):
     """Trajectory (hinge angles) and energy error beside MuJoCo's, same step."""
     try:
@@ -1055,11 +956,8 @@ def dp_and_rest(results, cap):
         if l4[0] and r4[0]:
             say(f"    error {level:g}: RK4 / liemid4 = {r4[0] / l4[0]:.3g}x")
 
-    # energy, figures, cost --------------------------------------------------------------
-    d_10 = chain(10)
-    p_10 = write_model(d_10)
-    m_10 = mujoco.MjModel.from_xml_path(str(p_10))
-    energy_study(m_10, p_10)
+    # figures, cost (chain-10's long-run energy: benchmarks/vs_mujoco_energy.py) ---------
+    write_model(chain(10))
     double_pendulum_figure(m_dp, p_dp, P_dp, t_long=20.0 if QUICK else 100.0)
     cost_study()
 
