@@ -49,6 +49,11 @@ use super::MultibodyState;
 
 /// Iteration cap of the position (λ) solve.
 pub const MAX_ITERATIONS: u32 = 60;
+/// The start of the learned contractions (logarithms) of the position solve's plain and
+/// refined corrections: `1e-2` and `1e-6`, so that the first corrections are refined.
+const RHO_PLAIN_START: f64 = -4.605_170_185_988_091;
+const RHO_REFINED_START: f64 = -13.815_510_557_964_274;
+
 /// Most re-solves of one step for joint limits switching on or off.
 pub const MAX_LIMIT_PASSES: u32 = 8;
 
@@ -93,6 +98,13 @@ pub struct MultibodySystem {
     pub(super) stage_lambda: Vec<[[f64; 6]; HISTORY]>,
     pub(super) scheme_steps: [f64; HISTORY],
     pub(super) delta: Vec<[f64; 6]>,
+    /// Scratch of the position solve's inner refinement (`positions.rs`).
+    pub(super) inner_rhs: Vec<[f64; 6]>,
+    pub(super) inner_delta: Vec<[f64; 6]>,
+    /// Log-averages of the residual's contraction per position iteration with the plain
+    /// and the refined correction, which decide whether to refine (`positions.rs`).
+    pub(super) rho_plain: f64,
+    pub(super) rho_refined: f64,
     pub(super) rhs: Vec<[f64; 6]>,
     pub(super) pb: Vec<Vec3>,
     pub(super) pib: Vec<Vec3>,
@@ -207,6 +219,10 @@ impl MultibodySystem {
             stage_lambda: vec![[[0.0; 6]; HISTORY]; method.scheme().map_or(0, |s| s.stages()) * nj],
             scheme_steps: [f64::NAN; HISTORY],
             delta: vec![[0.0; 6]; nj],
+            inner_rhs: vec![[0.0; 6]; nj],
+            inner_delta: vec![[0.0; 6]; nj],
+            rho_plain: RHO_PLAIN_START,
+            rho_refined: RHO_REFINED_START,
             rhs: vec![[0.0; 6]; nj],
             pb: z3.clone(),
             pib: z3.clone(),
@@ -326,6 +342,8 @@ impl MultibodySystem {
         self.lambda_steps = [f64::NAN; 4];
         self.scheme_steps = [f64::NAN; HISTORY];
         self.lambda.iter_mut().for_each(|l| *l = [0.0; 6]);
+        self.rho_plain = RHO_PLAIN_START;
+        self.rho_refined = RHO_REFINED_START;
     }
 
     /// Switch timing on or off (and reset it): with it on, every step and every
