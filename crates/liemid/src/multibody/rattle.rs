@@ -502,7 +502,7 @@ impl MultibodySystem {
             self.pb[i] = state.p[i] + (self.force[i] + df) * hh;
             self.pib[i] = state.pi[i] + (self.torque[i] + dt) * hh;
         }
-        let mut extrapolated = self.start_multipliers(h, stage);
+        let (mut extrapolated, mut points) = self.start_multipliers(h, stage);
         let limit_changes = report.limit_changes;
         let mut passes = 0;
         loop {
@@ -511,8 +511,20 @@ impl MultibodySystem {
                     return Err(e);
                 }
                 // An extrapolated start far from the root (steps too long for the
-                // extrapolation) can lead the iteration astray: again from the last `λ`,
-                // and no extrapolation until the histories are rebuilt.
+                // extrapolation) can lead the iteration astray: a composition's stage tries
+                // again from the cubic through its last four steps (the degree-6 start
+                // overshoots first: the spacecraft's liemid4 at h = 0.04, stages turning
+                // the hub by up to 0.8 rad), then from the last `λ`, and no extrapolation
+                // until the histories are rebuilt.
+                if let (Some((k, _)), true) = (stage, points > 4) {
+                    let nj = self.joints.len();
+                    let hist = &self.stage_lambda[k * nj..(k + 1) * nj];
+                    for (l, hist) in self.lambda.iter_mut().zip(hist) {
+                        *l = extrapolate(4, hist);
+                    }
+                    points = 0;
+                    continue;
+                }
                 extrapolated = false;
                 for (l, prev) in self.lambda.iter_mut().zip(&self.lambda_prev) {
                     *l = prev[0];
@@ -607,21 +619,36 @@ impl MultibodySystem {
     /// Steps count as the same when they agree to `1e-9` relative (a driver's steps
     /// `t_{k+1} − t_k` differ from `h` in the last bits). Returns whether the start is an
     /// extrapolation (the last `λ` is then in `lambda_prev[..][0]`: a position solve that
-    /// fails from the extrapolation is restarted from it). On the spacecraft (liemid6,
+    /// fails from the extrapolation is restarted from it) and how many of a stage's
+    /// converged values it used (0 for the base step's). On the spacecraft (liemid6,
     /// `h = 2.5e-3`) the degree-6 start took 2.0 quasi-Newton iterations per stage, the
     /// cubic 3.1, the quadratic 3.7 and the previous stage's `λ` 4.6
     /// (`examples/profile_multibody.rs`).
-    fn start_multipliers(&mut self, h: f64, stage: Option<(usize, f64)>) -> bool {
+    fn start_multipliers(&mut self, h: f64, stage: Option<(usize, f64)>) -> (bool, usize) {
         if let Some((k, step)) = stage {
             let same = same_steps(&self.scheme_steps, step);
             if same > 0 {
                 let nj = self.joints.len();
                 let hist = &self.stage_lambda[k * nj..(k + 1) * nj];
+                // The higher degree only where it agrees with the cubic to a tenth of the
+                // cubic's change from the last value: a history that is not smooth on the
+                // step's scale (steps too long for the motion) keeps the cubic.
+                let (mut gap, mut change) = (0.0f64, 0.0f64);
+                if same > 4 {
+                    for hist in hist {
+                        let (high, cubic) = (extrapolate(same, hist), extrapolate(4, hist));
+                        for r in 0..6 {
+                            gap = gap.max((high[r] - cubic[r]).abs());
+                            change = change.max((cubic[r] - hist[0][r]).abs());
+                        }
+                    }
+                }
+                let points = if gap <= 0.1 * change { same } else { 4 };
                 for ((l, prev), hist) in self.lambda.iter_mut().zip(&mut self.lambda_prev).zip(hist) {
                     push_front(prev, *l);
-                    *l = extrapolate(same, hist);
+                    *l = extrapolate(points, hist);
                 }
-                return true;
+                return (true, points);
             }
         }
         let same = same_steps(&self.lambda_steps, h);
@@ -632,7 +659,7 @@ impl MultibodySystem {
                 *l = extrapolate(same, &hist);
             }
         }
-        same >= 2
+        (same >= 2, 0)
     }
 
     fn velocities(&mut self, p: &[Vec3], pi: &[Vec3]) {
