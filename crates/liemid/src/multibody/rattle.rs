@@ -49,6 +49,11 @@ use super::MultibodyState;
 
 /// Iteration cap of the position (λ) solve.
 pub const MAX_ITERATIONS: u32 = 60;
+/// The start of the learned contractions (logarithms) of the position solve's plain and
+/// refined corrections: `1e-2` and `1e-6`, so that the first corrections are refined.
+const RHO_PLAIN_START: f64 = -4.605_170_185_988_091;
+const RHO_REFINED_START: f64 = -13.815_510_557_964_274;
+
 /// Most re-solves of one step for joint limits switching on or off.
 pub const MAX_LIMIT_PASSES: u32 = 8;
 
@@ -88,11 +93,18 @@ pub struct MultibodySystem {
     pub(super) lambda_prev: Vec<[[f64; 6]; 3]>,
     pub(super) lambda_steps: [f64; 4],
     /// The converged `λ` of each stage of a composition (`stages × joints`, stage-major) in
-    /// the last four steps, newest first, and those steps (NaN: none): stage `k` of a step
-    /// is extrapolated from stage `k` of the steps before, which took the same sub-step.
-    pub(super) stage_lambda: Vec<[[f64; 6]; 4]>,
-    pub(super) scheme_steps: [f64; 4],
+    /// the last `HISTORY` steps, newest first, and those steps (NaN: none): stage `k` of a
+    /// step is extrapolated from stage `k` of the steps before, which took the same sub-step.
+    pub(super) stage_lambda: Vec<[[f64; 6]; HISTORY]>,
+    pub(super) scheme_steps: [f64; HISTORY],
     pub(super) delta: Vec<[f64; 6]>,
+    /// Scratch of the position solve's inner refinement (`positions.rs`).
+    pub(super) inner_rhs: Vec<[f64; 6]>,
+    pub(super) inner_delta: Vec<[f64; 6]>,
+    /// Log-averages of the residual's contraction per position iteration with the plain
+    /// and the refined correction, which decide whether to refine (`positions.rs`).
+    pub(super) rho_plain: f64,
+    pub(super) rho_refined: f64,
     pub(super) rhs: Vec<[f64; 6]>,
     pub(super) pb: Vec<Vec3>,
     pub(super) pib: Vec<Vec3>,
@@ -204,9 +216,13 @@ impl MultibodySystem {
             lambda: vec![[0.0; 6]; nj],
             lambda_prev: vec![[[0.0; 6]; 3]; nj],
             lambda_steps: [f64::NAN; 4],
-            stage_lambda: vec![[[0.0; 6]; 4]; method.scheme().map_or(0, |s| s.stages()) * nj],
-            scheme_steps: [f64::NAN; 4],
+            stage_lambda: vec![[[0.0; 6]; HISTORY]; method.scheme().map_or(0, |s| s.stages()) * nj],
+            scheme_steps: [f64::NAN; HISTORY],
             delta: vec![[0.0; 6]; nj],
+            inner_rhs: vec![[0.0; 6]; nj],
+            inner_delta: vec![[0.0; 6]; nj],
+            rho_plain: RHO_PLAIN_START,
+            rho_refined: RHO_REFINED_START,
             rhs: vec![[0.0; 6]; nj],
             pb: z3.clone(),
             pib: z3.clone(),
@@ -244,8 +260,8 @@ impl MultibodySystem {
     pub fn set_method(&mut self, method: MultibodyMethod) {
         self.method = method;
         let n = method.scheme().map_or(0, |s| s.stages()) * self.joints.len();
-        self.stage_lambda.resize(n, [[0.0; 6]; 4]);
-        self.scheme_steps = [f64::NAN; 4];
+        self.stage_lambda.resize(n, [[0.0; 6]; HISTORY]);
+        self.scheme_steps = [f64::NAN; HISTORY];
     }
 
     /// The model's length scale `L` (see [`Model::length_scale`]).
@@ -324,8 +340,10 @@ impl MultibodySystem {
         self.cache_valid = false;
         self.factor_rows0 = false;
         self.lambda_steps = [f64::NAN; 4];
-        self.scheme_steps = [f64::NAN; 4];
+        self.scheme_steps = [f64::NAN; HISTORY];
         self.lambda.iter_mut().for_each(|l| *l = [0.0; 6]);
+        self.rho_plain = RHO_PLAIN_START;
+        self.rho_refined = RHO_REFINED_START;
     }
 
     /// Switch timing on or off (and reset it): with it on, every step and every
@@ -394,7 +412,7 @@ impl MultibodySystem {
         );
         self.factor_rows0 = false;
         self.lambda_steps = [f64::NAN; 4];
-        self.scheme_steps = [f64::NAN; 4];
+        self.scheme_steps = [f64::NAN; HISTORY];
         self.remember(state);
     }
 
@@ -438,15 +456,15 @@ impl MultibodySystem {
                     if let Err(e) = self.stage(state, s.gamma(k) * h, &mut report, Some((k, h))) {
                         state.copy_from(&self.backup);
                         self.cache_valid = false;
-                        self.scheme_steps = [f64::NAN; 4];
+                        self.scheme_steps = [f64::NAN; HISTORY];
                         return Err(e);
                     }
                 }
-                self.scheme_steps = if report.limit_changes == 0 {
-                    [h, self.scheme_steps[0], self.scheme_steps[1], self.scheme_steps[2]]
+                if report.limit_changes == 0 {
+                    push_front(&mut self.scheme_steps, h);
                 } else {
-                    [f64::NAN; 4]
-                };
+                    self.scheme_steps = [f64::NAN; HISTORY];
+                }
                 // The stages' times sum to `t0 + h` up to rounding: keep the end's cache
                 // (forces, rows, factorization) for the next step, as the drivers do.
                 self.set_time(state, t0 + h);
@@ -484,7 +502,7 @@ impl MultibodySystem {
             self.pb[i] = state.p[i] + (self.force[i] + df) * hh;
             self.pib[i] = state.pi[i] + (self.torque[i] + dt) * hh;
         }
-        let mut extrapolated = self.start_multipliers(h, stage);
+        let (mut extrapolated, mut points) = self.start_multipliers(h, stage);
         let limit_changes = report.limit_changes;
         let mut passes = 0;
         loop {
@@ -493,14 +511,26 @@ impl MultibodySystem {
                     return Err(e);
                 }
                 // An extrapolated start far from the root (steps too long for the
-                // extrapolation) can lead the iteration astray: again from the last `λ`,
-                // and no extrapolation until the histories are rebuilt.
+                // extrapolation) can lead the iteration astray: a composition's stage tries
+                // again from the cubic through its last four steps (the degree-6 start
+                // overshoots first: the spacecraft's liemid4 at h = 0.04, stages turning
+                // the hub by up to 0.8 rad), then from the last `λ`, and no extrapolation
+                // until the histories are rebuilt.
+                if let (Some((k, _)), true) = (stage, points > 4) {
+                    let nj = self.joints.len();
+                    let hist = &self.stage_lambda[k * nj..(k + 1) * nj];
+                    for (l, hist) in self.lambda.iter_mut().zip(hist) {
+                        *l = extrapolate(4, hist);
+                    }
+                    points = 0;
+                    continue;
+                }
                 extrapolated = false;
                 for (l, prev) in self.lambda.iter_mut().zip(&self.lambda_prev) {
                     *l = prev[0];
                 }
                 self.lambda_steps = [f64::NAN; 4];
-                self.scheme_steps = [f64::NAN; 4];
+                self.scheme_steps = [f64::NAN; HISTORY];
                 continue;
             }
             if !self.update_limits_after_positions() {
@@ -551,15 +581,15 @@ impl MultibodySystem {
         // The velocity solve's factorization (at `rows1`, now `rows0`) is the next position
         // solve's quasi-Newton matrix.
         self.factor_rows0 = self.rows0.iter().any(|r| r.n > 0);
-        self.lambda_steps = if report.limit_changes == limit_changes {
-            [h, self.lambda_steps[0], self.lambda_steps[1], self.lambda_steps[2]]
+        if report.limit_changes == limit_changes {
+            push_front(&mut self.lambda_steps, h);
         } else {
-            [f64::NAN; 4]
-        };
+            self.lambda_steps = [f64::NAN; 4];
+        }
         if let Some((k, _)) = stage {
             let nj = self.joints.len();
             for (hist, l) in self.stage_lambda[k * nj..(k + 1) * nj].iter_mut().zip(&self.lambda) {
-                *hist = [*l, hist[0], hist[1], hist[2]];
+                push_front(hist, *l);
             }
         }
         core::mem::swap(&mut self.force, &mut self.force1);
@@ -572,32 +602,53 @@ impl MultibodySystem {
     /// the iteration's start: the solution is the same to round-off).
     ///
     /// - Stage `k` of a composition, after steps of the same `h` whose stage `k` converged
-    ///   with the same rows: the cubic through stage `k` of the last four steps,
-    ///   `λ = 4 λₙ − 6 λₙ₋₁ + 4 λₙ₋₂ − λₙ₋₃` (an `O(h⁴)` error; the quadratic, linear or
-    ///   constant one after three, two or one such steps). The stages of one step differ in
-    ///   their sub-step (and sign), and RATTLE's `λ` is the constraint force plus a term odd
-    ///   in the sub-step, so the previous stage's `λ` is a poor start there.
-    /// - Otherwise (the base step, or a composition's first steps): the same extrapolation
-    ///   over the last stages when they took the same step `h` with the same rows (the
-    ///   previous `λ` after fewer than two).
+    ///   with the same rows: the polynomial of degree 6 through stage `k` of the last
+    ///   [`HISTORY`] = 7 steps, `λ = 7 λₙ − 21 λₙ₋₁ + 35 λₙ₋₂ − 35 λₙ₋₃ + 21 λₙ₋₄ − 7 λₙ₋₅ +
+    ///   λₙ₋₆` (an `O(h⁷)` error; the one through fewer values after fewer such steps). The
+    ///   stages of one step differ in their sub-step (and sign), and RATTLE's `λ` is the
+    ///   constraint force plus a term odd in the sub-step, so the previous stage's `λ` is a
+    ///   poor start there.
+    /// - Otherwise (the base step, or a composition's first steps): the cubic
+    ///   `λ = 4 λₙ − 6 λₙ₋₁ + 4 λₙ₋₂ − λₙ₋₃` over the last stages when they took the same
+    ///   step `h` with the same rows (the quadratic or linear one after three or two, the
+    ///   previous `λ` after fewer). At the base step's usual small steps the cubic's error is
+    ///   already near the round-off of the converged values, which the higher degrees
+    ///   amplify (iterations per step at h = 1e-4, degree 3 / 4 / 6: spacecraft 0.80 / 0.85 /
+    ///   0.97, chain-1000 0.93 / 1.00 / 1.00).
     ///
     /// Steps count as the same when they agree to `1e-9` relative (a driver's steps
     /// `t_{k+1} − t_k` differ from `h` in the last bits). Returns whether the start is an
     /// extrapolation (the last `λ` is then in `lambda_prev[..][0]`: a position solve that
-    /// fails from the extrapolation is restarted from it). On the spacecraft (liemid6,
-    /// `h = 2.5e-3`) the cubic start took 3.1 quasi-Newton iterations per stage, the
-    /// quadratic 3.7 and the previous stage's `λ` 4.6 (`examples/profile_multibody.rs`).
-    fn start_multipliers(&mut self, h: f64, stage: Option<(usize, f64)>) -> bool {
+    /// fails from the extrapolation is restarted from it) and how many of a stage's
+    /// converged values it used (0 for the base step's). On the spacecraft (liemid6,
+    /// `h = 2.5e-3`) the degree-6 start took 2.0 quasi-Newton iterations per stage, the
+    /// cubic 3.1, the quadratic 3.7 and the previous stage's `λ` 4.6
+    /// (`examples/profile_multibody.rs`).
+    fn start_multipliers(&mut self, h: f64, stage: Option<(usize, f64)>) -> (bool, usize) {
         if let Some((k, step)) = stage {
             let same = same_steps(&self.scheme_steps, step);
             if same > 0 {
                 let nj = self.joints.len();
                 let hist = &self.stage_lambda[k * nj..(k + 1) * nj];
-                for ((l, prev), hist) in self.lambda.iter_mut().zip(&mut self.lambda_prev).zip(hist) {
-                    *prev = [*l, prev[0], prev[1]];
-                    *l = extrapolate(same, hist);
+                // The higher degree only where it agrees with the cubic to a tenth of the
+                // cubic's change from the last value: a history that is not smooth on the
+                // step's scale (steps too long for the motion) keeps the cubic.
+                let (mut gap, mut change) = (0.0f64, 0.0f64);
+                if same > 4 {
+                    for hist in hist {
+                        let (high, cubic) = (extrapolate(same, hist), extrapolate(4, hist));
+                        for r in 0..6 {
+                            gap = gap.max((high[r] - cubic[r]).abs());
+                            change = change.max((cubic[r] - hist[0][r]).abs());
+                        }
+                    }
                 }
-                return true;
+                let points = if gap <= 0.1 * change { same } else { 4 };
+                for ((l, prev), hist) in self.lambda.iter_mut().zip(&mut self.lambda_prev).zip(hist) {
+                    push_front(prev, *l);
+                    *l = extrapolate(points, hist);
+                }
+                return (true, points);
             }
         }
         let same = same_steps(&self.lambda_steps, h);
@@ -608,7 +659,7 @@ impl MultibodySystem {
                 *l = extrapolate(same, &hist);
             }
         }
-        same >= 2
+        (same >= 2, 0)
     }
 
     fn velocities(&mut self, p: &[Vec3], pi: &[Vec3]) {
@@ -655,17 +706,49 @@ impl MultibodySystem {
     }
 }
 
+/// How many converged multipliers of a composition's stage the extrapolated start of its
+/// position solve uses at most: the polynomial through the last `HISTORY` values (degree
+/// 6). Iterations per stage (`examples/profile_multibody.rs`), degree 3 (the cubic) against
+/// 6: spacecraft liemid6 at h = 2.5e-3 3.10 → 2.02 (degree 4, 5, 7, 8, 9: 2.81, 2.40, 1.78,
+/// 1.69, 1.76), liemid4 at 1e-3 1.99 → 1.00; double pendulum liemid4 at 1e-2 3.87 → 3.29,
+/// at 2.5e-3 1.81 → 1.05. Degrees 7 to 9 were worse on the small steps (liemid4 at 1e-3
+/// 1.06 to 1.52 iterations): the round-off of the converged values is amplified by the
+/// weights' sum `2ⁿ − 1`.
+pub(super) const HISTORY: usize = 7;
+
+/// `BINOMIAL[n - 1][j] = (−1)ʲ C(n, j + 1)`: the weights of the polynomial extrapolation
+/// through `n` equally spaced values, newest first (`λ = Σ_j w_j λₙ₋ⱼ`).
+const BINOMIAL: [[f64; HISTORY]; HISTORY] = [
+    [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [2.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [3.0, -3.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+    [4.0, -6.0, 4.0, -1.0, 0.0, 0.0, 0.0],
+    [5.0, -10.0, 10.0, -5.0, 1.0, 0.0, 0.0],
+    [6.0, -15.0, 20.0, -15.0, 6.0, -1.0, 0.0],
+    [7.0, -21.0, 35.0, -35.0, 21.0, -7.0, 1.0],
+];
+
 /// The polynomial extrapolation to the next of equally spaced values, newest first:
-/// constant, linear, quadratic or cubic through the first `same` (at most 4) of `hist`.
+/// constant, linear, ..., degree `n − 1` through the first `n = same` of `hist` (at most
+/// `hist.len() ≤ HISTORY`).
 #[inline]
-fn extrapolate(same: usize, hist: &[[f64; 6]; 4]) -> [f64; 6] {
-    let [a, b, c, d] = hist;
-    match same {
-        0 | 1 => *a,
-        2 => core::array::from_fn(|r| 2.0 * a[r] - b[r]),
-        3 => core::array::from_fn(|r| 3.0 * (a[r] - b[r]) + c[r]),
-        _ => core::array::from_fn(|r| 4.0 * (a[r] + c[r]) - 6.0 * b[r] - d[r]),
+fn extrapolate(same: usize, hist: &[[f64; 6]]) -> [f64; 6] {
+    let n = same.clamp(1, hist.len());
+    let w = &BINOMIAL[n - 1];
+    let mut out = [0.0; 6];
+    for (wj, hj) in w[..n].iter().zip(hist) {
+        for (o, v) in out.iter_mut().zip(hj) {
+            *o += wj * v;
+        }
     }
+    out
+}
+
+/// Shift `new` in at the front of a history (newest first), dropping the oldest.
+#[inline]
+fn push_front<T: Copy, const N: usize>(hist: &mut [T; N], new: T) {
+    hist.copy_within(0..N - 1, 1);
+    hist[0] = new;
 }
 
 /// How many of the latest `steps` (newest first) equal `h` to `1e-9` relative.
