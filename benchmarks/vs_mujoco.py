@@ -34,7 +34,6 @@ import json
 import math
 import os
 import resource
-import shutil
 import subprocess
 import sys
 import tempfile
@@ -58,16 +57,8 @@ except ImportError as e:  # pragma: no cover - the skip path
     sys.exit(0)
 
 
-def find_liemid():
-    cands = [os.environ.get("LIEMID_BIN")]
-    if os.environ.get("CARGO_TARGET_DIR"):
-        cands.append(Path(os.environ["CARGO_TARGET_DIR"]) / "release" / "liemid")
-    cands += [ROOT / "target" / "release" / "liemid", shutil.which("liemid")]
-    for c in cands:
-        if c and Path(c).is_file() and os.access(c, os.X_OK):
-            return str(c)
-    return None
-
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from liemid_binary import find_liemid  # noqa: E402
 
 LIEMID = find_liemid()
 if LIEMID is None:

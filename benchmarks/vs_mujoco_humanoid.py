@@ -28,7 +28,6 @@ Peers: pip install mujoco==4.0.0 numpy (in a venv of your own).
 from __future__ import annotations
 
 import csv
-import os
 import subprocess
 import sys
 import tempfile
@@ -45,16 +44,8 @@ except ImportError as e:  # pragma: no cover - the skip path
     print(f"vs_mujoco_humanoid: skipped, a peer is missing ({e}); pip install mujoco==4.0.0 numpy")
     sys.exit(0)
 
-
-def find_liemid():
-    cands = [os.environ.get("LIEMID_BIN")]
-    if os.environ.get("CARGO_TARGET_DIR"):
-        cands.append(Path(os.environ["CARGO_TARGET_DIR"]) / "release" / "liemid")
-    cands.append(ROOT / "target" / "release" / "liemid")
-    for c in cands:
-        if c and Path(c).is_file() and os.access(c, os.X_OK):
-            return str(c)
-    return None
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from liemid_binary import find_liemid  # noqa: E402
 
 
 def mujoco_run(model, h):
