@@ -857,9 +857,9 @@ def spacecraft_case(p_sc, cap):
     say(f"  liemid built-in --problem spacecraft vs the MJCF file, t = 1: max |dxpos| {same:.1e}")
     P, ref, _ = case_reference(m_sc, t_sc, 1.0, "spacecraft")
     agreement(m_sc, p_sc, P, 0.1, 1.0)
-    lie_methods = ["liemid", "liemid4", "liemid6"]
+    lie_methods = ["liemid", "liemid4", "liemid6", "liemid8"]
     ns = {"liemid": geometric(2500, 2, 12), "liemid4": geometric(250, 2, 10),
-          "liemid6": geometric(250, 2, 9)}
+          "liemid6": geometric(250, 2, 9), "liemid8": geometric(250, 2, 8)}
     ns_mj = {"rk4": geometric(250, 2, 10), "implicitfast": geometric(2500, 2, 12),
              "euler": geometric(2500, 2, 12)}
     curves = work_precision("spacecraft", m_sc, p_sc, t_sc, 1.0, [1e-6], ref, lie_methods, ns, ns_mj, cap)

@@ -77,6 +77,7 @@ fn main() {
         "liemid" => MultibodyMethod::Liemid,
         "liemid4" => MultibodyMethod::Liemid4,
         "liemid6" => MultibodyMethod::Liemid6,
+        "liemid8" => MultibodyMethod::Liemid8,
         _ => panic!("unknown method {s}"),
     };
     if let Some(p) = args.first() {
