@@ -105,6 +105,8 @@ pub struct MultibodySystem {
     /// and the refined correction, which decide whether to refine (`positions.rs`).
     pub(super) rho_plain: f64,
     pub(super) rho_refined: f64,
+    /// The same with the correction refined toward the exact drift Jacobian.
+    pub(super) rho_exact: f64,
     pub(super) rhs: Vec<[f64; 6]>,
     pub(super) pb: Vec<Vec3>,
     pub(super) pib: Vec<Vec3>,
@@ -127,6 +129,9 @@ pub struct MultibodySystem {
     pub(super) psi2: Vec<Vec3>,
     pub(super) pi_a: Vec<Vec3>,
     pub(super) effective: Vec<Mat3>,
+    /// The drift's rotation per unit angular impulse over the step, `D / h` (`= I⁻¹` to
+    /// leading order in `h`), from the same Jacobian.
+    pub(super) drift_rate: Vec<Mat3>,
     /// Whether the solver holds the factorization of `G(q) M⁻¹ G(q)ᵀ` at `rows0` (the
     /// last velocity solve's, kept for the next position solve).
     pub(super) factor_rows0: bool,
@@ -223,6 +228,7 @@ impl MultibodySystem {
             inner_delta: vec![[0.0; 6]; nj],
             rho_plain: RHO_PLAIN_START,
             rho_refined: RHO_REFINED_START,
+            rho_exact: RHO_REFINED_START,
             rhs: vec![[0.0; 6]; nj],
             pb: z3.clone(),
             pib: z3.clone(),
@@ -243,6 +249,7 @@ impl MultibodySystem {
             psi2: vec![Vec3::ZERO; nb],
             pi_a: vec![Vec3::ZERO; nb],
             effective: vec![Mat3::IDENTITY; nb],
+            drift_rate: vec![Mat3::IDENTITY; nb],
             factor_rows0: false,
             profiling: false,
             solver_time: std::time::Duration::ZERO,
@@ -344,6 +351,7 @@ impl MultibodySystem {
         self.lambda.iter_mut().for_each(|l| *l = [0.0; 6]);
         self.rho_plain = RHO_PLAIN_START;
         self.rho_refined = RHO_REFINED_START;
+        self.rho_exact = RHO_REFINED_START;
     }
 
     /// Switch timing on or off (and reset it): with it on, every step and every
