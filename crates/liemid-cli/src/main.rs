@@ -118,16 +118,16 @@ fn main() -> ExitCode {
         }
         Command::Problems => {
             for name in rigid::scenario::PROBLEMS {
-                println!("{name:<15} {}", rigid::scenario::describe(name));
+                liemid_cli::outln!("{name:<15} {}", rigid::scenario::describe(name));
             }
-            println!("{:<15} {}", rigid::satellite::PROBLEM, rigid::satellite::DESCRIPTION);
-            println!("\nliemid spins --problem NAME:");
+            liemid_cli::outln!("{:<15} {}", rigid::satellite::PROBLEM, rigid::satellite::DESCRIPTION);
+            liemid_cli::outln!("\nliemid spins --problem NAME:");
             for name in liemid::spin::problems::NAMES {
-                println!("{name:<15} {}", liemid::spin::problems::describe(name).unwrap_or(""));
+                liemid_cli::outln!("{name:<15} {}", liemid::spin::problems::describe(name).unwrap_or(""));
             }
-            println!("\nliemid multibody --problem NAME:");
+            liemid_cli::outln!("\nliemid multibody --problem NAME:");
             for name in multibody::scenario::PROBLEMS {
-                println!("{name:<15} {}", multibody::scenario::describe(name));
+                liemid_cli::outln!("{name:<15} {}", multibody::scenario::describe(name));
             }
             Ok(())
         }

@@ -606,3 +606,35 @@ fn usage_errors_are_one_line_with_exit_code_2() {
     }
     assert!(files_in(&dir).is_empty());
 }
+
+/// A reader that exits before the summary is printed (`liemid ... --json - | head -c 1`)
+/// closes the pipe: the run still writes its files and exits 0, without a panic.
+#[test]
+fn a_closed_standard_output_is_not_a_panic_and_the_files_are_written() {
+    let dir = scratch("closed-stdout");
+    let bin = env!("CARGO_BIN_EXE_liemid");
+    for (args, file) in [
+        (
+            "multibody --problem double-pendulum --t-end 0.5 --out dp.csv --json -",
+            "dp.csv",
+        ),
+        ("run --t-end 0.1 --out top.csv --json -", "top.csv"),
+        ("methods", ""),
+    ] {
+        let mut child = Command::new(bin)
+            .current_dir(&dir)
+            .args(args.split(' '))
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take()); // the reader is gone before the first write
+        let o = child.wait_with_output().unwrap();
+        let err = stderr(&o);
+        assert!(!err.contains("panicked"), "{args}: {err}");
+        assert!(o.status.success(), "{args}: {err}");
+        if !file.is_empty() {
+            assert!(dir.join(file).is_file(), "{args}: {file} not written");
+        }
+    }
+}

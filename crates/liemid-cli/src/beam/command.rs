@@ -247,14 +247,14 @@ pub fn beam(args: BeamArgs) -> CmdResult {
         if args.json.as_deref() == Some("-") {
             eprintln!("{line}");
         } else {
-            println!("{line}");
+            crate::outln!("{line}");
         }
     }
     let mut summary = run.json(&sc.name);
     summary["threads"] = json!(threads);
     emit_json(args.json.as_deref(), &summary)?;
     if args.json.as_deref() != Some("-") {
-        println!(
+        crate::outln!(
             "{} ({}): {} elements, {} steps of {:.4e} to t = {} on {threads} thread(s): {:.3} s, {:.3e} element-steps/s",
             sc.name,
             run.method.key(),
@@ -265,15 +265,16 @@ pub fn beam(args: BeamArgs) -> CmdResult {
             run.wall_seconds,
             run.element_steps_per_second()
         );
-        println!(
+        crate::outln!(
             "critical step of the explicit splitting {:.4e} (omega_max <= {:.4e})",
-            run.critical_step, run.omega_bound
+            run.critical_step,
+            run.omega_bound
         );
         if let Some(beta) = run.axial_mass {
-            println!("axial mass scaling: stretch inertia {beta:.4} times the element mass");
+            crate::outln!("axial mass scaling: stretch inertia {beta:.4} times the element mass");
         }
         if let Some(it) = run.newton_iterations {
-            println!(
+            crate::outln!(
                 "Newton iterations {it} ({:.2} per step)",
                 it as f64 / run.steps.max(1) as f64
             );
@@ -295,7 +296,7 @@ pub fn beam(args: BeamArgs) -> CmdResult {
         if let Some(&e0) = after.first() {
             let scale = e0.abs().max(1e-300);
             let de = after.iter().map(|e| (e - e0).abs() / scale).fold(0.0, f64::max);
-            println!("max relative energy change after the loads (t >= {loads_end}) {de:.3e}");
+            crate::outln!("max relative energy change after the loads (t >= {loads_end}) {de:.3e}");
         }
         for (n, u) in &run.tracked {
             let (mut hi, mut lo) = ((f64::MIN, 0.0), (f64::MAX, 0.0));
@@ -307,9 +308,12 @@ pub fn beam(args: BeamArgs) -> CmdResult {
                     lo = (u[2], *t);
                 }
             }
-            println!(
+            crate::outln!(
                 "{n:>8}: u_z max {:.4} at t = {:.2}, min {:.4} at t = {:.2}",
-                hi.0, hi.1, lo.0, lo.1
+                hi.0,
+                hi.1,
+                lo.0,
+                lo.1
             );
         }
     }
@@ -362,7 +366,7 @@ fn work_precision(args: &WorkPrecisionArgs) -> CmdResult {
     let to_stdout = args.json.as_deref() != Some("-");
     let say = |s: String| {
         if to_stdout {
-            println!("{s}");
+            crate::outln!("{s}");
         } else {
             eprintln!("{s}");
         }

@@ -609,17 +609,17 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
         "trajectory_frames": frames,
     });
     match cli.json.as_deref() {
-        Some("-") => println!("{summary}"),
+        Some("-") => crate::outln!("{summary}"),
         Some(path) => {
             crate::shared::output::write_atomically(Path::new(path), (summary.to_string() + "\n").as_bytes())
                 .map_err(|e| Failure::Run(format!("{path}: cannot write: {e}")))?;
-            println!("wrote {path}");
+            crate::outln!("wrote {path}");
         }
         None => {}
     }
     if cli.json.as_deref() != Some("-") {
         let nb = bodies.len() as u64;
-        println!(
+        crate::outln!(
             "{} ({} rotation): {nb} {}, {steps} {} of {} to t = {} on {threads} {}: {:.3} s stepping, \
              {:.3e} body-steps/s",
             args.model.key(),
@@ -634,22 +634,26 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
         );
         if let Some((kt, f)) = args.thermostat {
             let [tt, tr] = kinetic_temperatures(&bodies);
-            println!("Langevin thermostat k_B T = {kt}, friction {f}: final kinetic temperature {tt:.4} (translation), {tr:.4} (rotation)");
+            crate::outln!("Langevin thermostat k_B T = {kt}, friction {f}: final kinetic temperature {tt:.4} (translation), {tr:.4} (rotation)");
         }
-        println!(
+        crate::outln!(
             "max relative energy error (sampled every {} {})  {max_de:.3e}",
             args.every,
             plural(args.every, "step", "steps")
         );
-        println!(
+        crate::outln!(
             "change of total linear momentum   [{:.3e}, {:.3e}, {:.3e}]",
-            dp.x, dp.y, dp.z
+            dp.x,
+            dp.y,
+            dp.z
         );
-        println!(
+        crate::outln!(
             "change of total angular momentum  [{:.3e}, {:.3e}, {:.3e}]",
-            dl.x, dl.y, dl.z
+            dl.x,
+            dl.y,
+            dl.z
         );
-        println!(
+        crate::outln!(
             "state memory                      {} bytes per body",
             bodies.bytes_per_body()
         );
@@ -658,7 +662,7 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
         if cli.json.as_deref() == Some("-") {
             eprintln!("{line}");
         } else {
-            println!("{line}");
+            crate::outln!("{line}");
         }
     }
     Ok(())

@@ -154,7 +154,7 @@ pub fn multibody(args: &MultibodyArgs) -> CmdResult {
             &format!("{}: {} at {step_label}", sc.name, method.key()),
         )? {
             if !quiet {
-                println!("wrote {}", p.display());
+                crate::outln!("wrote {}", p.display());
             }
         }
     }
@@ -164,7 +164,7 @@ pub fn multibody(args: &MultibodyArgs) -> CmdResult {
         if quiet {
             eprintln!("{line}");
         } else {
-            println!("{line}");
+            crate::outln!("{line}");
         }
     }
     match args.json.as_deref() {
@@ -473,46 +473,46 @@ fn run_maximal(
 
 fn print_summary(s: &serde_json::Value) {
     let num = |k: &str| s[k].as_f64().unwrap_or(f64::NAN);
-    println!("model                          {}", s["model"].as_str().unwrap_or(""));
-    println!("method                         {}", s["method"].as_str().unwrap_or(""));
-    println!(
+    crate::outln!("model                          {}", s["model"].as_str().unwrap_or(""));
+    crate::outln!("method                         {}", s["method"].as_str().unwrap_or(""));
+    crate::outln!(
         "steps                          {} of h = {} to t = {}",
         s["steps"],
         Num(num("step")),
         Num(num("t_end"))
     );
-    println!("bodies                         {}", s["bodies"]);
-    println!(
+    crate::outln!("bodies                         {}", s["bodies"]);
+    crate::outln!(
         "max relative energy error      {:.3e}",
         num("max_relative_energy_error")
     );
-    println!(
+    crate::outln!(
         "max constraint violation       position {:.3e}, velocity {:.3e} (relative)",
         num("max_position_constraint_violation"),
         num("max_velocity_constraint_violation")
     );
     if let Some(m) = s["max_momentum_change"].as_object() {
-        println!(
+        crate::outln!(
             "max momentum change            linear {:.3e}, angular {:.3e}",
             m["linear"].as_f64().unwrap_or(f64::NAN),
             m["angular"].as_f64().unwrap_or(f64::NAN)
         );
     }
     for j in s["joints"].as_array().into_iter().flatten() {
-        println!(
+        crate::outln!(
             "joint {:<24} {:.9}",
             j["name"].as_str().unwrap_or(""),
             j["value"].as_f64().unwrap_or(f64::NAN)
         );
     }
     if let Some(t) = s["trajectory"].as_object() {
-        println!(
+        crate::outln!(
             "trajectory                     {} ({} rows)",
             t["path"].as_str().unwrap_or(""),
             t["rows"]
         );
     }
-    println!(
+    crate::outln!(
         "wall time                      {:.3} s ({:.3e} body-steps/s)",
         num("stepping_seconds"),
         num("body_steps_per_second")

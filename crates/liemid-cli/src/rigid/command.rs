@@ -506,7 +506,7 @@ fn print_view_line(line: Option<String>, to_stderr: bool) {
         if to_stderr {
             eprintln!("{line}");
         } else {
-            println!("{line}");
+            crate::outln!("{line}");
         }
     }
 }
@@ -605,12 +605,15 @@ pub struct WorkPrecisionArgs {
 
 /// Print the rigid-body methods: order, torque evaluations a step, what they conserve.
 pub fn methods() {
-    println!(
+    crate::outln!(
         "{:<11} {:<12} {:>5}  {:<22} conserves",
-        "name", "method", "order", "torque evals/step"
+        "name",
+        "method",
+        "order",
+        "torque evals/step"
     );
     for m in RotationMethod::ALL {
-        println!(
+        crate::outln!(
             "{:<11} {:<12} {:>5}  {:<22} {}",
             m.key(),
             m.name(),

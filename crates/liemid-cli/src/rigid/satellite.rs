@@ -188,40 +188,48 @@ pub fn run(req: &RunRequest) -> CmdResult {
         (None, Some(h)) => format!("h = {h} s"),
         _ => String::new(),
     };
-    println!(
+    crate::outln!(
         "{PROBLEM}: {} with {how} to t = {:.6e} s ({} orbits)",
         method.name(),
         state.t,
         req.orbits
     );
-    println!("steps                          {steps}");
+    crate::outln!("steps                          {steps}");
     let r = state.rotation.m;
     for (i, row) in r.iter().enumerate() {
         let label = if i == 0 { "final rotation" } else { "" };
-        println!(
+        crate::outln!(
             "{label:<30} [{:>19.12e}, {:>19.12e}, {:>19.12e}]",
-            row[0], row[1], row[2]
+            row[0],
+            row[1],
+            row[2]
         );
     }
     let (x, v) = (state.position, state.velocity);
-    println!(
+    crate::outln!(
         "final Pi (kg m^2/s)            [{:.12e}, {:.12e}, {:.12e}]",
-        state.pi.x, state.pi.y, state.pi.z
+        state.pi.x,
+        state.pi.y,
+        state.pi.z
     );
-    println!(
+    crate::outln!(
         "final position (m)             [{:.12e}, {:.12e}, {:.12e}]",
-        x.x, x.y, x.z
+        x.x,
+        x.y,
+        x.z
     );
-    println!(
+    crate::outln!(
         "final velocity (m/s)           [{:.12e}, {:.12e}, {:.12e}]",
-        v.x, v.y, v.z
+        v.x,
+        v.y,
+        v.z
     );
-    println!("max relative energy error      {:.3e}", tracker.max_energy);
-    println!(
+    crate::outln!("max relative energy error      {:.3e}", tracker.max_energy);
+    crate::outln!(
         "max rel. angular momentum error {:.3e} (m r x v + R Pi)",
         tracker.max_momentum
     );
-    println!("wall time                      {wall:.3} s");
+    crate::outln!("wall time                      {wall:.3} s");
     Ok(())
 }
 
@@ -656,11 +664,11 @@ pub fn drift(orbits: u32, method: RotationMethod, eps: f64, plot_path: &Path, js
         "dop853": {"rtol": rtol, "evaluations": evals, "seconds": dop_seconds,
             "energy_first_tenth": df.0, "energy_last_tenth": dl.0, "momentum_first_tenth": df.1, "momentum_last_tenth": dl.1},
     });
-    println!(
+    crate::outln!(
         "{orbits} orbits: adaptive {} eps {eps} ({our_steps} steps, {our_seconds:.2} s): energy error first/last tenth {:.3e} / {:.3e} (ratio {:.3}), angular momentum {:.3e} / {:.3e}",
         method.key(), of.0, ol.0, ol.0 / of.0, of.1, ol.1
     );
-    println!(
+    crate::outln!(
         "{orbits} orbits: DOP853 rtol {rtol:e} ({evals} evaluations, {dop_seconds:.2} s): energy error first/last tenth {:.3e} / {:.3e} (ratio {:.3}), angular momentum {:.3e} / {:.3e} (ratio {:.3})",
         df.0, dl.0, dl.0 / df.0, df.1, dl.1, dl.1 / df.1
     );
@@ -693,7 +701,7 @@ pub fn drift(orbits: u32, method: RotationMethod, eps: f64, plot_path: &Path, js
     ];
     for path in plot::plot_paths(plot_path) {
         plot::stacked_histories(&path, &panels).map_err(Failure::Run)?;
-        println!("wrote {}", path.display());
+        crate::outln!("wrote {}", path.display());
     }
     if let Some(target) = json_target {
         write_json(target, &summary)?;
@@ -729,7 +737,7 @@ pub fn work_precision(args: &WorkPrecisionArgs) -> CmdResult {
     if args.json.as_deref() == Some("-") {
         eprint!("{table}");
     } else {
-        print!("{table}");
+        crate::out!("{table}");
     }
     if let Some(target) = args.json.as_deref() {
         crate::shared::command::write_json(target, &study)?;

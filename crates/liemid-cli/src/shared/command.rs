@@ -64,7 +64,7 @@ pub fn report<T: serde::Serialize>(
         if to_stdout {
             eprint!("{m}");
         } else {
-            print!("{m}");
+            crate::out!("{m}");
         }
     };
     say(table);
@@ -84,11 +84,11 @@ pub fn report<T: serde::Serialize>(
 pub fn write_json<T: serde::Serialize>(target: &str, value: &T) -> CmdResult {
     let text = serde_json::to_string_pretty(value).map_err(|e| Failure::Run(e.to_string()))?;
     if target == "-" {
-        println!("{text}");
+        crate::outln!("{text}");
     } else {
         output::write_atomically(Path::new(target), (text + "\n").as_bytes())
             .map_err(|e| Failure::Run(format!("{target}: cannot write: {e}")))?;
-        println!("wrote {target}");
+        crate::outln!("wrote {target}");
     }
     Ok(())
 }
@@ -97,7 +97,7 @@ pub fn write_json<T: serde::Serialize>(target: &str, value: &T) -> CmdResult {
 /// for files; nothing without a target.
 pub fn emit_json(target: Option<&str>, value: &serde_json::Value) -> CmdResult {
     match target {
-        Some("-") => println!("{value}"),
+        Some("-") => crate::outln!("{value}"),
         Some(path) => output::write_atomically(Path::new(path), (value.to_string() + "\n").as_bytes())
             .map_err(|e| Failure::Run(format!("{path}: cannot write: {e}")))?,
         None => {}

@@ -324,7 +324,7 @@ pub fn spins(args: SpinsArgs) -> CmdResult {
         "midpoint_iterations_per_step": if sc.method == SpinMethod::Midpoint { json!(integ.iterations as f64 / steps.max(1) as f64) } else { json!(null) },
     });
     match args.json.as_deref() {
-        Some("-") => println!("{summary}"),
+        Some("-") => crate::outln!("{summary}"),
         Some(path) => {
             write_atomically(Path::new(path), (summary.to_string() + "\n").as_bytes())
                 .map_err(|e| Failure::Run(format!("{path}: cannot write: {e}")))?;
@@ -332,7 +332,7 @@ pub fn spins(args: SpinsArgs) -> CmdResult {
         None => {}
     }
     if args.json.as_deref() != Some("-") && out.as_deref() != Some(Path::new("-")) {
-        println!(
+        crate::outln!(
             "{} ({}): {n} spins, {steps} {} of {} ps to t = {} ps on {threads} {}: {seconds:.3} s, {rate:.3e} spin-steps/s",
             sc.name,
             sc.method.key(),
@@ -341,20 +341,20 @@ pub fn spins(args: SpinsArgs) -> CmdResult {
             Num(done as f64 * sc.step),
             plural(threads as u64, "thread", "threads"),
         );
-        println!(
+        crate::outln!(
             "max relative energy error (every {every} {})  {max_de:.3e}",
             plural(every, "step", "steps")
         );
-        println!("max | |S_i| - 1 |                         {max_norm:.3e}");
+        crate::outln!("max | |S_i| - 1 |                         {max_norm:.3e}");
         if system.conserves_sz() && system.damping == 0.0 {
-            println!("max |sum S_z - sum S_z(0)| (conserved)    {max_sz:.3e}");
+            crate::outln!("max |sum S_z - sum S_z(0)| (conserved)    {max_sz:.3e}");
         } else {
-            println!("change of sum S_z (not conserved here)    {max_sz:.3e}");
+            crate::outln!("change of sum S_z (not conserved here)    {max_sz:.3e}");
         }
         if let (Some(a), Some(b)) = (q0, q1) {
-            println!("topological charge {a:.6} -> {b:.6}");
+            crate::outln!("topological charge {a:.6} -> {b:.6}");
         }
-        println!(
+        crate::outln!(
             "energy {} -> {} meV, mean spin [{:.6}, {:.6}, {:.6}]",
             Num(e0),
             Num(e1),
@@ -367,7 +367,7 @@ pub fn spins(args: SpinsArgs) -> CmdResult {
         if args.json.as_deref() == Some("-") || out.as_deref() == Some(Path::new("-")) {
             eprintln!("{line}");
         } else {
-            println!("{line}");
+            crate::outln!("{line}");
         }
     }
     Ok(())
@@ -413,22 +413,22 @@ fn work_precision(args: WorkPrecisionArgs) -> CmdResult {
     let table = study::table(&study);
     if args.json.as_deref() == Some("-") {
         eprint!("{table}");
-        println!("{}", serde_json::to_string(&study).expect("serialisable"));
+        crate::outln!("{}", serde_json::to_string(&study).expect("serialisable"));
     } else {
-        print!("{table}");
+        crate::out!("{table}");
         if let Some(path) = args.json.as_deref() {
             write_atomically(
                 Path::new(path),
                 (serde_json::to_string_pretty(&study).expect("serialisable") + "\n").as_bytes(),
             )
             .map_err(|e| Failure::Run(format!("{path}: cannot write: {e}")))?;
-            println!("wrote {path}");
+            crate::outln!("wrote {path}");
         }
     }
     for p in &plot_paths {
         crate::shared::plot::write(p, &study.figure()).map_err(Failure::Run)?;
         if args.json.as_deref() != Some("-") {
-            println!("wrote {}", p.display());
+            crate::outln!("wrote {}", p.display());
         }
     }
     Ok(())
@@ -449,15 +449,18 @@ pub fn methods(json: bool) {
                 })
             })
             .collect();
-        println!("{}", serde_json::Value::Array(list));
+        crate::outln!("{}", serde_json::Value::Array(list));
         return;
     }
-    println!(
+    crate::outln!(
         "{:<9} {:>5}  {:<28} {:<7} conserves",
-        "name", "order", "field evaluations/step", "damping"
+        "name",
+        "order",
+        "field evaluations/step",
+        "damping"
     );
     for m in SpinMethod::ALL {
-        println!(
+        crate::outln!(
             "{:<9} {:>5}  {:<28} {:<7} {}",
             m.key(),
             m.order(),

@@ -97,7 +97,7 @@ pub(super) fn print_summary(
         }
         match target {
             "-" if to_stdout => eprintln!("{out}"),
-            "-" => println!("{out}"),
+            "-" => crate::outln!("{out}"),
             file => emit_json(Some(file), &out)?,
         }
         if target == "-" {
@@ -179,7 +179,7 @@ pub(super) fn print_summary(
     if to_stdout {
         eprint!("{text}");
     } else {
-        print!("{text}");
+        crate::out!("{text}");
     }
     Ok(())
 }
