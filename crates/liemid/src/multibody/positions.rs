@@ -293,6 +293,7 @@ impl MultibodySystem {
     /// `EXACT_REFINE_PASSES`.
     fn refine_correction(&mut self, h: f64, floor: f64, exact: bool) {
         let g_scale = 0.5 * h * h;
+        let mut last = f64::INFINITY;
         for _ in 0..if exact { EXACT_REFINE_PASSES } else { REFINE_PASSES } {
             self.vel.iter_mut().for_each(|v| *v = Vec3::ZERO);
             self.omega.iter_mut().for_each(|v| *v = Vec3::ZERO);
@@ -329,6 +330,16 @@ impl MultibodySystem {
             if worst <= floor {
                 return;
             }
+            if worst > last {
+                // The passes diverge (a step too long for the spin): take back the last.
+                for (k, jr) in self.rows1.iter().enumerate() {
+                    for r in 0..jr.n {
+                        self.delta[k][r] -= self.inner_delta[k][r];
+                    }
+                }
+                return;
+            }
+            last = worst;
             let start = self.profiling.then(std::time::Instant::now);
             self.solver.solve(&self.pairs, &self.inner_rhs, &mut self.inner_delta);
             if let Some(start) = start {
