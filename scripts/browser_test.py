@@ -93,7 +93,10 @@ class Proxy:
                     line = conn.recv(4096).split(b"\r\n", 1)[0].decode("latin-1")
                 except OSError:
                     line = "(no request line)"
-                self.requests.append(line)
+                # A connection closed without a byte (Chromium's speculative preconnect,
+                # dropped as the browser exits) asks for nothing: not a request.
+                if line:
+                    self.requests.append(line)
                 try:
                     conn.sendall(b"HTTP/1.1 403 Forbidden\r\nContent-Length: 0\r\nConnection: close\r\n\r\n")
                 except OSError:
