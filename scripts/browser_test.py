@@ -92,9 +92,9 @@ class Proxy:
                 try:
                     line = conn.recv(4096).split(b"\r\n", 1)[0].decode("latin-1")
                 except OSError:
-                    line = "(no request line)"
-                # A connection closed without a byte (Chromium's speculative preconnect,
-                # dropped as the browser exits) asks for nothing: not a request.
+                    line = ""
+                # A connection that sends no request line (Chromium's speculative
+                # preconnect, closed as the browser exits or left idle) fetches nothing.
                 if line:
                     self.requests.append(line)
                 try:
