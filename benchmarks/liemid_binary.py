@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -20,3 +21,14 @@ def find_liemid() -> str | None:
         if c and Path(c).is_file() and os.access(c, os.X_OK):
             return str(c)
     return None
+
+
+def require_liemid(script: str) -> str:
+    """The command's path, or the script's skip message and exit 0 (benchmarks skip,
+    never fail, without what they compare)."""
+    found = find_liemid()
+    if found is None:
+        print(f"{script}: skipped, no release liemid binary "
+              "(cargo build --release -p liemid-cli, or set LIEMID_BIN)")
+        sys.exit(0)
+    return found

@@ -58,13 +58,9 @@ except ImportError as e:  # pragma: no cover - the skip path
 
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from liemid_binary import find_liemid  # noqa: E402
+from liemid_binary import require_liemid  # noqa: E402
 
-LIEMID = find_liemid()
-if LIEMID is None:
-    print("vs_mujoco: skipped, no release liemid binary "
-          "(cargo build --release -p liemid-cli, or set LIEMID_BIN)")
-    sys.exit(0)
+LIEMID = require_liemid("vs_mujoco")
 
 OUT_LINES: list[str] = []
 
