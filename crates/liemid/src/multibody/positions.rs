@@ -38,7 +38,7 @@ use crate::so3;
 
 use super::constraints::JointRows;
 use super::method::{LimitState, StepReport};
-use super::rattle::{add_impulse, pose, Matrix, MAX_ITERATIONS};
+use super::rattle::{add_impulse, for_each_rate, pose, Matrix, MAX_ITERATIONS};
 use super::{MultibodyState, MultibodySystem};
 
 /// EA's torque-free rotation of one body over `2 hh`: `Ψ₁` from (M) with `(P, hh)`,
@@ -314,19 +314,13 @@ impl MultibodySystem {
                 };
             }
             let mut worst: f64 = 0.0;
-            for (k, jr) in self.rows1.iter().enumerate() {
-                let g = &self.joints[k];
-                let (vi, wi) = g
-                    .parent
-                    .map_or((Vec3::ZERO, Vec3::ZERO), |p| (self.vel[p], self.omega[p]));
-                let (vj, wj) = (self.vel[g.child], self.omega[g.child]);
-                for r in 0..jr.n {
-                    let res = self.rhs[k][r] - jr.grad[r].rate(vi, wi, vj, wj);
-                    self.inner_rhs[k][r] = res;
-                    let v = (res * g_scale).abs();
-                    worst = worst.max(if jr.length[r] { v / self.length } else { v });
-                }
-            }
+            let (rhs, inner_rhs, length) = (&self.rhs, &mut self.inner_rhs, self.length);
+            for_each_rate(&self.joints, &self.rows1, &self.vel, &self.omega, |k, r, rate| {
+                let res = rhs[k][r] - rate;
+                inner_rhs[k][r] = res;
+                let v = (res * g_scale).abs();
+                worst = worst.max(if self.rows1[k].length[r] { v / length } else { v });
+            });
             if worst <= floor {
                 return;
             }

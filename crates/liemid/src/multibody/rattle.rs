@@ -809,3 +809,22 @@ pub(super) fn add_impulse(
         }
     }
 }
+
+/// The rates `G v` of the rows: calls `f(joint, row, rate)` for every row of every joint,
+/// with the bodies' velocities `linear` and angular rates `angular` (the transpose of
+/// [`add_impulse`]).
+pub(super) fn for_each_rate(
+    joints: &[JointGeometry],
+    rows: &[JointRows],
+    linear: &[Vec3],
+    angular: &[Vec3],
+    mut f: impl FnMut(usize, usize, f64),
+) {
+    for (k, (g, jr)) in joints.iter().zip(rows).enumerate() {
+        let (vi, wi) = g.parent.map_or((Vec3::ZERO, Vec3::ZERO), |p| (linear[p], angular[p]));
+        let (vj, wj) = (linear[g.child], angular[g.child]);
+        for (r, gr) in jr.grad[..jr.n].iter().enumerate() {
+            f(k, r, gr.rate(vi, wi, vj, wj));
+        }
+    }
+}

@@ -10,7 +10,7 @@ use crate::error::Result;
 use crate::linalg::Vec3;
 
 use super::method::{LimitState, StepReport};
-use super::rattle::{add_impulse, Matrix, MAX_LIMIT_PASSES};
+use super::rattle::{add_impulse, for_each_rate, Matrix, MAX_LIMIT_PASSES};
 use super::MultibodySystem;
 
 impl MultibodySystem {
@@ -108,15 +108,9 @@ impl MultibodySystem {
             m.max(self.vel[i].norm() + self.length * self.omega[i].norm())
         });
         let mut worst: f64 = 0.0;
-        for (k, jr) in self.rows1.iter().enumerate() {
-            let g = &self.joints[k];
-            let (vi, wi) = g
-                .parent
-                .map_or((Vec3::ZERO, Vec3::ZERO), |p| (self.vel[p], self.omega[p]));
-            for r in 0..jr.n {
-                worst = worst.max(jr.grad[r].rate(vi, wi, self.vel[g.child], self.omega[g.child]).abs());
-            }
-        }
+        for_each_rate(&self.joints, &self.rows1, &self.vel, &self.omega, |_, _, rate| {
+            worst = worst.max(rate.abs());
+        });
         if vscale > 0.0 {
             worst /= vscale;
         }
