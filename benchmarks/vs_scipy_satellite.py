@@ -20,7 +20,8 @@ of 5 runs each, on an otherwise idle machine (wall time is then CPU time).
 The project's compiled DOP853 is faster per orbit than liemid (docs/adaptive.md); this
 script measures what a Python user who would otherwise call `solve_ivp` gets.
 
-Run:  python benchmarks/vs_scipy_satellite.py      (LIEMID_BIN to point at the binary)\nWrites docs/vs-scipy-satellite.txt.
+Run:  python benchmarks/vs_scipy_satellite.py      (LIEMID_BIN to point at the binary)
+Writes docs/vs-scipy-satellite.txt.
 Peers: pip install numpy scipy (in a venv of your own).
 """
 

@@ -90,12 +90,15 @@ class Proxy:
             with conn:
                 conn.settimeout(2.0)
                 try:
-                    line = conn.recv(4096).split(b"\r\n", 1)[0].decode("latin-1")
+                    data = conn.recv(4096)
+                    line = data.split(b"\r\n", 1)[0].decode("latin-1")
                 except OSError:
-                    line = ""
-                # A connection that sends no request line (Chromium's speculative
-                # preconnect, closed as the browser exits or left idle) fetches nothing.
-                if line:
+                    line = "(no request line)"
+                    data = b"(idle)"
+                # A connection closed without a byte (Chromium's speculative preconnect,
+                # dropped as the browser exits) fetches nothing. An idle one is still
+                # counted: it holds this one-at-a-time proxy while a real request waits.
+                if data or line:
                     self.requests.append(line)
                 try:
                     conn.sendall(b"HTTP/1.1 403 Forbidden\r\nContent-Length: 0\r\nConnection: close\r\n\r\n")

@@ -120,7 +120,11 @@ impl MultibodySystem {
         for jr in rows {
             for k in 0..jr.n {
                 let v = jr.value[k].abs();
-                r = r.max(if jr.length[k] { v / self.length } else { v });
+                let v = if jr.length[k] { v / self.length } else { v };
+                // NaN propagates (f64::max would drop it), so the solve stops on it.
+                if v > r || v.is_nan() {
+                    r = v;
+                }
             }
         }
         r
@@ -148,8 +152,13 @@ impl MultibodySystem {
             let b = e1 + e1 * so3::hat(self.big_p[i]) * so3::right_jacobian(-psi1) * a1;
             let a2 = j2i * so3::exp(-psi2 * 0.5) * b * hh;
             let d = so3::exp(-psi2) * so3::right_jacobian(psi1) * a1 + so3::right_jacobian(psi2) * a2;
-            self.effective[i] = d.inverse().map_or(self.inertia_matrix[i], |m| m * h);
-            self.drift_rate[i] = d * (1.0 / h);
+            if let Some(d_inverse) = d.inverse() {
+                self.effective[i] = d_inverse * h;
+                self.drift_rate[i] = d * (1.0 / h);
+            } else {
+                self.effective[i] = self.inertia_matrix[i];
+                self.drift_rate[i] = self.inertia_matrix[i].inverse().unwrap_or(Mat3::IDENTITY);
+            }
         }
     }
 
@@ -160,7 +169,7 @@ impl MultibodySystem {
         let mut factored = false;
         // Whether the factored matrix is the start one `G(q) M⁻¹ G(q)ᵀ` (not the exact).
         let mut start_matrix = false;
-        let refine = self.solver.loop_rank().1 == 0;
+        let refine = !self.solver.has_loops();
         // Whether the last correction was refined (`None`: no correction yet).
         let mut refined: Option<Refine> = None;
         let mut it = 0;
@@ -256,7 +265,9 @@ impl MultibodySystem {
                     self.refine_correction(h, floor, true);
                 }
             }
-            refined = Some(choice);
+            // Only corrections with the start matrix teach the estimates (after the exact
+            // matrix is factored the contraction is Newton's, of no kind above).
+            refined = start_matrix.then_some(choice);
             for (k, jr) in self.rows1.iter().enumerate() {
                 for r in 0..jr.n {
                     self.lambda[k][r] += self.delta[k][r];
@@ -319,7 +330,11 @@ impl MultibodySystem {
                 let res = rhs[k][r] - rate;
                 inner_rhs[k][r] = res;
                 let v = (res * g_scale).abs();
-                worst = worst.max(if self.rows1[k].length[r] { v / length } else { v });
+                let v = if self.rows1[k].length[r] { v / length } else { v };
+                // NaN propagates (f64::max would drop it).
+                if v > worst || v.is_nan() {
+                    worst = v;
+                }
             });
             if worst <= floor {
                 return;

@@ -269,6 +269,10 @@ impl MultibodySystem {
         let n = method.scheme().map_or(0, |s| s.stages()) * self.joints.len();
         self.stage_lambda.resize(n, [[0.0; 6]; HISTORY]);
         self.scheme_steps = [f64::NAN; HISTORY];
+        // The sub-steps change, and with them the corrections' contractions.
+        self.rho_plain = RHO_PLAIN_START;
+        self.rho_refined = RHO_REFINED_START;
+        self.rho_exact = RHO_REFINED_START;
     }
 
     /// The model's length scale `L` (see [`Model::length_scale`]).
@@ -341,8 +345,9 @@ impl MultibodySystem {
         Ok(before)
     }
 
-    /// Forget the cached forces, rows and multipliers (after editing a state by hand the
-    /// cache is detected as stale anyway).
+    /// Forget the cached forces, rows and multipliers and the learned contractions of the
+    /// position solve's corrections (after editing a state by hand the cache is detected
+    /// as stale anyway).
     pub fn reset(&mut self) {
         self.cache_valid = false;
         self.factor_rows0 = false;

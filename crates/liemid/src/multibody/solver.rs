@@ -227,6 +227,13 @@ impl TreeSolver {
         }
     }
 
+    /// Whether the model has loop joints (rows outside the tree, eliminated by the Schur
+    /// complement): known from the structure, before any factorization.
+    #[must_use]
+    pub fn has_loops(&self) -> bool {
+        !self.loops.is_empty()
+    }
+
     /// The numerical rank of the loop Schur complement at the last factorization, and its
     /// size (equal when the loop rows are independent).
     #[must_use]
