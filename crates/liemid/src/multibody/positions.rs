@@ -67,6 +67,27 @@ fn midpoint_pair(
     Ok((inc1, pa, inc2))
 }
 
+/// The larger of `acc` and `v`, NaN once either is (`f64::max` drops a NaN, and a NaN
+/// residual must stop the solve, not pass for zero).
+#[inline]
+fn max_or_nan(acc: f64, v: f64) -> f64 {
+    if v > acc || v.is_nan() {
+        v
+    } else {
+        acc
+    }
+}
+
+/// `dst += scale src` over the active rows of each joint (`scale` ±1: exact).
+#[inline]
+fn add_rows(rows: &[JointRows], scale: f64, src: &[[f64; 6]], dst: &mut [[f64; 6]]) {
+    for ((jr, s), d) in rows.iter().zip(src).zip(dst) {
+        for (d, s) in d[..jr.n].iter_mut().zip(&s[..jr.n]) {
+            *d += scale * s;
+        }
+    }
+}
+
 /// Most passes of [`MultibodySystem::refine_correction`] per position iteration.
 const REFINE_PASSES: usize = 3;
 /// Most passes toward the exact drift Jacobian (each gains `O(h |Ω|)`).
@@ -120,11 +141,7 @@ impl MultibodySystem {
         for jr in rows {
             for k in 0..jr.n {
                 let v = jr.value[k].abs();
-                let v = if jr.length[k] { v / self.length } else { v };
-                // NaN propagates (f64::max would drop it), so the solve stops on it.
-                if v > r || v.is_nan() {
-                    r = v;
-                }
+                r = max_or_nan(r, if jr.length[k] { v / self.length } else { v });
             }
         }
         r
@@ -268,11 +285,7 @@ impl MultibodySystem {
             // Only corrections with the start matrix teach the estimates (after the exact
             // matrix is factored the contraction is Newton's, of no kind above).
             refined = start_matrix.then_some(choice);
-            for (k, jr) in self.rows1.iter().enumerate() {
-                for r in 0..jr.n {
-                    self.lambda[k][r] += self.delta[k][r];
-                }
-            }
+            add_rows(&self.rows1, 1.0, &self.delta, &mut self.lambda);
             prev = r;
             it += 1;
             report.iterations += 1;
@@ -330,22 +343,14 @@ impl MultibodySystem {
                 let res = rhs[k][r] - rate;
                 inner_rhs[k][r] = res;
                 let v = (res * g_scale).abs();
-                let v = if self.rows1[k].length[r] { v / length } else { v };
-                // NaN propagates (f64::max would drop it).
-                if v > worst || v.is_nan() {
-                    worst = v;
-                }
+                worst = max_or_nan(worst, if self.rows1[k].length[r] { v / length } else { v });
             });
             if worst <= floor {
                 return;
             }
             if worst > last {
                 // The passes diverge (a step too long for the spin): take back the last.
-                for (k, jr) in self.rows1.iter().enumerate() {
-                    for r in 0..jr.n {
-                        self.delta[k][r] -= self.inner_delta[k][r];
-                    }
-                }
+                add_rows(&self.rows1, -1.0, &self.inner_delta, &mut self.delta);
                 return;
             }
             last = worst;
@@ -354,11 +359,7 @@ impl MultibodySystem {
             if let Some(start) = start {
                 self.solver_time += start.elapsed();
             }
-            for (k, jr) in self.rows1.iter().enumerate() {
-                for r in 0..jr.n {
-                    self.delta[k][r] += self.inner_delta[k][r];
-                }
-            }
+            add_rows(&self.rows1, 1.0, &self.inner_delta, &mut self.delta);
         }
     }
 

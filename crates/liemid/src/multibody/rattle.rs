@@ -270,9 +270,7 @@ impl MultibodySystem {
         self.stage_lambda.resize(n, [[0.0; 6]; HISTORY]);
         self.scheme_steps = [f64::NAN; HISTORY];
         // The sub-steps change, and with them the corrections' contractions.
-        self.rho_plain = RHO_PLAIN_START;
-        self.rho_refined = RHO_REFINED_START;
-        self.rho_exact = RHO_REFINED_START;
+        self.forget_contractions();
     }
 
     /// The model's length scale `L` (see [`Model::length_scale`]).
@@ -354,6 +352,11 @@ impl MultibodySystem {
         self.lambda_steps = [f64::NAN; 4];
         self.scheme_steps = [f64::NAN; HISTORY];
         self.lambda.iter_mut().for_each(|l| *l = [0.0; 6]);
+        self.forget_contractions();
+    }
+
+    /// The position solve's learned contractions back to their starting values.
+    fn forget_contractions(&mut self) {
         self.rho_plain = RHO_PLAIN_START;
         self.rho_refined = RHO_REFINED_START;
         self.rho_exact = RHO_REFINED_START;
