@@ -114,6 +114,7 @@ fn example_models_load_and_name_what_they_ignore() {
         "double_pendulum.urdf",
         "chain_10.xml",
         "arm.xml",
+        "arm_scene.xml",
         "arm.urdf",
     ] {
         let path = examples().join("multibody").join(file);
@@ -127,7 +128,7 @@ fn example_models_load_and_name_what_they_ignore() {
             s["max_position_constraint_violation"].as_f64().unwrap() < 1e-12,
             "{file}"
         );
-        if file == "arm.xml" {
+        if file.starts_with("arm") && file.ends_with(".xml") {
             // Written as a published robot model is: actuators are named, once, on stderr.
             let err = stderr(&o);
             assert!(err.contains("ignored") && err.contains("actuator"), "{err}");
@@ -202,4 +203,55 @@ fn refusals_write_nothing() {
     }
     let o = run_in(&dir, &["problems"]);
     assert!(stdout(&o).contains("chain-1000") && stdout(&o).contains("spacecraft"));
+}
+
+#[test]
+fn a_stiff_damper_is_named_with_the_step_it_needs() {
+    // The shoulder's child turns with I = 1e-4 + 0.1 * 0.1^2 = 1.1e-3 kg m^2 about the
+    // axis; damping 20 gives the bound 2 I / d = 1.1e-4 s. Its armature (which MuJoCo adds
+    // to I) is dropped by the maximal-coordinate method.
+    let dir = scratch("mb-damper");
+    let model = r#"<mujoco model="damped">
+  <worldbody>
+    <body name="arm">
+      <joint name="shoulder" axis="0 1 0" damping="20" armature="0.1"/>
+      <inertial pos="0.1 0 0" mass="0.1" diaginertia="1e-4 1e-4 1e-4"/>
+      <body name="tip" pos="0.2 0 0">
+        <joint name="wrist" axis="0 1 0" damping="0.001"/>
+        <inertial pos="0.05 0 0" mass="0.01" diaginertia="1e-6 1e-6 1e-6"/>
+      </body>
+    </body>
+  </worldbody>
+  <keyframe><key qpos="0.3 0.1"/></keyframe>
+</mujoco>"#;
+    std::fs::write(dir.join("damped.xml"), model).unwrap();
+    for step in ["1e-3", "2e-4"] {
+        let o = run_in(
+            &dir,
+            &[
+                "multibody",
+                "damped.xml",
+                "--step",
+                step,
+                "--t-end",
+                "1",
+                "--json",
+                "s.json",
+            ],
+        );
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{step}: {err}");
+        let error: Vec<&str> = err.lines().filter(|l| l.starts_with("liemid: error")).collect();
+        assert_eq!(error.len(), 1, "{err}");
+        assert!(
+            error[0].contains("joint `shoulder` has damping 20") && error[0].contains("1.100e-4"),
+            "{err}"
+        );
+    }
+    // Below the bound the same model runs; joint-space RK4 keeps the armature and runs at 1e-3.
+    summary(&dir, &["damped.xml", "--step", "1e-4", "--t-end", "1"]);
+    summary(
+        &dir,
+        &["damped.xml", "--step", "1e-3", "--t-end", "1", "--method", "rk4"],
+    );
 }

@@ -371,6 +371,20 @@ impl Poses for Maximal<'_> {
     }
 }
 
+/// When step `h` is beyond the model's damper bound ([`liemid::multibody::model::Model::damper_step_bound`]):
+/// which joint's damper is stiff at `h` and the step it needs.
+fn stiff_damper(model: &liemid::multibody::model::Model, h: f64) -> Option<String> {
+    let (k, bound) = model.damper_step_bound().filter(|&(_, bound)| h > bound)?;
+    let j = &model.joints[k];
+    Some(format!(
+        "joint `{}` has damping {} against the child's inertia about its axis: the step damps it explicitly, \
+         stable only for h below 2 I / d = {:.3e}; take a smaller --step or --method rk4",
+        j.name,
+        Num(j.damping),
+        bound
+    ))
+}
+
 fn run_maximal(
     sc: &MultibodyScenario,
     method: liemid::multibody::MultibodyMethod,
@@ -411,7 +425,10 @@ fn run_maximal(
             }
             Err(e) => {
                 bar.finish_and_clear();
-                return Err(sink.failed(format!("{}: at t = {}: {e}", sc.name, Num(state.t))));
+                let hint = stiff_damper(&sc.model, h)
+                    .map(|w| format!(" ({w})"))
+                    .unwrap_or_default();
+                return Err(sink.failed(format!("{}: at t = {}: {e}{hint}", sc.name, Num(state.t))));
             }
         }
         state.t = t_next;

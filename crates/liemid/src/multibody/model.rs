@@ -276,6 +276,42 @@ impl Model {
         }
     }
 
+    /// The damper that most limits an explicit treatment of damping: over the hinge and
+    /// slide joints with `damping d > 0`, the least `2 I / d` and its joint, where `I` is the
+    /// child's moment of inertia about the joint axis through the anchor (its mass for a
+    /// slide). With the parent held, the joint rate of such a joint decays as
+    /// `q̇' = −(d/I) q̇`; the multibody step takes the start damping force explicitly and
+    /// solves the end one by fixed-point passes, which converge and stay stable only while
+    /// `(h/2)(d/I) < 1`, i.e. `h < 2 I / d`. Inertia the rest of the tree adds to the
+    /// joint's motion raises the bound, so this is the pessimistic one. MuJoCo models
+    /// often keep `h d / I` large and rely on `armature` (added to `I` in joint space) and
+    /// an implicit integrator; without armature the damper is stiff.
+    ///
+    /// Reference: E. Hairer, G. Wanner, *Solving Ordinary Differential Equations II*, 2nd
+    /// ed., Springer 1996, IV.2 (stiffness, the step bound of explicit methods).
+    #[must_use]
+    pub fn damper_step_bound(&self) -> Option<(usize, f64)> {
+        let mut least: Option<(usize, f64)> = None;
+        for (k, j) in self.joints.iter().enumerate() {
+            let Some(b) = self.bodies.get(j.child) else { continue };
+            let inertia = match j.kind {
+                JointKind::Hinge { axis } => {
+                    let arm = axis.cross(b.com - j.anchor_child);
+                    axis.dot(b.inertia * axis) + b.mass * arm.norm_squared()
+                }
+                JointKind::Slide { .. } => b.mass,
+                _ => continue,
+            };
+            if j.damping > 0.0 {
+                let bound = 2.0 * inertia / j.damping;
+                if least.is_none_or(|(_, h)| bound < h) {
+                    least = Some((k, bound));
+                }
+            }
+        }
+        least
+    }
+
     /// Check everything the multibody system relies on: masses positive and finite; inertia
     /// tensors SPD with the triangle inequality; finite centres, anchors and poses;
     /// rotations orthogonal; unit finite axes; one tree joint per body in body order

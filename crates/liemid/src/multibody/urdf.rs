@@ -30,7 +30,7 @@ use roxmltree::Node;
 
 use super::model::Model;
 use super::xml::{
-    build, check_inertia, parse_document, read_bounded, rpy, Ctx, Ignored, MassProps, Merge, RawBody, RawKind,
+    build, check_inertia, parse_document, read_bounded, rpy, Ctx, Ignored, MassProps, Merge, RawBody, RawKind, Sources,
 };
 use crate::error::Result;
 use crate::linalg::{Mat3, Vec3};
@@ -45,10 +45,11 @@ pub fn load(path: &Path) -> Result<Loaded> {
 
 /// Parses URDF text; `name_for_errors` names the file in error messages.
 pub fn parse(text: &str, name_for_errors: &str) -> Result<Loaded> {
-    let doc = parse_document(text, name_for_errors)?;
+    let doc = parse_document(text, name_for_errors, Sources::NONE)?;
     let cx = Ctx {
         file: name_for_errors,
         doc: &doc,
+        sources: Sources::NONE,
     };
     let robot = doc.root_element();
     if robot.tag_name().name() != "robot" {
@@ -178,7 +179,7 @@ pub fn parse(text: &str, name_for_errors: &str) -> Result<Loaded> {
             "the joints form a cycle (this joint's child link is not reached from the root)",
         ));
     }
-    let built = build(name_for_errors, raw)?;
+    let built = build(raw)?;
     Ok(Loaded {
         model: Model {
             name: robot.attribute("name").unwrap_or_default().to_string(),
@@ -236,6 +237,7 @@ fn raw_body(
         damping: 0.0,
         armature: 0.0,
         merge,
+        file: cx.file.to_string(),
         line: cx.line(link.node),
         element: super::xml::describe(link.node),
     }

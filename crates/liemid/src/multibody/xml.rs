@@ -86,7 +86,7 @@ pub(crate) fn file_error(file: &str, message: String) -> Error {
 }
 
 /// The 1-based line of byte `pos` of `text`.
-fn line_of(text: &str, pos: usize) -> u32 {
+pub(crate) fn line_of(text: &str, pos: usize) -> u32 {
     let upto = &text.as_bytes()[..pos.min(text.len())];
     1 + upto.iter().filter(|&&b| b == b'\n').count() as u32
 }
@@ -94,7 +94,7 @@ fn line_of(text: &str, pos: usize) -> u32 {
 /// Parses `text` as XML within the bounds: size, no DTD, node count and nesting depth. The
 /// parser (roxmltree) nests iteratively, so a deep document cannot overflow the stack; the
 /// depth is measured by an iterative traversal.
-pub(crate) fn parse_document<'i>(text: &'i str, file: &str) -> Result<Document<'i>> {
+pub(crate) fn parse_document<'i>(text: &'i str, file: &str, sources: &Sources) -> Result<Document<'i>> {
     if text.len() as u64 > MAX_FILE_BYTES {
         return Err(too_large(file));
     }
@@ -130,9 +130,12 @@ pub(crate) fn parse_document<'i>(text: &'i str, file: &str) -> Result<Document<'
         let d = n.parent().map_or(0, |p| depth[p.id().get_usize()]) + usize::from(n.is_element());
         depth[n.id().get_usize()] = d;
         if d > MAX_DEPTH {
-            return Err(
-                Ctx { file, doc: &doc }.err(n, format!("elements nested deeper than {MAX_DEPTH} levels are refused"))
-            );
+            return Err(Ctx {
+                file,
+                doc: &doc,
+                sources,
+            }
+            .err(n, format!("elements nested deeper than {MAX_DEPTH} levels are refused")));
         }
     }
     Ok(doc)
@@ -145,6 +148,39 @@ pub(crate) struct Ctx<'a, 'i> {
     pub file: &'a str,
     /// The parsed document.
     pub doc: &'a Document<'i>,
+    /// Where the document's text came from when it was assembled from several files
+    /// (MJCF `<include>`); [`Sources::NONE`] for one file.
+    pub sources: &'a Sources,
+}
+
+/// Where each piece of a text assembled from several files came from (MJCF `<include>`):
+/// the byte where the piece starts in the assembled text, its file and its first line there.
+#[derive(Debug, Default)]
+pub(crate) struct Sources {
+    pieces: Vec<(usize, String, u32)>,
+}
+
+impl Sources {
+    /// A text read from one file.
+    pub(crate) const NONE: &'static Sources = &Sources { pieces: Vec::new() };
+
+    /// Records that the assembled text from byte `start` on is `file` from line `line` on.
+    pub(crate) fn push(&mut self, start: usize, file: &str, line: u32) {
+        self.pieces.push((start, file.to_string(), line));
+    }
+
+    /// The file and 1-based line of byte `pos` of the assembled `text` (`file`'s own line
+    /// when the text is one file's).
+    pub(crate) fn locate(&self, text: &str, pos: usize, file: &str) -> (String, u32) {
+        let line = line_of(text, pos);
+        match self.pieces.partition_point(|p| p.0 <= pos).checked_sub(1) {
+            Some(i) => {
+                let (start, source, first) = &self.pieces[i];
+                (source.clone(), first + line - line_of(text, *start))
+            }
+            None => (file.to_string(), line),
+        }
+    }
 }
 
 /// `tag name="…"` (or just `tag`) for messages.
@@ -157,16 +193,23 @@ pub(crate) fn describe(node: Node) -> String {
 }
 
 impl<'a, 'i> Ctx<'a, 'i> {
-    /// The 1-based line where `node` starts.
+    /// The file and 1-based line where `node` starts.
+    pub(crate) fn locate(&self, node: Node) -> (String, u32) {
+        self.sources
+            .locate(self.doc.input_text(), node.range().start, self.file)
+    }
+
+    /// The 1-based line where `node` starts, in its own file.
     pub(crate) fn line(&self, node: Node) -> u32 {
-        self.doc.text_pos_at(node.range().start).row
+        self.locate(node).1
     }
 
     /// An error located at `node`.
     pub(crate) fn err(&self, node: Node, message: impl Into<String>) -> Error {
+        let (file, line) = self.locate(node);
         Error::ModelFile {
-            file: self.file.to_string(),
-            line: self.line(node),
+            file,
+            line,
             element: describe(node),
             message: message.into(),
         }
@@ -405,7 +448,8 @@ pub(crate) struct RawBody {
     pub damping: f64,
     pub armature: f64,
     pub merge: Merge,
-    /// Line and element description for errors.
+    /// File, line and element description for errors.
+    pub file: String,
     pub line: u32,
     pub element: String,
 }
@@ -421,10 +465,10 @@ pub(crate) struct Built {
 /// what [`Merge`] asks (children first, by the parallel-axis theorem, re-posing the merged
 /// body's children on its parent), refuses a remaining body without mass or with an
 /// impossible inertia, and poses everything in the world.
-pub(crate) fn build(file: &str, mut raw: Vec<RawBody>) -> Result<Built> {
+pub(crate) fn build(mut raw: Vec<RawBody>) -> Result<Built> {
     let n = raw.len();
     let located = |b: &RawBody, message: String| Error::ModelFile {
-        file: file.to_string(),
+        file: b.file.clone(),
         line: b.line,
         element: b.element.clone(),
         message,

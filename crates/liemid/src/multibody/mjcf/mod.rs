@@ -41,8 +41,9 @@
 //!   Ball and free keyframe values are taken as they are (MuJoCo's layout is the model's).
 //! - Mesh, height-field and SDF geoms are fine when the body has an `<inertial>` (no file is
 //!   read); when their mass would be needed the body is refused, naming the mesh.
-//! - `<include>`, `<frame>`, `<composite>`, `<flexcomp>`, `<replicate>` and `<attach>` are
-//!   refused (they add or move bodies); actuators, tendons, sensors, equalities, contacts,
+//! - `<include file>` is expanded as MuJoCo does (see [`include`]); `<frame>`,
+//!   `<composite>`, `<flexcomp>`, `<replicate>` and `<attach>` are refused (they add or move
+//!   bodies); actuators, tendons, sensors, equalities, contacts,
 //!   geom contact and visual properties, sites, cameras, lights, assets and the like are
 //!   listed in [`Loaded::ignored`].
 
@@ -53,31 +54,39 @@ use roxmltree::Node;
 
 use super::model::Model;
 use super::xml::{
-    axis_angle, build, check_inertia, coordinate_rotation, parse_document, quat_matrix, read_bounded, rotation_to_z,
-    Ctx, Ignored, MassProps, Merge, RawBody, RawKind,
+    axis_angle, build, check_inertia, coordinate_rotation, parse_document, quat_matrix, rotation_to_z, Ctx, Ignored,
+    MassProps, Merge, RawBody, RawKind, Sources,
 };
 use crate::error::Result;
 use crate::linalg::{Mat3, Vec3};
 
 mod geom;
+pub mod include;
 mod merge;
 
 use merge::KeyMap;
 
 pub use super::xml::Loaded;
 
-/// Loads an MJCF file (at most 64 MiB). No other file (mesh, include) is read.
+/// Loads an MJCF file (at most 64 MiB with its includes expanded), reading the files it
+/// `<include>`s (see [`include`]); no mesh or other asset file is read.
 pub fn load(path: &Path) -> Result<Loaded> {
-    let text = read_bounded(path)?;
-    parse(&text, &path.display().to_string())
+    let (text, sources) = include::expand(path)?;
+    parse_assembled(&text, &path.display().to_string(), &sources)
 }
 
-/// Parses MJCF text; `name_for_errors` names the file in error messages.
+/// Parses MJCF text; `name_for_errors` names the file in error messages. An `<include>`
+/// is refused (no file to resolve it against): use [`load`].
 pub fn parse(text: &str, name_for_errors: &str) -> Result<Loaded> {
-    let doc = parse_document(text, name_for_errors)?;
+    parse_assembled(text, name_for_errors, Sources::NONE)
+}
+
+fn parse_assembled(text: &str, name_for_errors: &str, sources: &Sources) -> Result<Loaded> {
+    let doc = parse_document(text, name_for_errors, sources)?;
     let cx = Ctx {
         file: name_for_errors,
         doc: &doc,
+        sources,
     };
     let root = doc.root_element();
     if root.tag_name().name() != "mujoco" {
@@ -126,7 +135,7 @@ pub fn parse(text: &str, name_for_errors: &str) -> Result<Loaded> {
             }
             "worldbody" => st.read_children(node, None, "main")?,
             "keyframe" => keys.extend(node.children().filter(|c| c.has_tag_name("key"))),
-            "include" => return Err(cx.err(node, "<include> is not supported: the loader reads one file")),
+            "include" => return Err(cx.err(node, NO_INCLUDE)),
             other => st.ignored.note(other),
         }
     }
@@ -137,7 +146,7 @@ pub fn parse(text: &str, name_for_errors: &str) -> Result<Loaded> {
         Some(&key) => st.read_key(key)?,
         None => (None, None),
     };
-    let built = build(cx.file, std::mem::take(&mut st.raw))?;
+    let built = build(std::mem::take(&mut st.raw))?;
     Ok(Loaded {
         model: Model {
             name: root.attribute("model").unwrap_or_default().to_string(),
@@ -152,6 +161,9 @@ pub fn parse(text: &str, name_for_errors: &str) -> Result<Loaded> {
         merged: built.merged,
     })
 }
+
+/// Why an `<include>` left in the text is refused: only [`load`] reads other files.
+const NO_INCLUDE: &str = "<include> needs the model loaded from a file (the included file is found next to it)";
 
 /// A keyframe's `qpos` and `qvel`, each when given.
 type KeyState = (Option<Vec<f64>>, Option<Vec<f64>>);
@@ -374,7 +386,8 @@ impl<'a, 'i> State<'a, 'i> {
                 "body" => self.read_body(c, parent, childclass)?,
                 "joint" | "freejoint" | "inertial" if parent.is_some() => {}
                 "geom" => self.ignored.note("geom contacts"),
-                tag @ ("frame" | "composite" | "flexcomp" | "replicate" | "attach" | "include") => {
+                "include" => return Err(cx.err(c, NO_INCLUDE)),
+                tag @ ("frame" | "composite" | "flexcomp" | "replicate" | "attach") => {
                     return Err(cx.err(c, format!("<{tag}> is not supported by this loader")));
                 }
                 tag @ ("joint" | "freejoint" | "inertial") => {
@@ -458,6 +471,7 @@ impl<'a, 'i> State<'a, 'i> {
             damping: 0.0,
             armature: 0.0,
             merge: Merge::IfMassless,
+            file: cx.locate(node).0,
             line: cx.line(node),
             element: super::xml::describe(node),
         };
