@@ -507,7 +507,7 @@ def err(a, b, length):
 def interp_cpu(points, level):
     """CPU at `level` by log-log interpolation along (cpu, err) points sorted by cost;
     extrapolated (flag True) from the last two points when the level is not reached."""
-    pts = [(c, e) for c, e in points if e > 0 and math.isfinite(e) and c > 0]
+    pts = [(c, e) for c, e, *_ in points if e > 0 and math.isfinite(e) and c > 0]
     pts.sort()
     if not pts:
         return None, False
@@ -529,13 +529,55 @@ MARK = {False: "", "ex": " (extrapolated)", "ub": " (upper bound: coarsest step 
 SHORT = {False: "", "ex": "*", "ub": "<="}
 
 
+def interp_steps(points, level):
+    """Steps N at `level` by log-log interpolation of (N, err) between the two runs that
+    bracket it; None when no two runs do."""
+    pts = sorted((n, e) for _c, e, n in points if e > 0 and math.isfinite(e))
+    for (n1, e1), (n2, e2) in zip(pts, pts[1:]):
+        if (e1 - level) * (e2 - level) <= 0 and e1 != e2:
+            s = (math.log(level) - math.log(e1)) / (math.log(e2) - math.log(e1))
+            return math.exp(math.log(n1) + s * (math.log(n2) - math.log(n1)))
+    return None
+
+
+# Force evaluations per step: MuJoCo's RK4 runs its forward dynamics four times a step;
+# a liemid method's stage (a whole RATTLE/EA step: kicks, drifts, position and velocity
+# solves) is its unit of work.
+EVALUATIONS = {"mujoco-rk4": 4, "liemid": 1, "liemid4": 5, "liemid6": 9, "liemid8": 17}
+
+
+def evaluation_budget(case, curves, level, goal):
+    """Why a ratio is what it is: each code's evaluations (RK4) or stages (liemid) to
+    `level`, and the CPU of one; the ratio liemid would reach at one MuJoCo evaluation per
+    stage, and the CPU a stage may cost for the goal ratio `goal` (MuJoCo / liemid)."""
+    rk = curves.get("mujoco-rk4")
+    n_rk = rk and interp_steps(rk, level)
+    c_rk = rk and interp_cpu(rk, level)[0]
+    if not n_rk or not c_rk:
+        return
+    per_eval = c_rk / (EVALUATIONS["mujoco-rk4"] * n_rk)
+    say(f"  evaluation budget at {level:g} ({case}): MuJoCo RK4 {n_rk:.0f} steps ="
+        f" {EVALUATIONS['mujoco-rk4'] * n_rk:.0f} forward evaluations of {per_eval * 1e6:.2f} us")
+    for k, pts in curves.items():
+        if k not in EVALUATIONS or k.startswith("mujoco"):
+            continue
+        n, (c, _) = interp_steps(pts, level), interp_cpu(pts, level)
+        if not n or not c:
+            continue
+        stages = EVALUATIONS[k] * n
+        say(f"    {k:<8} {n:.0f} steps = {stages:.0f} stages of {c / stages * 1e6:.2f} us"
+            f" ({c / stages / per_eval:.2f} MuJoCo evaluations); at one evaluation per stage"
+            f" MuJoCo / liemid would be {EVALUATIONS['mujoco-rk4'] * n_rk / stages:.3g}x;"
+            f" {goal:g}x needs {c_rk / goal / stages * 1e6:.2f} us per stage")
+
+
 def sweep(label, runner, ns, level, cpu_cap):
     """runner(n) -> (err, cpu); refines by ns until the error is below level/3 or a run
-    costs more than cpu_cap."""
+    costs more than cpu_cap. Returns (cpu, err, n) per run."""
     pts = []
     for n in ns:
         e, c = runner(n)
-        pts.append((c, e))
+        pts.append((c, e, n))
         say(f"    {label:<16} N = {n:>9d}  h = {runner.t_end / n:.3e}  err = {e:.3e}  cpu = {c:.4f} s")
         if math.isfinite(e) and e < level / 3:
             break
@@ -558,8 +600,9 @@ def geometric(n0, factor, count):
 
 # Runs shorter than SHORT_RUN CPU seconds are repeated REPEATS more times and the least CPU
 # kept (for both codes): on a loaded machine a run of a few milliseconds varies by tens of
-# per cent, and liemid's start-up, subtracted, is of the same size.
-SHORT_RUN = 0.2
+# per cent, and liemid's start-up, subtracted, is of the same size. Runs near the goals'
+# levels take 0.1-0.4 s, and this machine's pairs of equal runs differ by up to 40 %.
+SHORT_RUN = 0.5
 REPEATS = 2
 
 
@@ -669,7 +712,7 @@ def case_reference(m, t_end, length, name, tols=(1e-13, 1e-12)):
 def summary_table(results):
     say()
     say("Summary (CPU time of MuJoCo's best integrator / liemid's best, equal final error;"
-        " taken on a shared, loaded 2-core machine):")
+        " taken on a 2-core machine):")
     say(f"  {'case':<32} {'error':>7} {'liemid best':>22} {'MuJoCo best':>26} {'ratio':>8}  goal")
     for case, level, bl, bm, ratio, goal, got in results:
         if ratio is None:
@@ -784,39 +827,50 @@ def cost_study():
     steps = 20 if QUICK else 500
     h = 1e-4
     base = liemid_base(":chain-1000", "liemid")
-    # The least of three runs (both codes): single runs of a second move by tens of per cent
-    # on this shared machine.
-    runs = [r for r in (liemid_run(":chain-1000", "liemid", h, steps * h) for _ in range(3)) if r[0]]
-    if not runs:
-        say("  liemid: chain-1000 failed (see the work-precision runs)")
-        return
-    js, cpu, _ = min(runs, key=lambda r: r[1])
-    per = (cpu - base) / (steps * n)
-    say(f"  liemid (CLI, {steps} steps, least of 3, CPU less start-up {base:.3f} s): {per * 1e6:.3f} us per body-step"
-        f" ({1 / per:.3g} body-steps/s; wall-clock stepping_seconds gives"
-        f" {js['stepping_seconds'] / (steps * n) * 1e6:.3f} us)")
     try:
         P = PinModel(m)
+        n_pin = n
     except MemoryError:
         say(f"  Pinocchio: createData() raises MemoryError on the {n}-ball-joint chain (nv = {3 * n});"
             " ABA timed on chain-100 instead")
-        n = 100
-        m = to_mjspec(chain(n))
+        n_pin = 100
+        m = to_mjspec(chain(n_pin))
         P = PinModel(m)
     d = mj_start(m)
     q, v = P.from_mj(m, d)
     tau = np.zeros(P.nv)
     reps = 200 if QUICK else 1000
     pin.aba(P.model, P.data, q, v, tau)
-    abas = []
-    for _ in range(3):
+
+    def aba_time():
         c0 = time.process_time()
         for _ in range(reps):
             pin.aba(P.model, P.data, q, v, tau)
-        abas.append((time.process_time() - c0) / reps)
-    aba = min(abas)
-    say(f"  Pinocchio aba (one call from Python, least of 3 x {reps}): {aba * 1e6:.1f} us, {aba / n * 1e6:.3f} us per body;"
-        f" liemid / ABA per body = {per / (aba / n):.2f}")
+        return (time.process_time() - c0) / reps / n_pin
+
+    # Rounds of one liemid run and one batch of ABA calls in turn: single runs move by tens
+    # of per cent on this shared machine, and so does its speed over minutes; the pair's
+    # ratio is taken round by round, and the least of each code.
+    rounds = 2 if QUICK else 5
+    pers, abas, ratios, js = [], [], [], None
+    for _ in range(rounds):
+        js_k, cpu, _ = liemid_run(":chain-1000", "liemid", h, steps * h)
+        if not js_k:
+            say("  liemid: chain-1000 failed (see the work-precision runs)")
+            return
+        js = js_k
+        pers.append((cpu - base) / (steps * n))
+        abas.append(aba_time())
+        ratios.append(pers[-1] / abas[-1])
+    per, aba = min(pers), min(abas)
+    say(f"  liemid (CLI, {steps} steps, least of {rounds}, CPU less start-up {base:.3f} s): {per * 1e6:.3f} us per"
+        f" body-step ({1 / per:.3g} body-steps/s; wall-clock stepping_seconds of the last run gives"
+        f" {js['stepping_seconds'] / (steps * n) * 1e6:.3f} us)")
+    say(f"  Pinocchio aba on chain-{n_pin} (one call from Python, {reps} calls, least of {rounds}):"
+        f" {aba * n_pin * 1e6:.1f} us, {aba * 1e6:.3f} us per body")
+    say(f"  liemid per body-step / ABA per body: {per / aba:.2f} (least against least); round by round"
+        f" {', '.join(f'{r:.2f}' for r in ratios)}, median {sorted(ratios)[len(ratios) // 2]:.2f}")
+    n = n_pin
     say(f"  MuJoCo on chain-{n}:")
     for integ in ("euler", "rk4"):
         m.opt.integrator = INTEGRATORS[integ]
@@ -834,7 +888,7 @@ def main():
     say(f"vs_mujoco.py: liemid ({LIEMID}) against MuJoCo {mujoco.__version__}, Pinocchio "
         f"{pin.__version__} (reference), numpy {np.__version__}, scipy {scipy.__version__}")
     say("CPU times are process times (liemid: the CLI child's, less its one-step start-up) on a"
-        " shared 2-core machine under load; liemid's CLI loop also evaluates energy and momenta"
+        " 2-core machine (its load is stated below); liemid's CLI loop also evaluates energy and momenta"
         " every step.")
     results = []
     cap = 2.0 if QUICK else float(os.environ.get("VS_MUJOCO_CAP", "8"))
@@ -868,6 +922,7 @@ def spacecraft_case(p_sc, cap):
     ns_mj = {"rk4": geometric(250, 2, 10), "implicitfast": geometric(2500, 2, 12),
              "euler": geometric(2500, 2, 12)}
     curves = work_precision("spacecraft", m_sc, p_sc, t_sc, 1.0, [1e-6], ref, lie_methods, ns, ns_mj, cap)
+    evaluation_budget("spacecraft", curves, 1e-6, 10.0)
     for row in report_levels("spacecraft", curves, [1e-6]):
         results.append((f"spacecraft t={t_sc:g}", *row[:4], ">= 10x", row[4]))
     return results
@@ -934,12 +989,14 @@ def dp_and_rest(results, cap):
     P_dp, ref, _ = case_reference(m_dp, t_dp, 1.0, "dp")
     agreement(m_dp, p_dp, P_dp, 0.1, 1.0)
     lie_methods = ["liemid", "liemid4", "liemid6"]
-    ns = {"liemid": geometric(1000, 2, 12), "liemid4": geometric(250, 2, 10),
+    # liemid4 from 160 steps (h = 0.0625): its runs must bracket 1e-3 for the interpolation.
+    ns = {"liemid": geometric(1000, 2, 12), "liemid4": [160, 200] + geometric(250, 2, 10),
           "liemid6": geometric(125, 2, 9)}
     ns_mj = {"rk4": geometric(250, 2, 10), "implicitfast": geometric(1000, 2, 12),
              "euler": geometric(1000, 2, 12)}
     curves = work_precision("dp", m_dp, p_dp, t_dp, 1.0, [1e-3, 1e-6], ref, lie_methods, ns, ns_mj, cap)
     rows_dp = report_levels("double pendulum", curves, [1e-3, 1e-6])
+    evaluation_budget("double pendulum", {k: curves[k] for k in ("mujoco-rk4", "liemid4")}, 1e-3, 1.0)
     goals = {1e-3: "liemid4 ahead of RK4", 1e-6: "liemid4 within 2x RK4"}
     for row in rows_dp:
         results.append((f"double-pendulum t={t_dp:g}", *row[:4], goals[row[0]], row[4]))
