@@ -206,10 +206,10 @@ fn refusals_write_nothing() {
 }
 
 #[test]
-fn a_stiff_damper_is_named_with_the_step_it_needs() {
+fn a_stiff_damper_runs_and_a_composition_against_it_names_the_step() {
     // The shoulder's child turns with I = 1e-4 + 0.1 * 0.1^2 = 1.1e-3 kg m^2 about the
-    // axis; damping 20 gives the bound 2 I / d = 1.1e-4 s. Its armature (which MuJoCo adds
-    // to I) is dropped by the maximal-coordinate method.
+    // axis; damping 20 gives x = h d / (2 I) = 1 at h = 2 I / d = 1.1e-4 s. Its armature
+    // (which MuJoCo adds to I) is dropped by the maximal-coordinate method.
     let dir = scratch("mb-damper");
     let model = r#"<mujoco model="damped">
   <worldbody>
@@ -225,31 +225,40 @@ fn a_stiff_damper_is_named_with_the_step_it_needs() {
   <keyframe><key qpos="0.3 0.1"/></keyframe>
 </mujoco>"#;
     std::fs::write(dir.join("damped.xml"), model).unwrap();
-    for step in ["1e-3", "2e-4"] {
-        let o = run_in(
-            &dir,
-            &[
-                "multibody",
-                "damped.xml",
-                "--step",
-                step,
-                "--t-end",
-                "1",
-                "--json",
-                "s.json",
-            ],
-        );
-        let err = stderr(&o);
-        assert_eq!(o.status.code(), Some(1), "{step}: {err}");
-        let error: Vec<&str> = err.lines().filter(|l| l.starts_with("liemid: error")).collect();
-        assert_eq!(error.len(), 1, "{err}");
-        assert!(
-            error[0].contains("joint `shoulder` has damping 20") && error[0].contains("1.100e-4"),
-            "{err}"
-        );
-    }
-    // Below the bound the same model runs; joint-space RK4 keeps the armature and runs at 1e-3.
-    summary(&dir, &["damped.xml", "--step", "1e-4", "--t-end", "1"]);
+    // The implicit end half-kick holds liemid at x = 9 and 90.
+    let coarse = summary(&dir, &["damped.xml", "--step", "1e-2", "--t-end", "1"]);
+    let fine = summary(&dir, &["damped.xml", "--step", "1e-4", "--t-end", "1"]);
+    assert!(coarse["max_position_constraint_violation"].as_f64().unwrap() < 1e-12);
+    assert!(max_diff(&xpos(&coarse), &xpos(&fine)) < 1e-2);
+    // liemid4's negative sub-step at x > 1 cannot: exit 1, one line naming the joint.
+    let o = run_in(
+        &dir,
+        &[
+            "multibody",
+            "damped.xml",
+            "--method",
+            "liemid4",
+            "--step",
+            "1e-3",
+            "--t-end",
+            "1",
+            "--json",
+            "s.json",
+        ],
+    );
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    let error: Vec<&str> = err.lines().filter(|l| l.starts_with("liemid: error")).collect();
+    assert_eq!(error.len(), 1, "{err}");
+    assert!(
+        error[0].contains("joint `shoulder` has damping 20") && error[0].contains("1.100e-4"),
+        "{err}"
+    );
+    summary(
+        &dir,
+        &["damped.xml", "--method", "liemid4", "--step", "1e-4", "--t-end", "1"],
+    );
+    // Joint-space RK4 keeps the armature.
     summary(
         &dir,
         &["damped.xml", "--step", "1e-3", "--t-end", "1", "--method", "rk4"],

@@ -372,13 +372,14 @@ impl Poses for Maximal<'_> {
 }
 
 /// When step `h` is beyond the model's damper bound ([`liemid::multibody::model::Model::damper_step_bound`]):
-/// which joint's damper is stiff at `h` and the step it needs.
+/// which joint's damper is stiff at `h` and the step that keeps it tame.
 fn stiff_damper(model: &liemid::multibody::model::Model, h: f64) -> Option<String> {
     let (k, bound) = model.damper_step_bound().filter(|&(_, bound)| h > bound)?;
     let j = &model.joints[k];
     Some(format!(
-        "joint `{}` has damping {} against the child's inertia about its axis: the step damps it explicitly, \
-         stable only for h below 2 I / d = {:.3e}; take a smaller --step or --method rk4",
+        "joint `{}` has damping {} against the child's inertia about its axis: above h = 2 I / d = {:.3e} the \
+         damper rings and a composition's negative sub-step cannot hold it; take a smaller --step, --method liemid \
+         or --method rk4",
         j.name,
         Num(j.damping),
         bound

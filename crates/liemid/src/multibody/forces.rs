@@ -1,7 +1,8 @@
 //! Forces of the multibody step: gravity, constant body loads, joint springs and dampers
 //! (generalized forces along the exact gradient of the joint coordinate), and a user hook.
 //! Springs are conservative (`−k (q − q_ref) ∇q` is the gradient of `½ k (q − q_ref)²`);
-//! dampers (`−d q̇ ∇q`) are not, so they make the step neither symplectic nor reversible.
+//! dampers (`−d q̇ ∇q`, applied by the half-kicks of `dampers.rs`) are not, so they make the
+//! step neither symplectic nor energy-preserving.
 //! The hinge angle is read in `(−π, π]`, so a hinge spring's potential jumps where the
 //! angle wraps at `±π` from its rest angle: springs are meant for hinges that stay within
 //! half a turn of `spring_ref`.
@@ -80,26 +81,6 @@ impl MultibodySystem {
         }
         if let Some(hook) = self.hook.as_mut() {
             hook.add(t, c, r, force, torque);
-        }
-    }
-
-    /// Damper forces at positions `(c, R)` and velocities `(v, Ω)` into `damp_f`, `damp_t`.
-    pub(super) fn damping(&mut self, c: &[Vec3], r: &[Mat3]) {
-        self.damp_f.iter_mut().for_each(|v| *v = Vec3::ZERO);
-        self.damp_t.iter_mut().for_each(|v| *v = Vec3::ZERO);
-        for (k, g) in self.joints.iter().enumerate() {
-            let d = self.params[k].damping;
-            if d == 0.0 {
-                continue;
-            }
-            let (pi, pj) = pose(g, c, r);
-            if let Some((_, grad)) = g.coordinate(pi, pj) {
-                let (vi, wi) = g
-                    .parent
-                    .map_or((Vec3::ZERO, Vec3::ZERO), |p| (self.vel[p], self.omega[p]));
-                let rate = grad.rate(vi, wi, self.vel[g.child], self.omega[g.child]);
-                apply(g, &grad, -d * rate, &mut self.damp_f, &mut self.damp_t);
-            }
         }
     }
 }

@@ -38,6 +38,7 @@
 
 mod cholesky;
 pub mod constraints;
+mod dampers;
 pub mod ensemble;
 pub mod forces;
 pub mod joint_space;

@@ -276,19 +276,20 @@ impl Model {
         }
     }
 
-    /// The damper that most limits an explicit treatment of damping: over the hinge and
-    /// slide joints with `damping d > 0`, the least `2 I / d` and its joint, where `I` is the
-    /// child's moment of inertia about the joint axis through the anchor (its mass for a
-    /// slide). With the parent held, the joint rate of such a joint decays as
-    /// `q̇' = −(d/I) q̇`; the multibody step takes the start damping force explicitly and
-    /// solves the end one by fixed-point passes, which converge and stay stable only while
-    /// `(h/2)(d/I) < 1`, i.e. `h < 2 I / d`. Inertia the rest of the tree adds to the
-    /// joint's motion raises the bound, so this is the pessimistic one. MuJoCo models
-    /// often keep `h d / I` large and rely on `armature` (added to `I` in joint space) and
-    /// an implicit integrator; without armature the damper is stiff.
+    /// The stiffest damper: over the hinge and slide joints with `damping d > 0`, the least
+    /// `2 I / d` and its joint, where `I` is the child's moment of inertia about the joint
+    /// axis through the anchor (its mass for a slide). With the parent held the joint rate
+    /// decays as `q̇' = −(d/I) q̇`, and `x = h d / (2I)` measures how stiff the damper is at
+    /// step `h`. The step's dampers are the trapezoidal rule (stable at any `x`), but above
+    /// `x = 1`, i.e. `h > 2 I / d`, the drift moves the joint backwards at `x − 1` times its
+    /// rate (the rate alternates in sign, decaying as `((1 − x)/(1 + x))ⁿ`), and a
+    /// composition's negative sub-step anti-damps without a stable solution once its own
+    /// `|x| ≥ 1`. Inertia the rest of the tree adds to the joint's motion raises the bound,
+    /// so this is the pessimistic one. MuJoCo models often keep `x` large and rely on
+    /// `armature` (added to `I` in joint space, dropped in maximal coordinates).
     ///
     /// Reference: E. Hairer, G. Wanner, *Solving Ordinary Differential Equations II*, 2nd
-    /// ed., Springer 1996, IV.2 (stiffness, the step bound of explicit methods).
+    /// ed., Springer 1996, IV.2-IV.3 (stiffness, A-stability of the trapezoidal rule).
     #[must_use]
     pub fn damper_step_bound(&self) -> Option<(usize, f64)> {
         let mut least: Option<(usize, f64)> = None;

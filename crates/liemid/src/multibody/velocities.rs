@@ -1,7 +1,7 @@
 //! The velocity solve of the multibody step: the μ-kick, one linear solve of
 //! `(h/2) G M⁻¹ Gᵀ μ = −G (v, Ω)` at the end configuration so that `G(q⁺)(v⁺, Ω⁺) = 0`
-//! (multibody spec section 3), with the damping fixed point and the release of plastic
-//! limit rows that pull.
+//! (multibody spec section 3), with the end damping force (solved implicitly with it, see
+//! `dampers.rs`) and the release of plastic limit rows that pull.
 //!
 //! Reference: E. Hairer, C. Lubich, G. Wanner, *Geometric Numerical Integration*, 2nd ed.,
 //! Springer 2006, VII.1 (RATTLE).
@@ -14,8 +14,9 @@ use super::rattle::{add_impulse, for_each_rate, Matrix, MAX_LIMIT_PASSES};
 use super::MultibodySystem;
 
 impl MultibodySystem {
-    /// The μ-kick: one linear solve so that `G(q⁺)(v⁺, Ω⁺) = 0` (two more with dampers).
-    pub(super) fn solve_velocities(&mut self, h: f64, report: &mut StepReport) -> Result<()> {
+    /// The μ-kick: one linear solve so that `G(q⁺)(v⁺, Ω⁺) = 0`; with dampers two, around
+    /// the end damping half-kick (`dampers.rs`).
+    pub(super) fn solve_velocities(&mut self, t: f64, h: f64, report: &mut StepReport) -> Result<()> {
         let nb = self.mass.len();
         let hh = 0.5 * h;
         let any_rows = self.rows1.iter().any(|r| r.n > 0);
@@ -25,67 +26,10 @@ impl MultibodySystem {
         }
         self.damp_f.iter_mut().for_each(|v| *v = Vec3::ZERO);
         self.damp_t.iter_mut().for_each(|v| *v = Vec3::ZERO);
-        let passes = if self.has_damping { 3 } else { 1 };
-        let mut limit_pass = 0;
-        let mut pass = 0;
-        while pass < passes {
-            // w* = M⁻¹ (p' + (h/2)(F⁺ + D)).
-            for i in 0..nb {
-                self.vel[i] = (self.p_half[i] + (self.force1[i] + self.damp_f[i]) * hh) * (1.0 / self.mass[i]);
-                self.omega[i] = self.inertia[i].apply_inverse(self.pi_new[i] + (self.torque1[i] + self.damp_t[i]) * hh);
-            }
-            if any_rows {
-                let s = -2.0 / h;
-                for (k, jr) in self.rows1.iter().enumerate() {
-                    let g = &self.joints[k];
-                    let (vi, wi) = g
-                        .parent
-                        .map_or((Vec3::ZERO, Vec3::ZERO), |p| (self.vel[p], self.omega[p]));
-                    for r in 0..jr.n {
-                        self.rhs[k][r] = s * jr.grad[r].rate(vi, wi, self.vel[g.child], self.omega[g.child]);
-                    }
-                }
-                self.timed_solve();
-                // A plastic limit row whose μ pulls is released and the solve redone.
-                let mut released = false;
-                for k in 0..self.joints.len() {
-                    if self.limit[k] == LimitState::Inactive {
-                        continue;
-                    }
-                    let m = self.delta[k][self.joints[k].kind.rows()];
-                    if (self.limit[k] == LimitState::Lower && m < 0.0)
-                        || (self.limit[k] == LimitState::Upper && m > 0.0)
-                    {
-                        self.limit[k] = LimitState::Inactive;
-                        released = true;
-                    }
-                }
-                if released && limit_pass < MAX_LIMIT_PASSES {
-                    limit_pass += 1;
-                    report.limit_changes += 1;
-                    Self::rows_at(
-                        &self.joints,
-                        &self.limit,
-                        &self.params,
-                        &self.c_new,
-                        &self.r_new,
-                        &mut self.rows1,
-                    );
-                    self.factor(Matrix::End)?;
-                    report.factorizations += 1;
-                    continue;
-                }
-            }
-            pass += 1;
-            if pass == passes {
-                break;
-            }
-            // Damping at the provisional end velocity (fixed point).
-            self.end_velocities(hh);
-            let (c, r) = (core::mem::take(&mut self.c_new), core::mem::take(&mut self.r_new));
-            self.damping(&c, &r);
-            self.c_new = c;
-            self.r_new = r;
+        if self.has_damping {
+            self.end_dampers(t, hh, any_rows, report)?;
+        } else {
+            self.velocity_pass(hh, any_rows, report)?;
         }
         // Apply the end kick into p_half / pi_new.
         for i in 0..nb {
@@ -118,7 +62,61 @@ impl MultibodySystem {
         Ok(())
     }
 
-    /// Velocities after the provisional μ-kick (for the damping fixed point).
+    /// One solve for μ with the current damping forces: `w* = M⁻¹ (p' + (h/2)(F⁺ + D))`,
+    /// then `(h/2) G M⁻¹ Gᵀ μ = −G w*` into `delta`. A plastic limit row whose μ pulls is
+    /// released and the solve redone (at most [`MAX_LIMIT_PASSES`] times).
+    pub(super) fn velocity_pass(&mut self, hh: f64, any_rows: bool, report: &mut StepReport) -> Result<()> {
+        let mut limit_pass = 0;
+        loop {
+            for i in 0..self.mass.len() {
+                self.vel[i] = (self.p_half[i] + (self.force1[i] + self.damp_f[i]) * hh) * (1.0 / self.mass[i]);
+                self.omega[i] = self.inertia[i].apply_inverse(self.pi_new[i] + (self.torque1[i] + self.damp_t[i]) * hh);
+            }
+            if !any_rows {
+                return Ok(());
+            }
+            let s = -1.0 / hh;
+            for (k, jr) in self.rows1.iter().enumerate() {
+                let g = &self.joints[k];
+                let (vi, wi) = g
+                    .parent
+                    .map_or((Vec3::ZERO, Vec3::ZERO), |p| (self.vel[p], self.omega[p]));
+                for r in 0..jr.n {
+                    self.rhs[k][r] = s * jr.grad[r].rate(vi, wi, self.vel[g.child], self.omega[g.child]);
+                }
+            }
+            self.timed_solve();
+            // A plastic limit row whose μ pulls is released and the solve redone.
+            let mut released = false;
+            for k in 0..self.joints.len() {
+                if self.limit[k] == LimitState::Inactive {
+                    continue;
+                }
+                let m = self.delta[k][self.joints[k].kind.rows()];
+                if (self.limit[k] == LimitState::Lower && m < 0.0) || (self.limit[k] == LimitState::Upper && m > 0.0) {
+                    self.limit[k] = LimitState::Inactive;
+                    released = true;
+                }
+            }
+            if !(released && limit_pass < MAX_LIMIT_PASSES) {
+                return Ok(());
+            }
+            limit_pass += 1;
+            report.limit_changes += 1;
+            Self::rows_at(
+                &self.joints,
+                &self.limit,
+                &self.params,
+                &self.c_new,
+                &self.r_new,
+                &mut self.rows1,
+            );
+            self.factor(Matrix::End)?;
+            report.factorizations += 1;
+        }
+    }
+
+    /// Velocities after the provisional μ-kick (for the end dampers).
     pub(super) fn end_velocities(&mut self, hh: f64) {
         for i in 0..self.mass.len() {
             self.vel[i] = self.p_half[i] + (self.force1[i] + self.damp_f[i]) * hh;

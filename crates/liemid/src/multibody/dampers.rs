@@ -1,0 +1,273 @@
+//! Hinge and slide dampers in the multibody step.
+//!
+//! A damper applies the generalized force `σ_k = −d_k q̇_k` along its coordinate gradient
+//! `D_k` (`q̇_k = D_k v`). The step splits it off symmetrically: a forward-Euler half-kick
+//! by the dampers at the start (the start velocities, `σ₀ = −d ∘ D(q) v`, added to the
+//! λ-kick), the conservative RATTLE/EA step, and a backward-Euler half-kick at the end
+//! solved with the μ-kick,
+//!
+//! ```text
+//!     Φ(h) = BE_D(h/2) ∘ RATTLE(h) ∘ FE_D(h/2),
+//! ```
+//!
+//! every kick keeping the velocity constraints. Backward Euler is the adjoint of forward
+//! Euler, so `Φ(h)` is symmetric (`Φ(−h) = Φ(h)⁻¹`) and second order, and the compositions
+//! (`liemid4`…) keep their orders. A damper on a body of inertia `I` (parent held) turns
+//! the joint rate by `(1 − x)/(1 + x)` per step, `x = h d/(2I)`: the trapezoidal rule,
+//! A-stable, and under a constant load the rate settles at the exact terminal rate. The
+//! drift moves at the start-kicked rate, `(1 − x)` times the start rate: for a stiff
+//! damper (`x ≫ 1`) that rate alternates in sign and decays as `((1 − x)/(1 + x))ⁿ`, so
+//! a fast joint with `x` in the hundreds can turn its body too far in one step (a
+//! numerical error naming the step); `x` of a few is harmless.
+//!
+//! The end half-kick is linear: the end velocities are `v⁺(σ) = v⁺(0) + (h/2) P M⁻¹ Dᵀ σ`
+//! (`P` the projection of the velocity solve) and `A = D P M⁻¹ Dᵀ` is symmetric positive
+//! semi-definite, so `σ = −d ∘ r(σ)`, `r(σ) = r₀ + (h/2) A σ`, is
+//!
+//! ```text
+//!     (diag(1/d) + (h/2) A) σ = −r₀,
+//! ```
+//!
+//! symmetric positive definite for `h > 0`, solved by conjugate gradients preconditioned
+//! with `diag(d)` (eigenvalues of the preconditioned matrix in `[1, 1 + x]`), one solve
+//! with the μ-kick's factorization per iteration (the response to the damping forces
+//! alone), at most `2 n + 8` iterations for `n`
+//! dampers, stopped when the residual is at round-off of the rates. A composition's
+//! negative sub-steps make the matrix indefinite once `|h| d/(2I) ≥ 1`: that is reported
+//! as a numerical error (anti-damping that strong has no stable step). Dampers are not
+//! conservative: the step is then neither symplectic nor energy-preserving.
+//!
+//! Reference: E. Hairer, C. Lubich, G. Wanner, *Geometric Numerical Integration*, 2nd ed.,
+//! Springer 2006, II.3-II.5 (adjoint methods, splitting, composition); M. R. Hestenes,
+//! E. Stiefel, J. Res. Nat. Bur. Standards 49 (1952) 409-436 (conjugate gradients).
+
+use crate::error::{Error, Result};
+use crate::linalg::Vec3;
+
+use super::constraints::Row;
+use super::forces::apply;
+use super::method::StepReport;
+use super::rattle::{add_impulse, pose};
+use super::state::MultibodyState;
+use super::MultibodySystem;
+
+/// Scratch of the damper half-kicks, one entry per joint (`None`/zero without a damper).
+#[derive(Clone, Debug, Default)]
+pub(super) struct DamperScratch {
+    /// The coordinate gradient of each damped joint at the half-kick's configuration.
+    grad: Vec<Option<Row>>,
+    damping: Vec<f64>,
+    sigma: Vec<f64>,
+    rates0: Vec<f64>,
+    residual: Vec<f64>,
+    direction: Vec<f64>,
+    image: Vec<f64>,
+    /// Per body: the response's momenta.
+    linear: Vec<Vec3>,
+    angular: Vec<Vec3>,
+}
+
+impl DamperScratch {
+    pub(super) fn new(joints: usize, bodies: usize) -> Self {
+        DamperScratch {
+            grad: vec![None; joints],
+            damping: vec![0.0; joints],
+            sigma: vec![0.0; joints],
+            rates0: vec![0.0; joints],
+            residual: vec![0.0; joints],
+            direction: vec![0.0; joints],
+            image: vec![0.0; joints],
+            linear: vec![Vec3::ZERO; bodies],
+            angular: vec![Vec3::ZERO; bodies],
+        }
+    }
+
+    /// The gradients of the damped joints at poses `(c, R)`; returns how many there are.
+    fn gradients(&mut self, sys: &MultibodySystem, c: &[Vec3], r: &[crate::linalg::Mat3]) -> usize {
+        let mut count = 0;
+        for (k, g) in sys.joints.iter().enumerate() {
+            self.damping[k] = sys.params[k].damping;
+            self.grad[k] = None;
+            if self.damping[k] > 0.0 {
+                let (pi, pj) = pose(g, c, r);
+                self.grad[k] = g.coordinate(pi, pj).map(|(_, row)| row);
+                count += usize::from(self.grad[k].is_some());
+            }
+        }
+        count
+    }
+}
+
+impl MultibodySystem {
+    /// The start half-kick `FE_D(h/2)`: the damping forces at the state's velocities into
+    /// `damp_f`, `damp_t`, for the λ-kick to add.
+    pub(super) fn start_dampers(&mut self, state: &MultibodyState) {
+        let mut s = core::mem::take(&mut self.dampers);
+        s.gradients(self, &state.c, &state.rotation);
+        for i in 0..self.mass.len() {
+            self.vel[i] = state.p[i] * (1.0 / self.mass[i]);
+            self.omega[i] = self.inertia[i].apply_inverse(state.pi[i]);
+        }
+        self.rates_into(&s.grad, &mut s.rates0);
+        for k in 0..s.sigma.len() {
+            s.sigma[k] = -s.damping[k] * s.rates0[k];
+        }
+        self.set_dampers(&s.grad, Some(&s.sigma));
+        self.dampers = s;
+    }
+
+    /// The end half-kick `BE_D(h/2)` solved with the μ-kick (module docs), `hh = h/2`, in
+    /// the step from `t`.
+    /// Leaves `damp_f`, `damp_t` at the solved damping and `delta` at its μ.
+    pub(super) fn end_dampers(&mut self, t: f64, hh: f64, any_rows: bool, report: &mut StepReport) -> Result<()> {
+        let mut s = core::mem::take(&mut self.dampers);
+        let result = self.end_dampers_in(&mut s, t, hh, any_rows, report);
+        self.dampers = s;
+        result
+    }
+
+    fn end_dampers_in(
+        &mut self,
+        s: &mut DamperScratch,
+        t: f64,
+        hh: f64,
+        any_rows: bool,
+        report: &mut StepReport,
+    ) -> Result<()> {
+        let n = s.sigma.len();
+        let (c, r) = (core::mem::take(&mut self.c_new), core::mem::take(&mut self.r_new));
+        let count = s.gradients(self, &c, &r);
+        self.c_new = c;
+        self.r_new = r;
+        // r₀: the rates without end damping; this pass also settles the active limits.
+        self.set_dampers(&s.grad, None);
+        self.velocity_pass(hh, any_rows, report)?;
+        self.end_velocities(hh);
+        self.rates_into(&s.grad, &mut s.rates0);
+        s.sigma.iter_mut().for_each(|x| *x = 0.0);
+        let scale = s.rates0.iter().fold(0.0f64, |m, r| m.max(r.abs()));
+        if scale == 0.0 {
+            return Ok(());
+        }
+        let tol = 8.0 * f64::EPSILON * scale;
+        // The residual b − Kσ at σ = 0 and the preconditioned direction d ∘ residual.
+        let mut rz = 0.0;
+        for k in 0..n {
+            s.residual[k] = -s.rates0[k];
+            s.direction[k] = s.damping[k] * s.residual[k];
+            rz += s.residual[k] * s.direction[k];
+        }
+        for _ in 0..2 * count + 8 {
+            if rz == 0.0 {
+                break;
+            }
+            // K p = p / d + (h/2) A p.
+            self.damper_response(s, hh, any_rows);
+            let mut pkp = 0.0;
+            for k in 0..n {
+                if s.grad[k].is_some() {
+                    s.image[k] += s.direction[k] / s.damping[k];
+                    pkp += s.direction[k] * s.image[k];
+                }
+            }
+            if pkp.is_nan() || pkp <= 0.0 {
+                return Err(Error::NewtonDidNotConverge {
+                    method: self.method.name(),
+                    equation:
+                        "the dampers' implicit half-kick (indefinite: a negative sub-step with |h| d / (2 I) >= 1)",
+                    t,
+                    h: 2.0 * hh,
+                    residual: rz.abs().sqrt(),
+                    iterations: 0,
+                });
+            }
+            let alpha = rz / pkp;
+            let mut worst: f64 = 0.0;
+            let mut rz_next = 0.0;
+            for k in 0..n {
+                s.sigma[k] += alpha * s.direction[k];
+                s.residual[k] -= alpha * s.image[k];
+                worst = worst.max(s.residual[k].abs());
+                rz_next += s.damping[k] * s.residual[k] * s.residual[k];
+            }
+            if worst <= tol {
+                break;
+            }
+            let beta = rz_next / rz;
+            rz = rz_next;
+            for k in 0..n {
+                s.direction[k] = s.damping[k] * s.residual[k] + beta * s.direction[k];
+            }
+        }
+        // The μ-kick at the solved damping.
+        self.set_dampers(&s.grad, Some(&s.sigma));
+        self.velocity_pass(hh, any_rows, report)
+    }
+
+    /// `(h/2) A p` into `s.image`: the damped joints' rates after a half-kick by the damping
+    /// forces `Dᵀ p` (`p = s.direction`) alone, projected on `G(q⁺) v = 0` with the μ-kick's
+    /// factorization (linear: no other momentum enters, so nothing cancels).
+    fn damper_response(&mut self, s: &mut DamperScratch, hh: f64, any_rows: bool) {
+        self.set_dampers(&s.grad, Some(&s.direction));
+        let nb = self.mass.len();
+        for i in 0..nb {
+            s.linear[i] = self.damp_f[i] * hh;
+            s.angular[i] = self.damp_t[i] * hh;
+            self.vel[i] = s.linear[i] * (1.0 / self.mass[i]);
+            self.omega[i] = self.inertia[i].apply_inverse(s.angular[i]);
+        }
+        if any_rows {
+            let scale = -1.0 / hh;
+            for (k, jr) in self.rows1.iter().enumerate() {
+                let g = &self.joints[k];
+                let (vi, wi) = g
+                    .parent
+                    .map_or((Vec3::ZERO, Vec3::ZERO), |p| (self.vel[p], self.omega[p]));
+                for r in 0..jr.n {
+                    self.rhs[k][r] = scale * jr.grad[r].rate(vi, wi, self.vel[g.child], self.omega[g.child]);
+                }
+            }
+            self.timed_solve();
+            add_impulse(
+                &self.joints,
+                &self.rows1,
+                &self.delta,
+                hh,
+                &mut s.linear,
+                &mut s.angular,
+            );
+            for i in 0..nb {
+                self.vel[i] = s.linear[i] * (1.0 / self.mass[i]);
+                self.omega[i] = self.inertia[i].apply_inverse(s.angular[i]);
+            }
+        }
+        self.rates_into(&s.grad, &mut s.image);
+    }
+
+    /// The damping forces `Dᵀ σ` into `damp_f`, `damp_t` (`None`: zero).
+    fn set_dampers(&mut self, grad: &[Option<Row>], sigma: Option<&[f64]>) {
+        self.damp_f.iter_mut().for_each(|v| *v = Vec3::ZERO);
+        self.damp_t.iter_mut().for_each(|v| *v = Vec3::ZERO);
+        let Some(sigma) = sigma else { return };
+        for (k, g) in self.joints.iter().enumerate() {
+            if let Some(row) = &grad[k] {
+                apply(g, row, sigma[k], &mut self.damp_f, &mut self.damp_t);
+            }
+        }
+    }
+
+    /// The damped joints' rates `D_k v` at the velocities in `vel`, `omega`.
+    fn rates_into(&self, grad: &[Option<Row>], rates: &mut [f64]) {
+        for (k, g) in self.joints.iter().enumerate() {
+            rates[k] = match &grad[k] {
+                Some(row) => {
+                    let (vi, wi) = g
+                        .parent
+                        .map_or((Vec3::ZERO, Vec3::ZERO), |p| (self.vel[p], self.omega[p]));
+                    row.rate(vi, wi, self.vel[g.child], self.omega[g.child])
+                }
+                None => 0.0,
+            };
+        }
+    }
+}

@@ -1,0 +1,187 @@
+//! Hinge and slide dampers in the multibody step, `BE_D(h/2) ∘ RATTLE(h) ∘ FE_D(h/2)`
+//! (the end half-kick implicit, by conjugate gradients on `(diag(1/d) + (h/2) A) σ = −r₀`):
+//! a damper turns a joint rate by `(1 − x)/(1 + x)` per step, `x = h d/(2I)`, at any `x`
+//! (the trapezoidal rule); second order against the joint-space reference (RK4 at a small
+//! step) on a planar and on a spatial chain, order 4 composed; stable and constraint-exact
+//! where the explicit damper failed; a composition's negative sub-step with `x ≥ 1` is an
+//! error, not a blow-up; no allocation per step.
+
+use liemid::multibody::joint_space::JointSpaceModel;
+use liemid::multibody::{mjcf, problems, Model, MultibodyMethod, MultibodySystem};
+
+#[path = "common/thread_counting.rs"]
+mod thread_counting;
+use thread_counting::allocations;
+
+#[global_allocator]
+static GLOBAL: thread_counting::Counting = thread_counting::Counting;
+
+/// A wheel on a hinge to the world about its principal axis z (I_zz = 0.2 kg m²), centre
+/// of mass on the axis, no gravity, spinning at 3 rad/s, with damping `d`.
+fn wheel(d: f64) -> Model {
+    let text = format!(
+        "<mujoco><option gravity=\"0 0 0\"/><worldbody><body name=\"wheel\">\
+         <joint name=\"axle\" axis=\"0 0 1\" damping=\"{d}\"/>\
+         <inertial pos=\"0 0 0\" mass=\"1\" diaginertia=\"0.5 0.5 0.2\"/></body></worldbody>\
+         <keyframe><key qpos=\"0\" qvel=\"3\"/></keyframe></mujoco>"
+    );
+    mjcf::parse(&text, "wheel.xml").unwrap().model
+}
+
+#[test]
+fn a_damper_decays_by_the_trapezoidal_factor_at_any_stiffness() {
+    let h = 0.01;
+    // x = h d / (2 I): mild, at the explicit damper's limit, stiff (the drift's rate
+    // (1 − x) ω stays below half a turn per step at 3 rad/s up to x near 100).
+    for x in [0.05, 1.0, 5.0, 50.0] {
+        let d = 2.0 * 0.2 * x / h;
+        let model = wheel(d);
+        let mut sys = MultibodySystem::new(&model, MultibodyMethod::Liemid).unwrap();
+        let mut s = model.initial_state().unwrap();
+        let g = (1.0 - x) / (1.0 + x);
+        let (mut rate, mut angle) = (3.0f64, 0.0f64);
+        for n in 1..=40 {
+            sys.step(&mut s, h).unwrap();
+            // The drift turns the wheel at the start-kicked rate (1 − x) ω_n.
+            angle += h * (1.0 - x) * rate;
+            rate *= g;
+            // Each step's rounding is amplified by the conditioning of the implicit kick,
+            // 1 + x: n steps, a few ulps each.
+            let measured = s.pi[0].z / 0.2;
+            assert!(
+                (measured - rate).abs() <= n as f64 * (1.0 + x) * 8.0 * f64::EPSILON * 3.0,
+                "x = {x}, step {n}: rate {measured} against {rate}"
+            );
+            let wrapped = (angle + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
+            let q = sys.joint_coordinate(&s, 0).unwrap();
+            assert!(
+                (q - wrapped).abs() <= 1e-12,
+                "x = {x}, step {n}: angle {q} against {wrapped}"
+            );
+        }
+    }
+}
+
+/// The first two joint coordinates at `t_end` by liemid at `h`.
+fn liemid_angles(model: &Model, method: MultibodyMethod, h: f64, t_end: f64) -> [f64; 2] {
+    let mut sys = MultibodySystem::new(model, method).unwrap();
+    let mut s = model.initial_state().unwrap();
+    let n = (t_end / h).round() as usize;
+    for _ in 0..n {
+        let r = sys.step(&mut s, h).unwrap();
+        assert!(r.position_violation < 1e-12 && r.velocity_violation < 1e-12);
+    }
+    [
+        sys.joint_coordinate(&s, 0).unwrap(),
+        sys.joint_coordinate(&s, 1).unwrap(),
+    ]
+}
+
+/// Observed orders of `method` on `model` (its first two joints hinges) at the steps `hs`,
+/// against joint-space RK4 at h = 1e-4 (error below 1e-13 here).
+fn observed_orders(model: &Model, method: MultibodyMethod, hs: &[f64], t_end: f64) -> Vec<f64> {
+    let mut js = JointSpaceModel::new(model).unwrap();
+    let (mut q, mut v) = (js.initial_q().to_vec(), js.initial_v().to_vec());
+    let h_ref: f64 = 1e-4;
+    for _ in 0..(t_end / h_ref).round() as usize {
+        js.rk4_step(&mut q, &mut v, h_ref).unwrap();
+    }
+    let errors: Vec<f64> = hs
+        .iter()
+        .map(|&h| {
+            let a = liemid_angles(model, method, h, t_end);
+            (a[0] - q[0]).abs().max((a[1] - q[1]).abs())
+        })
+        .collect();
+    let orders: Vec<f64> = errors.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
+    println!("{} {}: errors {errors:?}, orders {orders:?}", model.name, method.name());
+    orders
+}
+
+fn damped_double_pendulum(d: f64) -> Model {
+    let mut m = problems::double_pendulum();
+    m.joints[0].damping = d;
+    m.joints[1].damping = 0.5 * d;
+    m
+}
+
+/// The spec's spatial test chain (hinge about y, hinge about x carried by the first link,
+/// ball; centres off the axes, full inertias) with both hinges damped.
+fn damped_test_chain() -> Model {
+    let mut m = problems::test_chain();
+    m.joints[0].damping = 0.3;
+    m.joints[1].damping = 0.2;
+    m
+}
+
+#[test]
+fn damped_chains_converge_with_orders_two_and_four_to_the_joint_space_reference() {
+    let hs = [2e-2, 1e-2, 5e-3, 2.5e-3];
+    for model in [damped_double_pendulum(0.4), damped_test_chain()] {
+        let orders = observed_orders(&model, MultibodyMethod::Liemid, &hs, 1.0);
+        for p in &orders {
+            assert!((p - 2.0).abs() < 0.1, "{}: orders {orders:?}", model.name);
+        }
+    }
+    let orders = observed_orders(&damped_test_chain(), MultibodyMethod::Liemid4, &[4e-2, 2e-2, 1e-2], 1.0);
+    for p in &orders {
+        assert!((p - 4.0).abs() < 0.1, "liemid4: orders {orders:?}");
+    }
+}
+
+#[test]
+fn a_negative_sub_step_against_a_stiff_damper_is_an_error() {
+    // liemid4's middle sub-step is −0.66 h: at x = h d/(2I) = 5 it anti-damps with |x| > 1.
+    let h = 0.01;
+    let model = wheel(2.0 * 0.2 * 5.0 / h);
+    let mut sys = MultibodySystem::new(&model, MultibodyMethod::Liemid4).unwrap();
+    let mut s = model.initial_state().unwrap();
+    let err = sys.step(&mut s, h).unwrap_err().to_string();
+    assert!(err.contains("negative sub-step"), "{err}");
+    // At x = 0.5 every sub-step is fine.
+    let model = wheel(2.0 * 0.2 * 0.5 / h);
+    let mut sys = MultibodySystem::new(&model, MultibodyMethod::Liemid4).unwrap();
+    let mut s = model.initial_state().unwrap();
+    for _ in 0..100 {
+        sys.step(&mut s, h).unwrap();
+    }
+    assert!(s.pi[0].z.abs() < 3.0 * 0.2 * 0.1);
+}
+
+#[test]
+fn stiff_dampers_stay_stable_and_dissipate() {
+    // x = h d / (2 I) = 30 and 15 at h = 1e-2 (each link's I about its joint 1/3 kg m²):
+    // the explicit damper needs h below 6.7e-4 and 3.3e-4.
+    let model = damped_double_pendulum(2000.0);
+    let mut sys = MultibodySystem::new(&model, MultibodyMethod::Liemid).unwrap();
+    let mut s = model.initial_state().unwrap();
+    let e0 = sys.energy(&s);
+    let mut last = e0;
+    let mut worst = 0.0f64;
+    for _ in 0..2000 {
+        let r = sys.step(&mut s, 1e-2).unwrap();
+        worst = worst.max(r.position_violation.max(r.velocity_violation));
+        last = sys.energy(&s);
+        assert!(
+            last.is_finite() && last <= e0 + 1e-12 * e0.abs(),
+            "energy {last} above {e0}"
+        );
+    }
+    println!("stiff dampers: energy {e0:.6} -> {last:.6}, constraints {worst:.1e}");
+    assert!(worst < 1e-12 && last < e0);
+}
+
+#[test]
+fn damped_steps_allocate_nothing() {
+    let model = damped_double_pendulum(5.0);
+    for method in [MultibodyMethod::Liemid, MultibodyMethod::Liemid4] {
+        let mut sys = MultibodySystem::new(&model, method).unwrap();
+        let mut s = model.initial_state().unwrap();
+        sys.step(&mut s, 1e-3).unwrap();
+        let before = allocations();
+        for _ in 0..100 {
+            sys.step(&mut s, 1e-3).unwrap();
+        }
+        assert_eq!(allocations() - before, 0, "{} allocates", method.name());
+    }
+}
