@@ -115,6 +115,7 @@ fn example_models_load_and_name_what_they_ignore() {
         "chain_10.xml",
         "arm.xml",
         "arm_scene.xml",
+        "four_bar.xml",
         "arm.urdf",
     ] {
         let path = examples().join("multibody").join(file);

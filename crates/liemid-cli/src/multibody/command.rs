@@ -398,6 +398,19 @@ fn run_maximal(
         .model
         .initial_state()
         .map_err(|e| Failure::Input(format!("{}: {e}", sc.name)))?;
+    if !sc.model.loop_joints().is_empty() {
+        // A keyframe written for MuJoCo's soft equalities may not close the loops exactly.
+        let start = |e: liemid::Error| Failure::Input(format!("{}: the start cannot close its loops: {e}", sc.name));
+        let position = system.project_positions(&mut state).map_err(start)?;
+        let velocity = system.project_velocities(&mut state).map_err(start)?;
+        if position > 1e-12 || velocity > 1e-12 {
+            eprintln!(
+                "liemid: note: {}: the start violated the loop-closing joints (relative position {position:.1e}, \
+                 velocity {velocity:.1e}); projected onto them",
+                sc.name
+            );
+        }
+    }
     let bodies = state.len();
     let joints = sc.model.joints.len();
     let e0 = system.energy(&state);

@@ -47,6 +47,7 @@ pub mod mjcf;
 pub mod model;
 mod positions;
 pub mod problems;
+mod projection;
 pub mod rattle;
 pub mod solver;
 pub mod state;

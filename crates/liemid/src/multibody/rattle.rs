@@ -306,48 +306,6 @@ impl MultibodySystem {
         self.solver.loop_rank()
     }
 
-    /// Project the velocities of `state` onto the velocity constraints `G (v, Ω) = 0` in
-    /// the kinetic-energy metric: `(G M⁻¹ Gᵀ) μ = −G (v, Ω)`, `p += G_cᵀ μ`,
-    /// `Π += G_θᵀ μ` (minimum-norm `μ` for redundant loop rows). For joint velocities that
-    /// do not respect loop-closing joints (a loader's `qvel` on a closed loop). Returns the
-    /// relative velocity violation before the projection.
-    ///
-    /// # Errors
-    /// [`Error::InvalidModel`] when the tree rows are dependent at this configuration.
-    ///
-    /// Reference: E. Hairer, C. Lubich, G. Wanner, *Geometric Numerical Integration*, VII.1
-    /// (the velocity projection of RATTLE).
-    pub fn project_velocities(&mut self, state: &mut MultibodyState) -> Result<f64> {
-        let (_, before) = self.constraint_violation(state);
-        Self::rows_at(
-            &self.joints,
-            &self.limit,
-            &self.params,
-            &state.c,
-            &state.rotation,
-            &mut self.rows1,
-        );
-        if self.rows1.iter().all(|r| r.n == 0) {
-            return Ok(before);
-        }
-        self.factor(Matrix::End)?;
-        self.velocities(&state.p, &state.pi);
-        for (k, jr) in self.rows1.iter().enumerate() {
-            let g = &self.joints[k];
-            let (vi, wi) = g
-                .parent
-                .map_or((Vec3::ZERO, Vec3::ZERO), |p| (self.vel[p], self.omega[p]));
-            for r in 0..jr.n {
-                self.rhs[k][r] = -jr.grad[r].rate(vi, wi, self.vel[g.child], self.omega[g.child]);
-            }
-        }
-        self.timed_solve();
-        add_impulse(&self.joints, &self.rows1, &self.delta, 1.0, &mut state.p, &mut state.pi);
-        self.cache_valid = false;
-        self.factor_rows0 = false;
-        Ok(before)
-    }
-
     /// Forget the cached forces, rows and multipliers and the learned contractions of the
     /// position solve's corrections (after editing a state by hand the cache is detected
     /// as stale anyway).
@@ -682,7 +640,7 @@ impl MultibodySystem {
         (same >= 2, 0)
     }
 
-    fn velocities(&mut self, p: &[Vec3], pi: &[Vec3]) {
+    pub(super) fn velocities(&mut self, p: &[Vec3], pi: &[Vec3]) {
         for i in 0..self.mass.len() {
             self.vel[i] = p[i] * (1.0 / self.mass[i]);
             self.omega[i] = self.inertia[i].apply_inverse(pi[i]);

@@ -41,9 +41,12 @@
 //!   Ball and free keyframe values are taken as they are (MuJoCo's layout is the model's).
 //! - Mesh, height-field and SDF geoms are fine when the body has an `<inertial>` (no file is
 //!   read); when their mass would be needed the body is refused, naming the mesh.
+//! - `<equality>` `connect` and `weld` become exact loop-closing joints (a ball, a weld;
+//!   MuJoCo's are soft), satisfied in the reference pose as in MuJoCo (`equality.rs`);
+//!   other equalities are listed as ignored.
 //! - `<include file>` is expanded as MuJoCo does (see [`include`]); `<frame>`,
 //!   `<composite>`, `<flexcomp>`, `<replicate>` and `<attach>` are refused (they add or move
-//!   bodies); actuators, tendons, sensors, equalities, contacts,
+//!   bodies); actuators, tendons, sensors, joint and tendon equalities, contacts,
 //!   geom contact and visual properties, sites, cameras, lights, assets and the like are
 //!   listed in [`Loaded::ignored`].
 
@@ -60,6 +63,7 @@ use super::xml::{
 use crate::error::Result;
 use crate::linalg::{Mat3, Vec3};
 
+mod equality;
 mod geom;
 pub mod include;
 mod merge;
@@ -115,6 +119,7 @@ fn parse_assembled(text: &str, name_for_errors: &str, sources: &Sources) -> Resu
     let mut gravity = Vec3::new(0.0, 0.0, -9.81);
     let mut timestep = None;
     let mut keys = Vec::new();
+    let mut equalities = Vec::new();
     for &node in &elements {
         match node.tag_name().name() {
             "compiler" | "default" => {}
@@ -135,6 +140,7 @@ fn parse_assembled(text: &str, name_for_errors: &str, sources: &Sources) -> Resu
             }
             "worldbody" => st.read_children(node, None, "main")?,
             "keyframe" => keys.extend(node.children().filter(|c| c.has_tag_name("key"))),
+            "equality" => equalities.push(node),
             "include" => return Err(cx.err(node, NO_INCLUDE)),
             other => st.ignored.note(other),
         }
@@ -147,16 +153,19 @@ fn parse_assembled(text: &str, name_for_errors: &str, sources: &Sources) -> Resu
         None => (None, None),
     };
     let built = build(std::mem::take(&mut st.raw))?;
+    let mut model = Model {
+        name: root.attribute("model").unwrap_or_default().to_string(),
+        bodies: built.bodies,
+        joints: built.joints,
+        gravity,
+        timestep,
+        qpos,
+        qvel,
+    };
+    let loops = equality::loop_joints(&cx, &equalities, &model, &built.merged, &mut st.ignored)?;
+    model.joints.extend(loops);
     Ok(Loaded {
-        model: Model {
-            name: root.attribute("model").unwrap_or_default().to_string(),
-            bodies: built.bodies,
-            joints: built.joints,
-            gravity,
-            timestep,
-            qpos,
-            qvel,
-        },
+        model,
         ignored: st.ignored.into_vec(),
         merged: built.merged,
     })
