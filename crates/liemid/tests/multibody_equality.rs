@@ -62,10 +62,7 @@ fn a_connect_closes_the_four_bar_as_the_built_in_hinge_does() {
     for (a, b) in q_connect.iter().zip(&q_hinge) {
         assert!((a - b).abs() < 1e-12, "{q_connect:?} against {q_hinge:?}");
     }
-    assert!(
-        (q_connect[0] - q_hinge[0]).abs() < 1e-12 && (q_connect[0] + 1.0472).abs() > 0.1,
-        "it moved"
-    );
+    assert!(q_connect[0].abs() > 0.1, "it moved");
 }
 
 fn two_bodies(equality: &str) -> String {
