@@ -8,6 +8,7 @@
 
 use liemid::multibody::joint_space::JointSpaceModel;
 use liemid::multibody::{mjcf, problems, Model, MultibodyMethod, MultibodySystem};
+use liemid::Vec3;
 
 #[path = "common/thread_counting.rs"]
 mod thread_counting;
@@ -62,6 +63,39 @@ fn a_damper_decays_by_the_trapezoidal_factor_at_any_stiffness() {
     }
 }
 
+#[test]
+fn a_ball_damper_decays_the_relative_spin_by_the_same_factor() {
+    // A ball of isotropic inertia 0.2 about its centre, pinned there, spinning at
+    // (3, −1, 2) rad/s: the damper −d ω turns ω by (1 − x)/(1 + x) per step.
+    let h = 0.01;
+    for x in [0.05, 1.0, 5.0] {
+        let d = 2.0 * 0.2 * x / h;
+        let text = format!(
+            "<mujoco><option gravity=\"0 0 0\"/><worldbody><body name=\"ball\">\
+             <joint name=\"pin\" type=\"ball\" damping=\"{d}\"/>\
+             <inertial pos=\"0 0 0\" mass=\"1\" diaginertia=\"0.2 0.2 0.2\"/></body></worldbody>\
+             <keyframe><key qpos=\"1 0 0 0\" qvel=\"3 -1 2\"/></keyframe></mujoco>"
+        );
+        let model = mjcf::parse(&text, "ball.xml").unwrap().model;
+        let mut sys = MultibodySystem::new(&model, MultibodyMethod::Liemid).unwrap();
+        let mut s = model.initial_state().unwrap();
+        let g = (1.0 - x) / (1.0 + x);
+        let mut factor = 1.0f64;
+        for n in 1..=40 {
+            sys.step(&mut s, h).unwrap();
+            factor *= g;
+            // The body-frame spin of an isotropic body: Π / I, the start spin times g^n in
+            // the body's axes (the spin axis is fixed in space and in the body).
+            let omega = s.pi[0] * (1.0 / 0.2);
+            let expected = Vec3::new(3.0, -1.0, 2.0) * factor;
+            assert!(
+                (omega - expected).max_abs() <= n as f64 * (1.0 + x) * 8.0 * f64::EPSILON * 3.0,
+                "x = {x}, step {n}: {omega:?} against {expected:?}"
+            );
+        }
+    }
+}
+
 /// The first two joint coordinates at `t_end` by liemid at `h`.
 fn liemid_angles(model: &Model, method: MultibodyMethod, h: f64, t_end: f64) -> [f64; 2] {
     let mut sys = MultibodySystem::new(model, method).unwrap();
@@ -106,11 +140,12 @@ fn damped_double_pendulum(d: f64) -> Model {
 }
 
 /// The spec's spatial test chain (hinge about y, hinge about x carried by the first link,
-/// ball; centres off the axes, full inertias) with both hinges damped.
+/// ball; centres off the axes, full inertias) with every joint damped.
 fn damped_test_chain() -> Model {
     let mut m = problems::test_chain();
     m.joints[0].damping = 0.3;
     m.joints[1].damping = 0.2;
+    m.joints[2].damping = 0.05;
     m
 }
 

@@ -1,7 +1,8 @@
 //! Hinge and slide dampers in the multibody step.
 //!
 //! A damper applies the generalized force `σ_k = −d_k q̇_k` along its coordinate gradient
-//! `D_k` (`q̇_k = D_k v`). The step splits it off symmetrically: a forward-Euler half-kick
+//! `D_k` (`q̇_k = D_k v`): a hinge's or slide's coordinate, or the three components of a
+//! ball's relative angular velocity (`−d (ω_child − ω_parent)`). The step splits it off symmetrically: a forward-Euler half-kick
 //! by the dampers at the start (the start velocities, `σ₀ = −d ∘ D(q) v`, added to the
 //! λ-kick), the conservative RATTLE/EA step, and a backward-Euler half-kick at the end
 //! solved with the μ-kick,
@@ -47,11 +48,13 @@ use crate::linalg::Vec3;
 use super::constraints::Row;
 use super::forces::apply;
 use super::method::StepReport;
+use super::model::JointKind;
 use super::rattle::{add_impulse, pose};
 use super::state::MultibodyState;
 use super::MultibodySystem;
 
-/// Scratch of the damper half-kicks, one entry per joint (`None`/zero without a damper).
+/// Scratch of the damper half-kicks, three rows per joint (`None`/zero where there is no
+/// damper row).
 #[derive(Clone, Debug, Default)]
 pub(super) struct DamperScratch {
     /// The coordinate gradient of each damped joint at the half-kick's configuration.
@@ -68,30 +71,53 @@ pub(super) struct DamperScratch {
 }
 
 impl DamperScratch {
-    pub(super) fn new(joints: usize, bodies: usize) -> Self {
+    pub(super) fn new(rows: usize, bodies: usize) -> Self {
         DamperScratch {
-            grad: vec![None; joints],
-            damping: vec![0.0; joints],
-            sigma: vec![0.0; joints],
-            rates0: vec![0.0; joints],
-            residual: vec![0.0; joints],
-            direction: vec![0.0; joints],
-            image: vec![0.0; joints],
+            grad: vec![None; rows],
+            damping: vec![0.0; rows],
+            sigma: vec![0.0; rows],
+            rates0: vec![0.0; rows],
+            residual: vec![0.0; rows],
+            direction: vec![0.0; rows],
+            image: vec![0.0; rows],
             linear: vec![Vec3::ZERO; bodies],
             angular: vec![Vec3::ZERO; bodies],
         }
     }
 
-    /// The gradients of the damped joints at poses `(c, R)`; returns how many there are.
+    /// The damper rows at poses `(c, R)`, three slots per joint (row `3k + m`): a hinge's or
+    /// slide's coordinate gradient in slot 0, a ball's relative angular velocity along the
+    /// world axes `e_m` in slots 0-2 (`e_m·(R_j Ω_j − R_i Ω_i)`: `∂/∂Ω_i = −R_iᵀ e_m`,
+    /// `∂/∂Ω_j = R_jᵀ e_m`; isotropic, so the force is `−d (ω_j − ω_i)` in any axes).
+    /// Returns how many rows there are.
     fn gradients(&mut self, sys: &MultibodySystem, c: &[Vec3], r: &[crate::linalg::Mat3]) -> usize {
         let mut count = 0;
         for (k, g) in sys.joints.iter().enumerate() {
-            self.damping[k] = sys.params[k].damping;
-            self.grad[k] = None;
-            if self.damping[k] > 0.0 {
-                let (pi, pj) = pose(g, c, r);
-                self.grad[k] = g.coordinate(pi, pj).map(|(_, row)| row);
-                count += usize::from(self.grad[k].is_some());
+            let d = sys.params[k].damping;
+            for m in 0..3 {
+                self.damping[3 * k + m] = d;
+                self.grad[3 * k + m] = None;
+            }
+            if d == 0.0 {
+                continue;
+            }
+            let (pi, pj) = pose(g, c, r);
+            if g.kind == JointKind::Ball {
+                for m in 0..3 {
+                    let mut e = [0.0; 3];
+                    e[m] = 1.0;
+                    let e = Vec3::from_array(e);
+                    self.grad[3 * k + m] = Some(Row {
+                        ci: Vec3::ZERO,
+                        ti: -(pi.1.transpose() * e),
+                        cj: Vec3::ZERO,
+                        tj: pj.1.transpose() * e,
+                    });
+                }
+                count += 3;
+            } else {
+                self.grad[3 * k] = g.coordinate(pi, pj).map(|(_, row)| row);
+                count += usize::from(self.grad[3 * k].is_some());
             }
         }
         count
@@ -249,18 +275,19 @@ impl MultibodySystem {
         self.damp_f.iter_mut().for_each(|v| *v = Vec3::ZERO);
         self.damp_t.iter_mut().for_each(|v| *v = Vec3::ZERO);
         let Some(sigma) = sigma else { return };
-        for (k, g) in self.joints.iter().enumerate() {
-            if let Some(row) = &grad[k] {
-                apply(g, row, sigma[k], &mut self.damp_f, &mut self.damp_t);
+        for (r, row) in grad.iter().enumerate() {
+            if let Some(row) = row {
+                apply(&self.joints[r / 3], row, sigma[r], &mut self.damp_f, &mut self.damp_t);
             }
         }
     }
 
-    /// The damped joints' rates `D_k v` at the velocities in `vel`, `omega`.
+    /// The damper rows' rates `D_r v` at the velocities in `vel`, `omega`.
     fn rates_into(&self, grad: &[Option<Row>], rates: &mut [f64]) {
-        for (k, g) in self.joints.iter().enumerate() {
-            rates[k] = match &grad[k] {
+        for (r, row) in grad.iter().enumerate() {
+            rates[r] = match row {
                 Some(row) => {
+                    let g = &self.joints[r / 3];
                     let (vi, wi) = g
                         .parent
                         .map_or((Vec3::ZERO, Vec3::ZERO), |p| (self.vel[p], self.omega[p]));

@@ -98,7 +98,8 @@ pub struct Joint {
     pub stiffness: f64,
     /// The spring's rest coordinate (MJCF `springref`, default 0).
     pub spring_ref: f64,
-    /// Viscous damping (N m s/rad or N s/m), hinge and slide only.
+    /// Viscous damping (N m s/rad or N s/m) on the joint rate of a hinge or slide, or on
+    /// the relative angular velocity of a ball (`−d (ω_child − ω_parent)`).
     pub damping: f64,
     /// MJCF `armature` (kg m² or kg); 0 when absent.
     pub armature: f64,

@@ -188,7 +188,11 @@ impl MultibodySystem {
                 JointParams {
                     stiffness: if one_dof { j.stiffness } else { 0.0 },
                     spring_ref: j.spring_ref,
-                    damping: if one_dof { j.damping } else { 0.0 },
+                    damping: if one_dof || j.kind == JointKind::Ball {
+                        j.damping
+                    } else {
+                        0.0
+                    },
                     range: if one_dof { j.range } else { None },
                 }
             })
@@ -245,7 +249,7 @@ impl MultibodySystem {
             torque1: z3.clone(),
             damp_f: z3.clone(),
             damp_t: z3.clone(),
-            dampers: DamperScratch::new(nj, nb),
+            dampers: DamperScratch::new(3 * nj, nb),
             vel: z3.clone(),
             omega: z3,
             solver: TreeSolver::new(&parents, &tree_rows, &loops),

@@ -15,10 +15,13 @@ use crate::error::{Error, Result};
 use crate::linalg::Vec3;
 
 impl JointSpaceModel {
-    /// The passive generalised force of a hinge or slide joint: `−k (q − q_ref) − d q̇`.
-    pub(super) fn passive(n: &Node, q: &[f64], v: &[f64]) -> f64 {
+    /// The passive generalised force on velocity `k` of a joint: `−k (q − q_ref) − d q̇` for
+    /// a hinge or slide, `−d ω_k` for a ball (its damper on the relative angular velocity),
+    /// 0 for the others.
+    pub(super) fn passive(n: &Node, q: &[f64], v: &[f64], k: usize) -> f64 {
         match n.kind {
             Kind::Hinge(_) | Kind::Slide(_) => -n.stiffness * (q[n.iq] - n.spring_ref) - n.damping * v[n.iv],
+            Kind::Ball => -n.damping * v[n.iv + k],
             _ => 0.0,
         }
     }
@@ -83,7 +86,9 @@ impl JointSpaceModel {
             }
             if nd == 1 {
                 d[0][0] += Self::armature(n);
-                w.uu[i][0] += Self::passive(n, q, v);
+            }
+            for k in 0..nd {
+                w.uu[i][k] += Self::passive(n, q, v, k);
             }
             if nd > 0 {
                 w.dinv[i] = invert_small(&d, nd).ok_or_else(|| {
@@ -199,7 +204,10 @@ impl JointSpaceModel {
                 tau[n.iv + k] = dot6(&w.s[i][k], &w.pa[i]);
             }
             if n.nd == 1 {
-                tau[n.iv] += Self::armature(n) * qdd[n.iv] - Self::passive(n, q, v);
+                tau[n.iv] += Self::armature(n) * qdd[n.iv];
+            }
+            for k in 0..n.nd {
+                tau[n.iv + k] -= Self::passive(n, q, v, k);
             }
             if let Some(p) = n.parent {
                 let fp = w.xf[i].force_to_parent(&w.pa[i]);

@@ -630,8 +630,11 @@ impl<'a, 'i> State<'a, 'i> {
             }
         }
         body.spring_ref = num("springref")?.map_or(0.0, unit) - reference;
-        if matches!(kind, RawKind::Ball | RawKind::Free) && (body.stiffness != 0.0 || body.damping != 0.0) {
-            self.ignored.note(&format!("{ty} joint stiffness and damping"));
+        if kind == RawKind::Ball && body.stiffness != 0.0 {
+            self.ignored.note("ball joint stiffness");
+        }
+        if kind == RawKind::Free && (body.stiffness != 0.0 || body.damping != 0.0) {
+            self.ignored.note("free joint stiffness and damping");
         }
         if num("frictionloss")?.is_some_and(|f| f != 0.0) {
             self.ignored.note("joint frictionloss");
