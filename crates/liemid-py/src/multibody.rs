@@ -186,7 +186,10 @@ fn multibody_run<'py>(
             model.joints.iter_mut().for_each(|j| j.armature = 0.0);
             let joints = model.joints.len();
             let mut system = MultibodySystem::new(&model, m).map_err(|e| py_error(py, &e, &sc.name))?;
-            let mut state = model.initial_state().map_err(|e| py_error(py, &e, &sc.name))?;
+            // As the CLI: a start off its loop-closing joints is projected onto them.
+            let (mut state, _, _) = system
+                .initial_state_on_loops(&model)
+                .map_err(|e| py_error(py, &e, &sc.name))?;
             samples.push_maximal(&system, &state, joints);
             py.detach(|| -> liemid::Result<()> {
                 for k in 1..=n {

@@ -56,6 +56,13 @@ def test_files_load_with_what_they_ignore() -> None:
     assert a.joints.shape == b.joints.shape == (2, 2)
     energy = a.relative_energy_error
     assert energy[0] == 0.0 and abs(energy[-1]) < 1e-4
+    # A scene that includes the arm, and a four-bar closed by an equality `connect`.
+    scene = multibody.load(ROOT / "examples" / "multibody" / "arm_scene.xml")
+    assert scene.bodies == arm.bodies and scene.joints == arm.joints
+    four_bar = multibody.load(ROOT / "examples" / "multibody" / "four_bar.xml")
+    assert four_bar.joints[-1] == ("D", "ball")
+    run = four_bar.run(step=1e-3, t_end=0.2, every=100)
+    assert run.max_position_constraint_violation < 1e-12
 
 
 def test_bad_input_raises(tmp_path: Path) -> None:

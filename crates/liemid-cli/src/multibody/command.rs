@@ -394,22 +394,16 @@ fn run_maximal(
 ) -> Result<(serde_json::Value, Sink), Failure> {
     let mut system =
         MultibodySystem::new(&sc.model, method).map_err(|e| Failure::Input(format!("{}: {e}", sc.name)))?;
-    let mut state = sc
-        .model
-        .initial_state()
-        .map_err(|e| Failure::Input(format!("{}: {e}", sc.name)))?;
-    if !sc.model.loop_joints().is_empty() {
-        // A keyframe written for MuJoCo's soft equalities may not close the loops exactly.
-        let start = |e: liemid::Error| Failure::Input(format!("{}: the start cannot close its loops: {e}", sc.name));
-        let position = system.project_positions(&mut state).map_err(start)?;
-        let velocity = system.project_velocities(&mut state).map_err(start)?;
-        if position > 1e-12 || velocity > 1e-12 {
-            eprintln!(
-                "liemid: note: {}: the start violated the loop-closing joints (relative position {position:.1e}, \
-                 velocity {velocity:.1e}); projected onto them",
-                sc.name
-            );
-        }
+    // A keyframe written for MuJoCo's soft equalities may not close the loops exactly.
+    let (mut state, position, velocity) = system
+        .initial_state_on_loops(&sc.model)
+        .map_err(|e| Failure::Input(format!("{}: the start: {e}", sc.name)))?;
+    if position > 1e-12 || velocity > 1e-12 {
+        eprintln!(
+            "liemid: note: {}: the start violated the loop-closing joints (relative position {position:.1e}, \
+             velocity {velocity:.1e}); projected onto them",
+            sc.name
+        );
     }
     let bodies = state.len();
     let joints = sc.model.joints.len();

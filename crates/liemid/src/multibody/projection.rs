@@ -9,11 +9,30 @@
 use crate::error::{Error, Result};
 use crate::linalg::Vec3;
 
+use super::model::Model;
 use super::rattle::{add_impulse, Matrix};
 use super::state::MultibodyState;
 use super::MultibodySystem;
 
 impl MultibodySystem {
+    /// The start of `model` ([`Model::initial_state`]) brought onto its loop-closing joints
+    /// when it has any: positions ([`Self::project_positions`]) then velocities
+    /// ([`Self::project_velocities`]). Returns the state and the relative position and
+    /// velocity violations found before (0 without loops). `model` is the one the system was
+    /// built from.
+    ///
+    /// # Errors
+    /// [`Model::initial_state`]'s errors and the projections'.
+    pub fn initial_state_on_loops(&mut self, model: &Model) -> Result<(MultibodyState, f64, f64)> {
+        let mut state = model.initial_state()?;
+        if model.loop_joints().is_empty() {
+            return Ok((state, 0.0, 0.0));
+        }
+        let position = self.project_positions(&mut state)?;
+        let velocity = self.project_velocities(&mut state)?;
+        Ok((state, position, velocity))
+    }
+
     /// Project the velocities of `state` onto the velocity constraints `G (v, Ω) = 0` in
     /// the kinetic-energy metric: `(G M⁻¹ Gᵀ) μ = −G (v, Ω)`, `p += G_cᵀ μ`,
     /// `Π += G_θᵀ μ` (minimum-norm `μ` for redundant loop rows). For joint velocities that
