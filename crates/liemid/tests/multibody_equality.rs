@@ -107,7 +107,7 @@ fn anchors_and_relative_poses_by_hand() {
     assert_eq!((j.kind, j.parent, j.child), (JointKind::Weld, Link::Body(0), 1));
     assert!((j.reference_rotation - rz(90.0)).max_abs() < 1e-15);
     close_v(j.anchor_parent, Vec3::new(1.0, 0.1, 0.0), 1e-15);
-    // weld with relpose: b 2 m along a's y, turned by Rz(180) (quaternion (0, 0, 0, 1)).
+    // weld with relpose (quaternion (0, 0, 0, 1): Rz(180)).
     let m = mjcf::parse(
         &two_bodies("<weld body1=\"a\" body2=\"b\" relpose=\"0 2 0 0 0 0 1\" anchor=\"0.1 0 0\"/>"),
         "w.xml",
@@ -116,7 +116,25 @@ fn anchors_and_relative_poses_by_hand() {
     .model;
     let j = &m.joints[2];
     assert!((j.reference_rotation - rz(180.0)).max_abs() < 1e-15);
-    close_v(j.anchor_parent, Vec3::new(-0.1, 2.0, 0.0), 1e-15);
+    // As MuJoCo: b's point (0.1, 0, 0) held on a's point (0, 2, 0): b's origin at (0.1, 2, 0).
+    close_v(j.anchor_parent, Vec3::new(0.0, 2.0, 0.0), 0.0);
+    close_v(j.anchor_child, Vec3::new(0.1, 0.0, 0.0), 0.0);
+    close_v(
+        j.anchor_parent - j.reference_rotation * j.anchor_child,
+        Vec3::new(0.1, 2.0, 0.0),
+        1e-15,
+    );
+    // connect from the world (body1 = world): the world point (1, 0.5, 0) on b.
+    let m = mjcf::parse(
+        &two_bodies("<connect body1=\"world\" body2=\"b\" anchor=\"1 0.5 0\"/>"),
+        "c.xml",
+    )
+    .unwrap()
+    .model;
+    let j = &m.joints[2];
+    assert_eq!((j.parent, j.child), (Link::World, 1));
+    close_v(j.anchor_parent, Vec3::new(1.0, 0.5, 0.0), 0.0);
+    close_v(j.anchor_child, Vec3::new(0.5, 0.0, 0.0), 1e-15);
     // weld of b to the world: b's pose in the world.
     let m = mjcf::parse(&two_bodies("<weld body1=\"b\"/>"), "w.xml").unwrap().model;
     let j = &m.joints[2];
@@ -150,7 +168,7 @@ fn refuses_unknown_merged_and_site_bodies() {
             "<connect body1=\"a\" body2=\"nobody\" anchor=\"0 0 0\"/>",
             &["body2 `nobody` is not a body"][..],
         ),
-        ("<connect body2=\"a\" anchor=\"0 0 0\"/>", &["needs body1"]),
+        ("<connect anchor=\"0 0 0\"/>", &["needs body1 or body2"]),
         ("<connect body1=\"a\" body2=\"a\" anchor=\"0 0 0\"/>", &["to itself"]),
         ("<connect body1=\"a\" body2=\"b\"/>", &["needs an anchor"]),
         ("<connect site1=\"s\" site2=\"t\" anchor=\"0 0 0\"/>", &["site-based"]),
@@ -180,4 +198,14 @@ fn a_start_off_the_loop_is_projected_onto_it() {
         let r = sys.step(&mut s, 1e-3).unwrap();
         assert!(r.position_violation < 1e-12);
     }
+    // 1 km from the origin the positions' round-off (about 1e-13 m) is above 1e-14 of the
+    // links: the projection stops where its decrease stalls, well inside 1e-10.
+    let text = std::fs::read_to_string(example("four_bar.xml")).unwrap();
+    let far = text.replace("<body name=\"crank\" ", "<body name=\"crank\" pos=\"1000 0 0\" ");
+    let mut m = mjcf::parse(&far, "far.xml").unwrap().model;
+    m.qpos = Some(vec![0.01, 0.0, 0.0]);
+    let mut sys = MultibodySystem::new(&m, MultibodyMethod::Liemid).unwrap();
+    let (s, before, _) = sys.initial_state_on_loops(&m).unwrap();
+    let (after, _) = sys.constraint_violation(&s);
+    assert!(before > 1e-3 && after <= 1e-10, "{before:e} -> {after:e}");
 }

@@ -1,6 +1,7 @@
 //! MJCF `<include>`: a scene that includes a robot loads as the robot itself; nested
-//! includes resolve against the main file's directory; errors name the included file and
-//! its line; cycles, missing files, deep chains and a wrong root are refused.
+//! includes resolve against the main file's directory, else the including file's; errors
+//! name the included file and its line; cycles, files included twice, missing files, deep
+//! chains and a wrong root are refused.
 
 #[path = "common/model_files.rs"]
 mod model_files;
@@ -91,6 +92,22 @@ fn nested_includes_resolve_against_the_main_file() {
     let whole = "<mujoco model=\"m\">\n<default><joint axis=\"0 1 0\"/></default>\n<worldbody><body name=\"b\">\
                  <joint name=\"j\"/><geom size=\"0.1\"/></body></worldbody>\n</mujoco>";
     assert_eq!(loaded.model, mjcf::parse(whole, "whole.xml").unwrap().model);
+    // As MuJoCo, a path not found next to the main file is looked for next to the file that
+    // includes it: robot/scene.xml includes arm.xml of its own folder.
+    std::fs::create_dir_all(dir.join("robot")).unwrap();
+    std::fs::copy(example("arm.xml"), dir.join("robot/arm.xml")).unwrap();
+    write(
+        &dir,
+        "robot/scene.xml",
+        "<mujoco>\n<include file=\"arm.xml\"/>\n</mujoco>",
+    );
+    let task = write(
+        &dir,
+        "task.xml",
+        "<mujoco model=\"task\">\n<include file=\"robot/scene.xml\"/>\n</mujoco>",
+    );
+    let arm = mjcf::load(&example("arm.xml")).unwrap();
+    assert_eq!(mjcf::load(&task).unwrap().model.bodies, arm.model.bodies);
 }
 
 #[test]
@@ -121,6 +138,15 @@ fn errors_name_the_included_file_and_its_line() {
         "<mujoco>\n<option timestep=\"0.01\"/>\n\n\n\n\n</mujoco>",
     );
     refused_in(mjcf::load(&main), "main.xml", 5, "joint", &["axis"]);
+    // XML that parses alone but not once spliced (a prefix declared on the included root)
+    // is still located in the included file.
+    write(&dir, "parts/ns.xml", "<mujoco xmlns:x=\"u\">\n<x:foo/>\n</mujoco>");
+    let ns_main = write(
+        &dir,
+        "ns_main.xml",
+        "<mujoco>\n\n\n<include file=\"parts/ns.xml\"/>\n</mujoco>",
+    );
+    refused_in(mjcf::load(&ns_main), "parts/ns.xml", 2, "xml", &["not well-formed"]);
     // Broken XML in an included file is found in that file.
     write(&dir, "parts/ok.xml", "<mujoco>\n<option>\n</mujoco>");
     refused_in(mjcf::load(&main), "parts/ok.xml", 3, "xml", &["not well-formed"]);
@@ -183,6 +209,15 @@ fn refuses_cycles_missing_files_deep_chains_and_other_roots() {
     );
     write(&dir, "c40.xml", "<mujoco/>");
     assert!(mjcf::load(&dir.join("c24.xml")).is_ok());
+    // A file included twice (MuJoCo: "already included"): also what bounds the work of a
+    // file that includes another many times over.
+    write(&dir, "leaf.xml", "<mujoco/>");
+    write(
+        &dir,
+        "main.xml",
+        "<mujoco>\n<include file=\"leaf.xml\"/>\n<include file=\"leaf.xml\"/>\n</mujoco>",
+    );
+    refused_in(mjcf::load(&main), "main.xml", 3, "include", &["already included"]);
     // Text without a file cannot resolve an include.
     refused(
         mjcf::parse("<mujoco>\n<include file=\"a.xml\"/>\n</mujoco>", "t.xml"),

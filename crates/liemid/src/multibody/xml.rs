@@ -117,8 +117,15 @@ pub(crate) fn parse_document<'i>(text: &'i str, file: &str, sources: &Sources) -
             roxmltree::Error::NodesLimitReached => format!("more than {MAX_NODES} XML nodes"),
             other => format!("not well-formed XML: {other}"),
         };
+        // In a text assembled from several files, the row is the assembled text's.
+        let start = text
+            .split_inclusive('\n')
+            .take(line.saturating_sub(1) as usize)
+            .map(str::len)
+            .sum();
+        let (file, line) = sources.locate(text, start, file);
         Error::ModelFile {
-            file: file.to_string(),
+            file,
             line,
             element: "xml".into(),
             message,

@@ -7,10 +7,11 @@
 //! - `connect body1 body2 anchor`: a ball joint at `anchor` (body1's frame); the point on
 //!   body2 (or the world when `body2` is omitted) is where that anchor is in the reference
 //!   pose.
-//! - `weld body1 body2 relpose anchor`: a weld joint; the relative pose is `relpose` (body2
-//!   in body1's frame) when its quaternion is not zero, else the reference pose's; the
-//!   joint's point is `anchor` on body2 (for a rigid weld the point does not change the
-//!   motion).
+//! - `weld body1 body2 relpose anchor`: a weld joint holding body2's point `anchor` on
+//!   body1's point `relpose[0..3]`, body2 turned by `relpose[3..7]` in body1's frame, when
+//!   that quaternion is not zero; else the reference pose's relative pose (body1's point is
+//!   then where body2's anchor is).
+//! - Either body may be the world (omitted, or `world`), not both.
 //!
 //! `active="false"` equalities are skipped; `joint`, `tendon`, `distance` and `flex`
 //! equalities, site-based ones and the softness parameters are listed as ignored. A body
@@ -76,14 +77,16 @@ pub(super) fn loop_joints(
                     .map(Some)
                     .ok_or_else(|| cx.err(node, format!("{attr} `{name}` is not a body of the model")))
             };
-            let b1 =
-                body("body1")?.ok_or_else(|| cx.err(node, format!("<{tag}> needs body1 (a body, not the world)")))?;
+            let b1 = body("body1")?;
             let b2 = body("body2")?;
-            if Some(b1) == b2 {
-                return Err(cx.err(
-                    node,
-                    format!("<{tag}> joins body `{}` to itself", model.bodies[b1].name),
-                ));
+            if b1 == b2 {
+                return Err(match b1 {
+                    Some(i) => cx.err(node, format!("<{tag}> joins body `{}` to itself", model.bodies[i].name)),
+                    None => cx.err(
+                        node,
+                        format!("<{tag}> needs body1 or body2 to be a body, not the world"),
+                    ),
+                });
             }
             let anchor = Vec3::from_array(cx.array::<3>(node, "anchor")?.unwrap_or([0.0; 3]));
             let pose = |b: Option<usize>| {
@@ -91,58 +94,42 @@ pub(super) fn loop_joints(
                     (model.bodies[i].position, model.bodies[i].rotation)
                 })
             };
-            let (p1, r1) = pose(Some(b1));
+            let (p1, r1) = pose(b1);
             let (p2, r2) = pose(b2);
-            let name = node.attribute("name").map_or_else(
-                || {
-                    let other = b2.map_or("world", |i| model.bodies[i].name.as_str());
-                    format!("{tag} {}-{other}", model.bodies[b1].name)
-                },
-                str::to_string,
-            );
+            let label = |b: Option<usize>| b.map_or("world", |i| model.bodies[i].name.as_str());
+            let name = node
+                .attribute("name")
+                .map_or_else(|| format!("{tag} {}-{}", label(b1), label(b2)), str::to_string);
             let joint = if tag == "connect" {
                 if node.attribute("anchor").is_none() {
                     return Err(cx.err(node, "<connect> needs an anchor (a point in body1's frame)"));
                 }
-                // The anchor in the world at the reference pose, then on body2.
+                // The anchor in the world at the reference pose, and that point on body2.
                 let x = p1 + r1 * anchor;
-                loop_joint(
-                    name,
-                    JointKind::Ball,
-                    b2,
-                    b1,
-                    r2.transpose() * (x - p2),
-                    anchor,
-                    r2.transpose() * r1,
-                )
+                let on_body2 = r2.transpose() * (x - p2);
+                match (b1, b2) {
+                    (Some(i), _) => loop_joint(name, JointKind::Ball, b2, i, on_body2, anchor, r2.transpose() * r1),
+                    (None, Some(j)) => loop_joint(name, JointKind::Ball, None, j, x, on_body2, r2),
+                    (None, None) => unreachable!("refused above"),
+                }
             } else {
-                // Body2's frame relative to body1's: `relpose`, else the reference pose's.
+                // MuJoCo's weld: body1's point `anchor1` on body2's point `anchor`, body2 turned
+                // by `rel` in body1's frame; `relpose` (position = anchor1, quaternion = rel)
+                // when its quaternion is not zero, else the reference pose's.
                 let relpose = cx.array::<7>(node, "relpose")?;
-                let rel = match relpose {
+                let (anchor1, rel) = match relpose {
                     Some(v) if v[3..].iter().any(|&q| q != 0.0) => {
                         let rot = quat_matrix([v[3], v[4], v[5], v[6]])
                             .ok_or_else(|| cx.err(node, "relpose has a zero or non-finite quaternion"))?;
                         (Vec3::new(v[0], v[1], v[2]), rot)
                     }
-                    _ => (r1.transpose() * (p2 - p1), r1.transpose() * r2),
+                    _ => (r1.transpose() * (p2 + r2 * anchor - p1), r1.transpose() * r2),
                 };
-                match b2 {
-                    // body2 on body1: the weld point `anchor` on body2.
-                    Some(j) => loop_joint(
-                        name,
-                        JointKind::Weld,
-                        Some(b1),
-                        j,
-                        rel.0 + rel.1 * anchor,
-                        anchor,
-                        rel.1,
-                    ),
-                    // The world welded to body1: body1 in the world is the inverse pose.
-                    None => {
-                        let r = rel.1.transpose();
-                        let p = -(r * rel.0);
-                        loop_joint(name, JointKind::Weld, None, b1, anchor, r.transpose() * (anchor - p), r)
-                    }
+                match (b1, b2) {
+                    (_, Some(j)) => loop_joint(name, JointKind::Weld, b1, j, anchor1, anchor, rel),
+                    // Welded to the world: body1 is the child, its attitude in the world rel⁻¹.
+                    (Some(i), None) => loop_joint(name, JointKind::Weld, None, i, anchor, anchor1, rel.transpose()),
+                    (None, None) => unreachable!("refused above"),
                 }
             };
             joints.push(joint);

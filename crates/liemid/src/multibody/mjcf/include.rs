@@ -3,12 +3,14 @@
 //! includes the robot and adds a floor and lights) loads as it is.
 //!
 //! Decisions:
-//! - A relative `file` is resolved against the directory of the main model file, as in
-//!   MuJoCo, also for includes inside included files.
+//! - A relative `file` is resolved as in MuJoCo: against the directory of the main model
+//!   file, else against the directory of the file that includes it.
 //! - Includes nest at most [`MAX_INCLUDE_DEPTH`] deep; a file that includes itself,
-//!   directly or through others, is refused naming the chain; the assembled text is bounded
-//!   by [`MAX_FILE_BYTES`] and every file is parsed within the same bounds as the main one
-//!   (size, no DTD, node count, nesting), before it is spliced.
+//!   directly or through others, is refused naming the chain, and so is a file included a
+//!   second time anywhere in the model (MuJoCo's "already included": it also bounds the
+//!   work); the assembled text is bounded by the 64 MiB of one model file, and every file
+//!   is parsed within the same bounds as the main one (size, no DTD, node count, nesting)
+//!   before it is spliced.
 //! - Errors name the file and line where the element stands, not the assembled text's.
 //!
 //! Reference: MuJoCo documentation, *XML Reference*, `include`
@@ -33,10 +35,12 @@ pub(super) fn expand(path: &Path) -> Result<(String, Sources)> {
         out: String::with_capacity(text.len()),
         sources: Sources::default(),
         chain: vec![canonical(path)],
+        seen: vec![canonical(path)],
         main: path.display().to_string(),
     };
     let name = assembler.main.clone();
-    assembler.splice(&text, &name, true)?;
+    let dir = assembler.base.clone();
+    assembler.splice(&text, &name, &dir, true)?;
     Ok((assembler.out, assembler.sources))
 }
 
@@ -47,6 +51,8 @@ struct Assembler {
     sources: Sources,
     /// The files being included, outermost first (to refuse cycles).
     chain: Vec<PathBuf>,
+    /// Every file read so far (to refuse a second inclusion).
+    seen: Vec<PathBuf>,
     main: String,
 }
 
@@ -57,8 +63,8 @@ fn canonical(path: &Path) -> PathBuf {
 
 impl Assembler {
     /// Appends `text` (all of it for the main file, else its root's content) to the output,
-    /// with its includes expanded.
-    fn splice(&mut self, text: &str, name: &str, main: bool) -> Result<()> {
+    /// with its includes expanded; `dir` is the file's own directory.
+    fn splice(&mut self, text: &str, name: &str, dir: &Path, main: bool) -> Result<()> {
         let doc = parse_document(text, name, Sources::NONE)?;
         let cx = Ctx {
             file: name,
@@ -93,7 +99,8 @@ impl Assembler {
                     format!("includes nested deeper than {MAX_INCLUDE_DEPTH} files are refused"),
                 ));
             }
-            let path = self.base.join(file);
+            let in_main = self.base.join(file);
+            let path = if in_main.exists() { in_main } else { dir.join(file) };
             let id = canonical(&path);
             if let Some(k) = self.chain.iter().position(|p| *p == id) {
                 let cycle: Vec<String> = self.chain[k..]
@@ -103,10 +110,18 @@ impl Assembler {
                     .collect();
                 return Err(cx.err(include, format!("the file includes itself: {}", cycle.join(" -> "))));
             }
+            if self.seen.contains(&id) {
+                return Err(cx.err(
+                    include,
+                    format!("`{}` is already included in this model", path.display()),
+                ));
+            }
             let included = read_bounded(&path)
                 .map_err(|e| cx.err(include, format!("cannot include `{}`: {e}", path.display())))?;
+            self.seen.push(id.clone());
             self.chain.push(id);
-            self.splice(&included, &path.display().to_string(), false)?;
+            let own_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+            self.splice(&included, &path.display().to_string(), &own_dir, false)?;
             self.chain.pop();
             at = include.range().end;
         }

@@ -44,7 +44,7 @@
 //! - `<equality>` `connect` and `weld` become exact loop-closing joints (a ball, a weld;
 //!   MuJoCo's are soft), satisfied in the reference pose as in MuJoCo (`equality.rs`);
 //!   other equalities are listed as ignored.
-//! - `<include file>` is expanded as MuJoCo does (see [`include`]); `<frame>`,
+//! - `<include file>` is expanded as MuJoCo does (see [`mod@include`]); `<frame>`,
 //!   `<composite>`, `<flexcomp>`, `<replicate>` and `<attach>` are refused (they add or move
 //!   bodies); actuators, tendons, sensors, joint and tendon equalities, contacts,
 //!   geom contact and visual properties, sites, cameras, lights, assets and the like are
@@ -73,7 +73,7 @@ use merge::KeyMap;
 pub use super::xml::Loaded;
 
 /// Loads an MJCF file (at most 64 MiB with its includes expanded), reading the files it
-/// `<include>`s (see [`include`]); no mesh or other asset file is read.
+/// `<include>`s (see [`mod@include`]); no mesh or other asset file is read.
 pub fn load(path: &Path) -> Result<Loaded> {
     let (text, sources) = include::expand(path)?;
     parse_assembled(&text, &path.display().to_string(), &sources)
