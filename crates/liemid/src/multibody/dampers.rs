@@ -258,16 +258,7 @@ impl MultibodySystem {
             self.omega[i] = self.inertia[i].apply_inverse(s.angular[i]);
         }
         if any_rows {
-            let scale = -1.0 / hh;
-            for (k, jr) in self.rows1.iter().enumerate() {
-                let g = &self.joints[k];
-                let (vi, wi) = g
-                    .parent
-                    .map_or((Vec3::ZERO, Vec3::ZERO), |p| (self.vel[p], self.omega[p]));
-                for r in 0..jr.n {
-                    self.rhs[k][r] = scale * jr.grad[r].rate(vi, wi, self.vel[g.child], self.omega[g.child]);
-                }
-            }
+            self.end_rates_rhs(-1.0 / hh);
             self.timed_solve();
             add_impulse(
                 &self.joints,

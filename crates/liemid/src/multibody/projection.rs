@@ -15,6 +15,24 @@ use super::state::MultibodyState;
 use super::MultibodySystem;
 
 impl MultibodySystem {
+    /// The rows at `state` into `rows1` and `G M⁻¹ Gᵀ` of them factored; `false` when
+    /// there are no rows (nothing factored).
+    fn factor_rows_of(&mut self, state: &MultibodyState) -> Result<bool> {
+        Self::rows_at(
+            &self.joints,
+            &self.limit,
+            &self.params,
+            &state.c,
+            &state.rotation,
+            &mut self.rows1,
+        );
+        if self.rows1.iter().all(|r| r.n == 0) {
+            return Ok(false);
+        }
+        self.factor(Matrix::End)?;
+        Ok(true)
+    }
+
     /// The start of `model` ([`Model::initial_state`]) brought onto its loop-closing joints
     /// when it has any: positions ([`Self::project_positions`]) then velocities
     /// ([`Self::project_velocities`]). Returns the state and the relative position and
@@ -46,28 +64,11 @@ impl MultibodySystem {
     /// (the velocity projection of RATTLE).
     pub fn project_velocities(&mut self, state: &mut MultibodyState) -> Result<f64> {
         let (_, before) = self.constraint_violation(state);
-        Self::rows_at(
-            &self.joints,
-            &self.limit,
-            &self.params,
-            &state.c,
-            &state.rotation,
-            &mut self.rows1,
-        );
-        if self.rows1.iter().all(|r| r.n == 0) {
+        if !self.factor_rows_of(state)? {
             return Ok(before);
         }
-        self.factor(Matrix::End)?;
         self.velocities(&state.p, &state.pi);
-        for (k, jr) in self.rows1.iter().enumerate() {
-            let g = &self.joints[k];
-            let (vi, wi) = g
-                .parent
-                .map_or((Vec3::ZERO, Vec3::ZERO), |p| (self.vel[p], self.omega[p]));
-            for r in 0..jr.n {
-                self.rhs[k][r] = -jr.grad[r].rate(vi, wi, self.vel[g.child], self.omega[g.child]);
-            }
-        }
+        self.end_rates_rhs(-1.0);
         self.timed_solve();
         add_impulse(&self.joints, &self.rows1, &self.delta, 1.0, &mut state.p, &mut state.pi);
         self.cache_valid = false;
@@ -105,15 +106,7 @@ impl MultibodySystem {
                 });
             }
             iterations += 1;
-            Self::rows_at(
-                &self.joints,
-                &self.limit,
-                &self.params,
-                &state.c,
-                &state.rotation,
-                &mut self.rows1,
-            );
-            self.factor(Matrix::End)?;
+            self.factor_rows_of(state)?;
             for (k, jr) in self.rows1.iter().enumerate() {
                 for r in 0..jr.n {
                     self.rhs[k][r] = -jr.value[r];

@@ -75,16 +75,7 @@ impl MultibodySystem {
             if !any_rows {
                 return Ok(());
             }
-            let s = -1.0 / hh;
-            for (k, jr) in self.rows1.iter().enumerate() {
-                let g = &self.joints[k];
-                let (vi, wi) = g
-                    .parent
-                    .map_or((Vec3::ZERO, Vec3::ZERO), |p| (self.vel[p], self.omega[p]));
-                for r in 0..jr.n {
-                    self.rhs[k][r] = s * jr.grad[r].rate(vi, wi, self.vel[g.child], self.omega[g.child]);
-                }
-            }
+            self.end_rates_rhs(-1.0 / hh);
             self.timed_solve();
             // A plastic limit row whose μ pulls is released and the solve redone.
             let mut released = false;
@@ -114,6 +105,15 @@ impl MultibodySystem {
             self.factor(Matrix::End)?;
             report.factorizations += 1;
         }
+    }
+
+    /// `rhs = scale · G(q⁺) (v, Ω)` over the end rows `rows1` at the velocities in `vel`,
+    /// `omega`: the right side of a velocity solve.
+    pub(super) fn end_rates_rhs(&mut self, scale: f64) {
+        let rhs = &mut self.rhs;
+        for_each_rate(&self.joints, &self.rows1, &self.vel, &self.omega, |k, r, rate| {
+            rhs[k][r] = scale * rate;
+        });
     }
 
     /// Velocities after the provisional μ-kick (for the end dampers).
