@@ -14,6 +14,7 @@ use crate::error::{Error, Result};
 use crate::linalg::{Mat3, Vec3};
 
 use super::constraints::{JointGeometry, Row};
+use super::model::JointKind;
 use super::rattle::{pose, MultibodySystem};
 
 /// A force law added to gravity, springs and constant loads: given the time and the
@@ -75,7 +76,16 @@ impl MultibodySystem {
                 continue;
             }
             let (pi, pj) = pose(g, c, r);
-            if let Some((q, grad)) = g.coordinate(pi, pj) {
+            if g.kind == JointKind::Ball {
+                // V = ½ k |θ|², θ = log(Qᵀ R_iᵀ R_j): the child's torque −k θ (its frame), the
+                // parent's k Q θ (its frame); exact, as θ is its own image under the
+                // inverse Jacobians of log.
+                let theta = ball_angle(g, pi.1, pj.1);
+                torque[g.child] -= theta * par.stiffness;
+                if let Some(p) = g.parent {
+                    torque[p] += (g.q * theta) * par.stiffness;
+                }
+            } else if let Some((q, grad)) = g.coordinate(pi, pj) {
                 apply(g, &grad, -par.stiffness * (q - par.spring_ref), force, torque);
             }
         }
@@ -94,4 +104,10 @@ pub(super) fn apply(g: &JointGeometry, grad: &Row, f: f64, force: &mut [Vec3], t
     }
     force[g.child] += grad.cj * f;
     torque[g.child] += grad.tj * f;
+}
+
+/// The rotation vector `θ = log(Qᵀ R_iᵀ R_j)` of a ball joint: the child's attitude relative
+/// to the parent's at the reference configuration (its spring's coordinate).
+pub(super) fn ball_angle(g: &JointGeometry, ri: &Mat3, rj: &Mat3) -> Vec3 {
+    crate::so3::log(&(g.q.transpose() * (ri.transpose() * *rj)))
 }

@@ -186,7 +186,11 @@ impl MultibodySystem {
             .map(|j| {
                 let one_dof = matches!(j.kind, JointKind::Hinge { .. } | JointKind::Slide { .. });
                 JointParams {
-                    stiffness: if one_dof { j.stiffness } else { 0.0 },
+                    stiffness: if one_dof || j.kind == JointKind::Ball {
+                        j.stiffness
+                    } else {
+                        0.0
+                    },
                     spring_ref: j.spring_ref,
                     damping: if one_dof || j.kind == JointKind::Ball {
                         j.damping

@@ -6,6 +6,7 @@ use crate::so3::Quaternion;
 
 use super::constraints::JointRows;
 use super::method::StepReport;
+use super::model::JointKind;
 use super::rattle::{pose, MultibodySystem};
 
 /// The state of `n` bodies in maximal coordinates: per body `i` the centre of mass `c_i`,
@@ -152,7 +153,9 @@ impl MultibodySystem {
                 continue;
             }
             let (pi, pj) = pose(g, &state.c, &state.rotation);
-            if let Some((q, _)) = g.coordinate(pi, pj) {
+            if g.kind == JointKind::Ball {
+                e += 0.5 * par.stiffness * super::forces::ball_angle(g, pi.1, pj.1).norm_squared();
+            } else if let Some((q, _)) = g.coordinate(pi, pj) {
                 e += 0.5 * par.stiffness * (q - par.spring_ref).powi(2);
             }
         }

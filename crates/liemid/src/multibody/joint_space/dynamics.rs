@@ -16,12 +16,20 @@ use crate::linalg::Vec3;
 
 impl JointSpaceModel {
     /// The passive generalised force on velocity `k` of a joint: `−k (q − q_ref) − d q̇` for
-    /// a hinge or slide, `−d ω_k` for a ball (its damper on the relative angular velocity),
-    /// 0 for the others.
+    /// a hinge or slide; for a ball `−k θ_k − d ω_k`, `θ` the rotation vector of its
+    /// quaternion (MuJoCo's ball spring, the gradient of `½ k |θ|²`) and `ω` its relative
+    /// angular velocity; 0 for the others.
     pub(super) fn passive(n: &Node, q: &[f64], v: &[f64], k: usize) -> f64 {
         match n.kind {
             Kind::Hinge(_) | Kind::Slide(_) => -n.stiffness * (q[n.iq] - n.spring_ref) - n.damping * v[n.iv],
-            Kind::Ball => -n.damping * v[n.iv + k],
+            Kind::Ball => {
+                let spring = if n.stiffness == 0.0 {
+                    0.0
+                } else {
+                    n.stiffness * ball_angle(&q[n.iq..n.iq + 4])[k]
+                };
+                -spring - n.damping * v[n.iv + k]
+            }
             _ => 0.0,
         }
     }
@@ -281,4 +289,13 @@ impl JointSpaceModel {
         }
         Ok(())
     }
+}
+
+/// The rotation vector `θ` of a ball joint's quaternion (w, x, y, z; normalised here).
+pub(super) fn ball_angle(q: &[f64]) -> Vec3 {
+    crate::so3::log(
+        &crate::so3::Quaternion::new(q[0], q[1], q[2], q[3])
+            .normalized()
+            .to_matrix(),
+    )
 }

@@ -244,6 +244,9 @@ impl JointSpaceModel {
                 let dq = q[n.iq] - n.spring_ref;
                 e += 0.5 * n.stiffness * dq * dq + 0.5 * Self::armature(n) * v[n.iv] * v[n.iv];
             }
+            if n.kind == Kind::Ball && n.stiffness != 0.0 {
+                e += 0.5 * n.stiffness * super::dynamics::ball_angle(&q[n.iq..n.iq + 4]).norm_squared();
+            }
         }
         Ok(e)
     }

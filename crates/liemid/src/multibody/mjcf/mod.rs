@@ -630,9 +630,6 @@ impl<'a, 'i> State<'a, 'i> {
             }
         }
         body.spring_ref = num("springref")?.map_or(0.0, unit) - reference;
-        if kind == RawKind::Ball && body.stiffness != 0.0 {
-            self.ignored.note("ball joint stiffness");
-        }
         if kind == RawKind::Free && (body.stiffness != 0.0 || body.damping != 0.0) {
             self.ignored.note("free joint stiffness and damping");
         }
