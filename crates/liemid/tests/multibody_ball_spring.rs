@@ -29,12 +29,12 @@ fn a_pinned_ball_on_a_spring_oscillates_at_the_closed_form_frequency() {
     let omega = (k / inertia).sqrt();
     let t_end = 2.0;
     let mut errors = Vec::new();
-    for h in [4e-3, 2e-3, 1e-3] {
+    for h in [4e-3f64, 2e-3, 1e-3] {
         let mut sys = MultibodySystem::new(&model, MultibodyMethod::Liemid).unwrap();
         let mut st = model.initial_state().unwrap();
         let e0 = sys.energy(&st);
         assert!((e0 - 0.5 * k * amplitude * amplitude).abs() < 1e-15, "{e0}");
-        let n = (t_end / h as f64).round() as usize;
+        let n = (t_end / h).round() as usize;
         let mut worst: f64 = 0.0;
         for step in 1..=n {
             sys.step(&mut st, h).unwrap();
