@@ -1,7 +1,7 @@
 //! Hinge and slide dampers in the multibody step, `BE_D(h/2) ∘ RATTLE(h) ∘ FE_D(h/2)`
 //! (the end half-kick implicit, by conjugate gradients on `(diag(1/d) + (h/2) A) σ = −r₀`):
-//! a damper turns a joint rate by `(1 − x)/(1 + x)` per step, `x = h d/(2I)`, at any `x`
-//! (the trapezoidal rule); second order against the joint-space reference (RK4 at a small
+//! a damper turns a joint rate by `(1 − x)/(1 + x)` per step, `x = h d/(2I)` (the
+//! trapezoidal rule), and above `x = 2` by `1/(1 + x)²` (backward Euler at the start too); second order against the joint-space reference (RK4 at a small
 //! step) on a planar and on a spatial chain, order 4 composed; stable and constraint-exact
 //! where the explicit damper failed; a composition's negative sub-step with `x ≥ 1` is an
 //! error, not a blow-up; no allocation per step.
@@ -29,22 +29,32 @@ fn wheel(d: f64) -> Model {
     mjcf::parse(&text, "wheel.xml").unwrap().model
 }
 
+/// Per step: the rate's factor and the drift's factor (the drift moves at that times the
+/// start rate) of a damper with `x = h d/(2I)`: the trapezoidal rule up to `x = 2`,
+/// backward Euler in both half-kicks above.
+fn damper_factors(x: f64) -> (f64, f64) {
+    if x > 2.0 {
+        (1.0 / ((1.0 + x) * (1.0 + x)), 1.0 / (1.0 + x))
+    } else {
+        ((1.0 - x) / (1.0 + x), 1.0 - x)
+    }
+}
+
 #[test]
 fn a_damper_decays_by_the_trapezoidal_factor_at_any_stiffness() {
     let h = 0.01;
-    // x = h d / (2 I): mild, at the explicit damper's limit, stiff (the drift's rate
-    // (1 − x) ω stays below half a turn per step at 3 rad/s up to x near 100).
-    for x in [0.05, 1.0, 5.0, 50.0] {
+    // x = h d / (2 I): mild, near the switch, stiff and very stiff (the trapezoidal drift
+    // would move at (1 − x) ω: 15 rad in a step at x = 500).
+    for x in [0.05, 1.5, 5.0, 50.0, 500.0] {
         let d = 2.0 * 0.2 * x / h;
         let model = wheel(d);
         let mut sys = MultibodySystem::new(&model, MultibodyMethod::Liemid).unwrap();
         let mut s = model.initial_state().unwrap();
-        let g = (1.0 - x) / (1.0 + x);
+        let (g, drift) = damper_factors(x);
         let (mut rate, mut angle) = (3.0f64, 0.0f64);
         for n in 1..=40 {
             sys.step(&mut s, h).unwrap();
-            // The drift turns the wheel at the start-kicked rate (1 − x) ω_n.
-            angle += h * (1.0 - x) * rate;
+            angle += h * drift * rate;
             rate *= g;
             // Each step's rounding is amplified by the conditioning of the implicit kick,
             // 1 + x: n steps, a few ulps each.
@@ -66,9 +76,9 @@ fn a_damper_decays_by_the_trapezoidal_factor_at_any_stiffness() {
 #[test]
 fn a_ball_damper_decays_the_relative_spin_by_the_same_factor() {
     // A ball of isotropic inertia 0.2 about its centre, pinned there, spinning at
-    // (3, −1, 2) rad/s: the damper −d ω turns ω by (1 − x)/(1 + x) per step.
+    // (3, −1, 2) rad/s: the damper −d ω turns ω by the wheel's factor per step.
     let h = 0.01;
-    for x in [0.05, 1.0, 5.0] {
+    for x in [0.05, 1.5, 5.0] {
         let d = 2.0 * 0.2 * x / h;
         let text = format!(
             "<mujoco><option gravity=\"0 0 0\"/><worldbody><body name=\"ball\">\
@@ -79,7 +89,7 @@ fn a_ball_damper_decays_the_relative_spin_by_the_same_factor() {
         let model = mjcf::parse(&text, "ball.xml").unwrap().model;
         let mut sys = MultibodySystem::new(&model, MultibodyMethod::Liemid).unwrap();
         let mut s = model.initial_state().unwrap();
-        let g = (1.0 - x) / (1.0 + x);
+        let (g, _) = damper_factors(x);
         let mut factor = 1.0f64;
         for n in 1..=40 {
             sys.step(&mut s, h).unwrap();
@@ -219,4 +229,31 @@ fn damped_steps_allocate_nothing() {
         }
         assert_eq!(allocations() - before, 0, "{} allocates", method.name());
     }
+}
+
+#[test]
+fn a_stiff_damper_under_a_load_creeps_at_the_exact_rate() {
+    // A 1 kg arm on a hinge about y at the world origin, its centre 0.1 m along x, I about
+    // the axis 0.0101 kg m², d = 100: at h = 1e-2, x = h d/(2I) = 49.5 (backward Euler in
+    // both half-kicks). Overdamped, it creeps at the rate where the damper holds gravity's
+    // torque: θ' = −m g r cos θ / d (about 9.8e-3 rad/s), reached within I/d = 1e-4 s.
+    let text = "<mujoco><worldbody><body name=\"arm\"><joint name=\"j\" axis=\"0 1 0\" damping=\"100\"/>\
+                <inertial pos=\"0.1 0 0\" mass=\"1\" diaginertia=\"1e-4 1e-4 1e-4\"/></body></worldbody></mujoco>";
+    let model = mjcf::parse(text, "creep.xml").unwrap().model;
+    let mut sys = MultibodySystem::new(&model, MultibodyMethod::Liemid).unwrap();
+    let mut s = model.initial_state().unwrap();
+    for _ in 0..20 {
+        sys.step(&mut s, 1e-2).unwrap();
+    }
+    let theta = sys.joint_coordinate(&s, 0).unwrap();
+    // The arm's rate about y: its body-frame spin Π / I_c (the axis is y in the body too).
+    let omega_y = s.pi[0].y / 1e-4;
+    // The hinge angle turns with the body about +y; gravity −z on the centre at x pulls it
+    // down: torque about y = r × F = (0.1 cos θ, 0, −0.1 sin θ) × (0, 0, −9.81) → y: 0.981 cos θ.
+    let expected = 0.981 * theta.cos() / 100.0;
+    println!("creep: θ = {theta}, rate {omega_y}, expected {expected}");
+    assert!(
+        (omega_y - expected).abs() < 1e-3 * expected.abs(),
+        "{omega_y} against {expected}"
+    );
 }

@@ -371,15 +371,22 @@ impl Poses for Maximal<'_> {
     }
 }
 
-/// When step `h` is beyond the model's damper bound ([`liemid::multibody::model::Model::damper_step_bound`]):
-/// which joint's damper is stiff at `h` and the step that keeps it tame.
-fn stiff_damper(model: &liemid::multibody::model::Model, h: f64) -> Option<String> {
+/// For a composition (its negative sub-steps anti-damp) whose step `h` is beyond the
+/// model's damper bound ([`liemid::multibody::model::Model::damper_step_bound`]): which
+/// joint's damper is too stiff at `h` and the step that holds it.
+fn stiff_damper(
+    model: &liemid::multibody::model::Model,
+    method: liemid::multibody::MultibodyMethod,
+    h: f64,
+) -> Option<String> {
+    if method == liemid::multibody::MultibodyMethod::Liemid {
+        return None;
+    }
     let (k, bound) = model.damper_step_bound().filter(|&(_, bound)| h > bound)?;
     let j = &model.joints[k];
     Some(format!(
-        "joint `{}` has damping {} against the child's inertia about its axis: above h = 2 I / d = {:.3e} the \
-         damper rings and a composition's negative sub-step cannot hold it; take a smaller --step, --method liemid \
-         or --method rk4",
+        "joint `{}` has damping {} against the child's inertia about its axis: a composition's negative \
+         sub-step cannot hold it above h = 2 I / d = {:.3e}; take --method liemid, a smaller --step or --method rk4",
         j.name,
         Num(j.damping),
         bound
@@ -433,7 +440,7 @@ fn run_maximal(
             }
             Err(e) => {
                 bar.finish_and_clear();
-                let hint = stiff_damper(&sc.model, h)
+                let hint = stiff_damper(&sc.model, method, h)
                     .map(|w| format!(" ({w})"))
                     .unwrap_or_default();
                 return Err(sink.failed(format!("{}: at t = {}: {e}{hint}", sc.name, Num(state.t))));

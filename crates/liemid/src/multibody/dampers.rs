@@ -1,11 +1,11 @@
-//! Hinge and slide dampers in the multibody step.
+//! Hinge, slide and ball dampers in the multibody step.
 //!
 //! A damper applies the generalized force `σ_k = −d_k q̇_k` along its coordinate gradient
 //! `D_k` (`q̇_k = D_k v`): a hinge's or slide's coordinate, or the three components of a
-//! ball's relative angular velocity (`−d (ω_child − ω_parent)`). The step splits it off symmetrically: a forward-Euler half-kick
-//! by the dampers at the start (the start velocities, `σ₀ = −d ∘ D(q) v`, added to the
-//! λ-kick), the conservative RATTLE/EA step, and a backward-Euler half-kick at the end
-//! solved with the μ-kick,
+//! ball's relative angular velocity (`−d (ω_child − ω_parent)`). The step splits it off
+//! symmetrically: a forward-Euler half-kick by the dampers at the start (the start
+//! velocities, `σ₀ = −d ∘ D(q) v`, added to the λ-kick), the conservative RATTLE/EA step,
+//! and a backward-Euler half-kick at the end solved with the μ-kick,
 //!
 //! ```text
 //!     Φ(h) = BE_D(h/2) ∘ RATTLE(h) ∘ FE_D(h/2),
@@ -15,15 +15,22 @@
 //! Euler, so `Φ(h)` is symmetric (`Φ(−h) = Φ(h)⁻¹`) and second order, and the compositions
 //! (`liemid4`…) keep their orders. A damper on a body of inertia `I` (parent held) turns
 //! the joint rate by `(1 − x)/(1 + x)` per step, `x = h d/(2I)`: the trapezoidal rule,
-//! A-stable, and under a constant load the rate settles at the exact terminal rate. The
-//! drift moves at the start-kicked rate, `(1 − x)` times the start rate: for a stiff
-//! damper (`x ≫ 1`) that rate alternates in sign and decays as `((1 − x)/(1 + x))ⁿ`, so
-//! a fast joint with `x` in the hundreds can turn its body too far in one step (a
-//! numerical error naming the step); `x` of a few is harmless.
+//! A-stable, and under a constant load the rate settles at the exact creep rate.
 //!
-//! The end half-kick is linear: the end velocities are `v⁺(σ) = v⁺(0) + (h/2) P M⁻¹ Dᵀ σ`
-//! (`P` the projection of the velocity solve) and `A = D P M⁻¹ Dᵀ` is symmetric positive
-//! semi-definite, so `σ = −d ∘ r(σ)`, `r(σ) = r₀ + (h/2) A σ`, is
+//! The drift moves at the start-kicked rate, `1 − x` times the start rate, which for
+//! `x > 2` is larger than the rate itself and alternates in sign (a fast joint behind a
+//! damper with `x` in the hundreds would turn its body by radians in one step). So a
+//! damper row whose `x`, estimated from the row's own response `D M⁻¹ Dᵀ` (an upper
+//! bound of the constrained one), exceeds 2 takes backward Euler at the start as well:
+//! `σ₀` solved at the start configuration with the start forces in it, so that the rate
+//! turns by `1/(1 + x)²` per step (L-stable, no ringing, the drift at `1/(1 + x)` of the
+//! start rate) and the creep under a steady load is still exact. Such a row is then first
+//! order, which is what an unresolved mode (`x > 2`) allows; models without one are not
+//! touched.
+//!
+//! The implicit half-kicks are linear. At the end the velocities are
+//! `v⁺(σ) = v⁺(0) + (h/2) P M⁻¹ Dᵀ σ` (`P` the projection of the velocity solve) and
+//! `A = D P M⁻¹ Dᵀ` is symmetric positive semi-definite, so `σ = −d ∘ r(σ)`, `r(σ) = r₀ + (h/2) A σ`, is
 //!
 //! ```text
 //!     (diag(1/d) + (h/2) A) σ = −r₀,
@@ -33,10 +40,12 @@
 //! with `diag(d)` (eigenvalues of the preconditioned matrix in `[1, 1 + x]`), one solve
 //! with the μ-kick's factorization per iteration (the response to the damping forces
 //! alone), stopped when the residual is at 8 ulps of the rates; after `2 n + 8`
-//! iterations for `n` damper rows a residual above `1e-10` of the rates is an error. A
-//! composition's negative sub-steps make the matrix indefinite once `|h| d/(2I) ≥ 1`: that is reported
-//! as a numerical error (anti-damping that strong has no stable step). Dampers are not
-//! conservative: the step is then neither symplectic nor energy-preserving.
+//! iterations for `n` damper rows a residual above `1e-10` of the rates is an error. The
+//! start's is the same system over the stiff rows, projected with the start rows. A
+//! composition's negative sub-steps make the matrix indefinite once `|h| d/(2I) ≥ 1`:
+//! that is reported as a numerical error (anti-damping that strong has no stable step).
+//! Dampers are not conservative: the step is then neither symplectic nor
+//! energy-preserving.
 //!
 //! Reference: E. Hairer, C. Lubich, G. Wanner, *Geometric Numerical Integration*, 2nd ed.,
 //! Springer 2006, II.3-II.5 (adjoint methods, splitting, composition); M. R. Hestenes,
@@ -49,7 +58,7 @@ use super::constraints::Row;
 use super::forces::apply;
 use super::method::StepReport;
 use super::model::JointKind;
-use super::rattle::{add_impulse, pose};
+use super::rattle::{add_impulse, pose, Matrix};
 use super::state::MultibodyState;
 use super::MultibodySystem;
 
@@ -65,6 +74,8 @@ pub(super) struct DamperScratch {
     residual: Vec<f64>,
     direction: Vec<f64>,
     image: Vec<f64>,
+    /// The rows solved implicitly by [`MultibodySystem::solve_dampers`].
+    active: Vec<bool>,
     /// Per body: the response's momenta.
     linear: Vec<Vec3>,
     angular: Vec<Vec3>,
@@ -80,6 +91,7 @@ impl DamperScratch {
             residual: vec![0.0; rows],
             direction: vec![0.0; rows],
             image: vec![0.0; rows],
+            active: vec![false; rows],
             linear: vec![Vec3::ZERO; bodies],
             angular: vec![Vec3::ZERO; bodies],
         }
@@ -125,21 +137,80 @@ impl DamperScratch {
 }
 
 impl MultibodySystem {
-    /// The start half-kick `FE_D(h/2)`: the damping forces at the state's velocities into
-    /// `damp_f`, `damp_t`, for the λ-kick to add.
-    pub(super) fn start_dampers(&mut self, state: &MultibodyState) {
+    /// The start half-kick: the damping forces at the state's velocities (`FE_D(h/2)`) into
+    /// `damp_f`, `damp_t`, for the λ-kick to add; a stiff damper row (`x > 1`) instead
+    /// backward Euler, solved at the start configuration (module docs). `t` and `hh = h/2`
+    /// are the step's.
+    pub(super) fn start_dampers(
+        &mut self,
+        state: &MultibodyState,
+        t: f64,
+        hh: f64,
+        report: &mut StepReport,
+    ) -> Result<()> {
         let mut s = core::mem::take(&mut self.dampers);
+        let result = self.start_dampers_in(&mut s, state, t, hh, report);
+        self.dampers = s;
+        result
+    }
+
+    fn start_dampers_in(
+        &mut self,
+        s: &mut DamperScratch,
+        state: &MultibodyState,
+        t: f64,
+        hh: f64,
+        report: &mut StepReport,
+    ) -> Result<()> {
         s.gradients(self, &state.c, &state.rotation);
         for i in 0..self.mass.len() {
             self.vel[i] = state.p[i] * (1.0 / self.mass[i]);
             self.omega[i] = self.inertia[i].apply_inverse(state.pi[i]);
         }
         self.rates_into(&s.grad, &mut s.rates0);
-        for k in 0..s.sigma.len() {
-            s.sigma[k] = -s.damping[k] * s.rates0[k];
+        let mut stiff = 0;
+        for r in 0..s.sigma.len() {
+            s.active[r] = false;
+            s.sigma[r] = 0.0;
+            s.direction[r] = 0.0;
+            let Some(row) = s.grad[r] else { continue };
+            // x = (h/2) d D M⁻¹ Dᵀ: the row's own response bounds the constrained one above.
+            // Up to x = 2 the trapezoidal drift's factor 1 − x stays within [−1, 1].
+            let g = &self.joints[r / 3];
+            let own = |i: Option<usize>, c: Vec3, w: Vec3| {
+                i.map_or(0.0, |i| {
+                    c.norm_squared() / self.mass[i] + w.dot(self.inertia[i].apply_inverse(w))
+                })
+            };
+            let x = hh * s.damping[r] * (own(g.parent, row.ci, row.ti) + own(Some(g.child), row.cj, row.tj));
+            if x > 2.0 {
+                s.active[r] = true;
+                stiff += 1;
+            } else {
+                s.sigma[r] = -s.damping[r] * s.rates0[r];
+                s.direction[r] = s.sigma[r];
+            }
+        }
+        if stiff > 0 {
+            // The stiff rows' rates after the start half-kick by the forces and the explicit
+            // rows, projected on G(q) v = 0: the force in the implicit solve makes the
+            // creep under a steady load exact (σ = −F at rest), as the trapezoidal rule's.
+            let any_rows = self.rows0.iter().any(|r| r.n > 0);
+            if any_rows && !self.factor_rows0 {
+                self.factor(Matrix::Start)?;
+                report.factorizations += 1;
+            }
+            self.set_dampers(&s.grad, Some(&s.sigma));
+            for i in 0..self.mass.len() {
+                s.linear[i] = state.p[i] + (self.force[i] + self.damp_f[i]) * hh;
+                s.angular[i] = state.pi[i] + (self.torque[i] + self.damp_t[i]) * hh;
+            }
+            self.project_momenta(s, hh, any_rows, true);
+            self.rates_into(&s.grad, &mut s.rates0);
+            self.solve_dampers(s, t, hh, any_rows, true)?;
         }
         self.set_dampers(&s.grad, Some(&s.sigma));
-        self.dampers = s;
+        Ok(())
     }
 
     /// The end half-kick `BE_D(h/2)` solved with the μ-kick (module docs), `hh = h/2`, in
@@ -160,9 +231,8 @@ impl MultibodySystem {
         any_rows: bool,
         report: &mut StepReport,
     ) -> Result<()> {
-        let n = s.sigma.len();
         let (c, r) = (core::mem::take(&mut self.c_new), core::mem::take(&mut self.r_new));
-        let count = s.gradients(self, &c, &r);
+        s.gradients(self, &c, &r);
         self.c_new = c;
         self.r_new = r;
         // r₀: the rates without end damping; this pass also settles the active limits.
@@ -170,18 +240,42 @@ impl MultibodySystem {
         self.velocity_pass(hh, any_rows, report)?;
         self.end_velocities(hh);
         self.rates_into(&s.grad, &mut s.rates0);
-        s.sigma.iter_mut().for_each(|x| *x = 0.0);
-        let scale = s.rates0.iter().fold(0.0f64, |m, r| m.max(r.abs()));
+        for r in 0..s.sigma.len() {
+            s.active[r] = s.grad[r].is_some();
+            s.sigma[r] = 0.0;
+        }
+        self.solve_dampers(s, t, hh, any_rows, false)?;
+        // The μ-kick at the solved damping.
+        self.set_dampers(&s.grad, Some(&s.sigma));
+        self.velocity_pass(hh, any_rows, report)
+    }
+
+    /// Backward Euler for the active damper rows: `(diag(1/d) + (h/2) A) σ = −r₀` on them by
+    /// preconditioned conjugate gradients (module docs), the other rows' forces held; `A`
+    /// projected on the start rows (`start`) or the end rows, whose factorization is current.
+    fn solve_dampers(&mut self, s: &mut DamperScratch, t: f64, hh: f64, any_rows: bool, start: bool) -> Result<()> {
+        let n = s.sigma.len();
+        let mut count = 0;
+        let mut scale: f64 = 0.0;
+        for r in 0..n {
+            if s.active[r] {
+                count += 1;
+                scale = scale.max(s.rates0[r].abs());
+            }
+        }
         if scale == 0.0 {
             return Ok(());
         }
         let tol = 8.0 * f64::EPSILON * scale;
         // The residual b − Kσ at σ = 0 and the preconditioned direction d ∘ residual.
         let mut rz = 0.0;
-        for k in 0..n {
-            s.residual[k] = -s.rates0[k];
-            s.direction[k] = s.damping[k] * s.residual[k];
-            rz += s.residual[k] * s.direction[k];
+        for r in 0..n {
+            (s.residual[r], s.direction[r]) = if s.active[r] {
+                (-s.rates0[r], -s.damping[r] * s.rates0[r])
+            } else {
+                (0.0, 0.0)
+            };
+            rz += s.residual[r] * s.direction[r];
         }
         let mut worst = scale;
         let mut iterations = 0;
@@ -206,12 +300,12 @@ impl MultibodySystem {
             }
             iterations += 1;
             // K p = p / d + (h/2) A p.
-            self.damper_response(s, hh, any_rows);
+            self.damper_response(s, hh, any_rows, start);
             let mut pkp = 0.0;
-            for k in 0..n {
-                if s.grad[k].is_some() {
-                    s.image[k] += s.direction[k] / s.damping[k];
-                    pkp += s.direction[k] * s.image[k];
+            for r in 0..n {
+                if s.active[r] {
+                    s.image[r] += s.direction[r] / s.damping[r];
+                    pkp += s.direction[r] * s.image[r];
                 }
             }
             if pkp.is_nan() || pkp <= 0.0 {
@@ -228,52 +322,57 @@ impl MultibodySystem {
             let alpha = rz / pkp;
             worst = 0.0;
             let mut rz_next = 0.0;
-            for k in 0..n {
-                s.sigma[k] += alpha * s.direction[k];
-                s.residual[k] -= alpha * s.image[k];
-                worst = worst.max(s.residual[k].abs());
-                rz_next += s.damping[k] * s.residual[k] * s.residual[k];
+            for r in 0..n {
+                if s.active[r] {
+                    s.sigma[r] += alpha * s.direction[r];
+                    s.residual[r] -= alpha * s.image[r];
+                    worst = worst.max(s.residual[r].abs());
+                    rz_next += s.damping[r] * s.residual[r] * s.residual[r];
+                }
             }
             let beta = rz_next / rz;
             rz = rz_next;
-            for k in 0..n {
-                s.direction[k] = s.damping[k] * s.residual[k] + beta * s.direction[k];
+            for r in 0..n {
+                if s.active[r] {
+                    s.direction[r] = s.damping[r] * s.residual[r] + beta * s.direction[r];
+                }
             }
         }
-        // The μ-kick at the solved damping.
-        self.set_dampers(&s.grad, Some(&s.sigma));
-        self.velocity_pass(hh, any_rows, report)
+        Ok(())
     }
 
-    /// `(h/2) A p` into `s.image`: the damped joints' rates after a half-kick by the damping
-    /// forces `Dᵀ p` (`p = s.direction`) alone, projected on `G(q⁺) v = 0` with the μ-kick's
-    /// factorization (linear: no other momentum enters, so nothing cancels).
-    fn damper_response(&mut self, s: &mut DamperScratch, hh: f64, any_rows: bool) {
+    /// `(h/2) A p` into `s.image`: the damper rows' rates after a half-kick by the damping
+    /// forces `Dᵀ p` (`p = s.direction`) alone, projected on `G v = 0` with the current
+    /// factorization, of the start rows (`start`) or the end rows (linear: no other
+    /// momentum enters, so nothing cancels).
+    fn damper_response(&mut self, s: &mut DamperScratch, hh: f64, any_rows: bool, start: bool) {
         self.set_dampers(&s.grad, Some(&s.direction));
-        let nb = self.mass.len();
-        for i in 0..nb {
+        for i in 0..self.mass.len() {
             s.linear[i] = self.damp_f[i] * hh;
             s.angular[i] = self.damp_t[i] * hh;
+        }
+        self.project_momenta(s, hh, any_rows, start);
+        self.rates_into(&s.grad, &mut s.image);
+    }
+
+    /// The velocities of the momenta `s.linear`, `s.angular` projected on `G v = 0` (the
+    /// start rows or the end rows, factored), in `vel`, `omega` (the momenta are changed).
+    fn project_momenta(&mut self, s: &mut DamperScratch, hh: f64, any_rows: bool, start: bool) {
+        let nb = self.mass.len();
+        for i in 0..nb {
             self.vel[i] = s.linear[i] * (1.0 / self.mass[i]);
             self.omega[i] = self.inertia[i].apply_inverse(s.angular[i]);
         }
         if any_rows {
-            self.end_rates_rhs(-1.0 / hh);
+            self.rates_rhs(start, -1.0 / hh);
             self.timed_solve();
-            add_impulse(
-                &self.joints,
-                &self.rows1,
-                &self.delta,
-                hh,
-                &mut s.linear,
-                &mut s.angular,
-            );
+            let rows = if start { &self.rows0 } else { &self.rows1 };
+            add_impulse(&self.joints, rows, &self.delta, hh, &mut s.linear, &mut s.angular);
             for i in 0..nb {
                 self.vel[i] = s.linear[i] * (1.0 / self.mass[i]);
                 self.omega[i] = self.inertia[i].apply_inverse(s.angular[i]);
             }
         }
-        self.rates_into(&s.grad, &mut s.image);
     }
 
     /// The damping forces `Dᵀ σ` into `damp_f`, `damp_t` (`None`: zero).

@@ -68,7 +68,7 @@ impl MultibodySystem {
             return Ok(before);
         }
         self.velocities(&state.p, &state.pi);
-        self.end_rates_rhs(-1.0);
+        self.rates_rhs(false, -1.0);
         self.timed_solve();
         add_impulse(&self.joints, &self.rows1, &self.delta, 1.0, &mut state.p, &mut state.pi);
         self.cache_valid = false;

@@ -477,7 +477,7 @@ impl MultibodySystem {
         let hh = 0.5 * h;
         let t = state.t;
         if self.has_damping {
-            self.start_dampers(state);
+            self.start_dampers(state, t, hh, report)?;
         }
         for i in 0..nb {
             let (df, dt) = if self.has_damping {

@@ -75,7 +75,7 @@ impl MultibodySystem {
             if !any_rows {
                 return Ok(());
             }
-            self.end_rates_rhs(-1.0 / hh);
+            self.rates_rhs(false, -1.0 / hh);
             self.timed_solve();
             // A plastic limit row whose μ pulls is released and the solve redone.
             let mut released = false;
@@ -107,11 +107,12 @@ impl MultibodySystem {
         }
     }
 
-    /// `rhs = scale · G(q⁺) (v, Ω)` over the end rows `rows1` at the velocities in `vel`,
-    /// `omega`: the right side of a velocity solve.
-    pub(super) fn end_rates_rhs(&mut self, scale: f64) {
+    /// `rhs = scale · G (v, Ω)` over the start rows `rows0` (`start`) or the end rows
+    /// `rows1` at the velocities in `vel`, `omega`: the right side of a velocity solve.
+    pub(super) fn rates_rhs(&mut self, start: bool, scale: f64) {
         let rhs = &mut self.rhs;
-        for_each_rate(&self.joints, &self.rows1, &self.vel, &self.omega, |k, r, rate| {
+        let rows = if start { &self.rows0 } else { &self.rows1 };
+        for_each_rate(&self.joints, rows, &self.vel, &self.omega, |k, r, rate| {
             rhs[k][r] = scale * rate;
         });
     }
