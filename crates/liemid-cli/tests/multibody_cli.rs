@@ -265,3 +265,18 @@ fn a_stiff_damper_runs_and_a_composition_against_it_names_the_step() {
         &["damped.xml", "--step", "1e-3", "--t-end", "1", "--method", "rk4"],
     );
 }
+
+#[test]
+fn the_joint_space_methods_say_they_drop_joint_limits() {
+    let dir = scratch("mb-limits");
+    let arm = examples().join("multibody").join("arm.xml");
+    let arm = arm.to_str().unwrap();
+    for (method, said) in [("rk4", true), ("dop853", true), ("liemid", false)] {
+        let o = run_in(
+            &dir,
+            &["multibody", arm, "--method", method, "--t-end", "0.01", "--json", "-"],
+        );
+        assert!(o.status.success(), "{method}: {}", stderr(&o));
+        assert_eq!(stderr(&o).contains("joint limits"), said, "{method}: {}", stderr(&o));
+    }
+}

@@ -127,6 +127,11 @@ pub fn multibody(args: &MultibodyArgs) -> CmdResult {
         sc.ignored
             .push("joint armature (no exact form in maximal coordinates; --method rk4 keeps it)".into());
     }
+    if !matches!(method, Method::Liemid(_)) && sc.model.joints.iter().any(|j| j.range.is_some()) {
+        // The joint-space reference integrates the joints free of their ranges.
+        sc.ignored
+            .push("joint limits (the joint-space reference has none; the liemid methods keep them)".into());
+    }
     if !sc.ignored.is_empty() {
         eprintln!(
             "liemid: note: {} holds what is not simulated, ignored: {}",

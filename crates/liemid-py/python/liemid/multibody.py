@@ -127,7 +127,8 @@ class Model:
         """Integrate from the model's start to ``t_end`` at ``step`` (defaults: the file's
         ``timestep`` or 1e-3 s; the problem's end time or 1 s), sampling every ``every``
         steps and the last. A failed step raises ``liemid.ConvergenceError``; bad input
-        ``ValueError``. Joint armature is not simulated by the maximal-coordinate methods."""
+        ``ValueError``. Joint armature is not simulated by the maximal-coordinate methods, and
+        joint limits are not enforced by the joint-space ones (``rk4``, ``dop853``)."""
         h = self._core.default_step if step is None else _number("step", step)
         end = self._core.default_t_end if t_end is None else _number("t_end", t_end)
         if isinstance(every, bool) or not isinstance(every, int) or every < 1:
