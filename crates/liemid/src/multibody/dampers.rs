@@ -101,9 +101,7 @@ impl DamperScratch {
     /// slide's coordinate gradient in slot 0, a ball's relative angular velocity along the
     /// world axes `e_m` in slots 0-2 (`e_m·(R_j Ω_j − R_i Ω_i)`: `∂/∂Ω_i = −R_iᵀ e_m`,
     /// `∂/∂Ω_j = R_jᵀ e_m`; isotropic, so the force is `−d (ω_j − ω_i)` in any axes).
-    /// Returns how many rows there are.
-    fn gradients(&mut self, sys: &MultibodySystem, c: &[Vec3], r: &[crate::linalg::Mat3]) -> usize {
-        let mut count = 0;
+    fn gradients(&mut self, sys: &MultibodySystem, c: &[Vec3], r: &[crate::linalg::Mat3]) {
         for (k, g) in sys.joints.iter().enumerate() {
             let d = sys.params[k].damping;
             for m in 0..3 {
@@ -126,19 +124,16 @@ impl DamperScratch {
                         tj: pj.1.transpose() * e,
                     });
                 }
-                count += 3;
             } else {
                 self.grad[3 * k] = g.coordinate(pi, pj).map(|(_, row)| row);
-                count += usize::from(self.grad[3 * k].is_some());
             }
         }
-        count
     }
 }
 
 impl MultibodySystem {
     /// The start half-kick: the damping forces at the state's velocities (`FE_D(h/2)`) into
-    /// `damp_f`, `damp_t`, for the λ-kick to add; a stiff damper row (`x > 1`) instead
+    /// `damp_f`, `damp_t`, for the λ-kick to add; a stiff damper row (`x > 2`) instead
     /// backward Euler, solved at the start configuration (module docs). `t` and `hh = h/2`
     /// are the step's.
     pub(super) fn start_dampers(
@@ -163,16 +158,12 @@ impl MultibodySystem {
         report: &mut StepReport,
     ) -> Result<()> {
         s.gradients(self, &state.c, &state.rotation);
-        for i in 0..self.mass.len() {
-            self.vel[i] = state.p[i] * (1.0 / self.mass[i]);
-            self.omega[i] = self.inertia[i].apply_inverse(state.pi[i]);
-        }
+        self.velocities(&state.p, &state.pi);
         self.rates_into(&s.grad, &mut s.rates0);
         let mut stiff = 0;
         for r in 0..s.sigma.len() {
             s.active[r] = false;
             s.sigma[r] = 0.0;
-            s.direction[r] = 0.0;
             let Some(row) = s.grad[r] else { continue };
             // x = (h/2) d D M⁻¹ Dᵀ: the row's own response bounds the constrained one above.
             // Up to x = 2 the trapezoidal drift's factor 1 − x stays within [−1, 1].
@@ -188,7 +179,6 @@ impl MultibodySystem {
                 stiff += 1;
             } else {
                 s.sigma[r] = -s.damping[r] * s.rates0[r];
-                s.direction[r] = s.sigma[r];
             }
         }
         if stiff > 0 {
@@ -358,20 +348,13 @@ impl MultibodySystem {
     /// The velocities of the momenta `s.linear`, `s.angular` projected on `G v = 0` (the
     /// start rows or the end rows, factored), in `vel`, `omega` (the momenta are changed).
     fn project_momenta(&mut self, s: &mut DamperScratch, hh: f64, any_rows: bool, start: bool) {
-        let nb = self.mass.len();
-        for i in 0..nb {
-            self.vel[i] = s.linear[i] * (1.0 / self.mass[i]);
-            self.omega[i] = self.inertia[i].apply_inverse(s.angular[i]);
-        }
+        self.velocities(&s.linear, &s.angular);
         if any_rows {
             self.rates_rhs(start, -1.0 / hh);
             self.timed_solve();
             let rows = if start { &self.rows0 } else { &self.rows1 };
             add_impulse(&self.joints, rows, &self.delta, hh, &mut s.linear, &mut s.angular);
-            for i in 0..nb {
-                self.vel[i] = s.linear[i] * (1.0 / self.mass[i]);
-                self.omega[i] = self.inertia[i].apply_inverse(s.angular[i]);
-            }
+            self.velocities(&s.linear, &s.angular);
         }
     }
 

@@ -281,11 +281,10 @@ impl Model {
     /// `2 I / d` and its joint, where `I` is the child's moment of inertia about the joint
     /// axis through the anchor (its mass for a slide). With the parent held the joint rate
     /// decays as `q̇' = −(d/I) q̇`, and `x = h d / (2I)` measures how stiff the damper is at
-    /// step `h`. The step's dampers are the trapezoidal rule (stable at any `x`), but above
-    /// `x = 1`, i.e. `h > 2 I / d`, the drift moves the joint backwards at `x − 1` times its
-    /// rate (the rate alternates in sign, decaying as `((1 − x)/(1 + x))ⁿ`), and a
-    /// composition's negative sub-step anti-damps without a stable solution once its own
-    /// `|x| ≥ 1`. Inertia the rest of the tree adds to the joint's motion raises the bound,
+    /// step `h`. The step's dampers are stable at any `x` (the trapezoidal rule, and
+    /// backward Euler in both half-kicks for a row above `x = 2`), but a composition's
+    /// negative sub-step anti-damps without a stable solution once its own `|x| ≥ 1`, i.e.
+    /// above a sub-step of `2 I / d`. Inertia the rest of the tree adds to the joint's motion raises the bound,
     /// so this is the pessimistic one. MuJoCo models often keep `x` large and rely on
     /// `armature` (added to `I` in joint space, dropped in maximal coordinates).
     ///

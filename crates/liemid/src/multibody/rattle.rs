@@ -17,11 +17,12 @@
 //! step's start forces. Symmetric and, for conservative forces, symplectic; keeps the total
 //! linear and angular momentum when the forces and joints do.
 //!
-//! **Dampers** (hinge and slide `damping`) are not conservative and make the step neither
-//! symplectic nor energy-preserving. They are split off symmetrically (`dampers.rs`): an
-//! explicit half-kick at the start velocities and an implicit one solved with the μ-kick
-//! (conjugate gradients, one solve per iteration): the trapezoidal rule, second order and
-//! A-stable however stiff the damper.
+//! **Dampers** (hinge, slide and ball `damping`) are not conservative and make the step
+//! neither symplectic nor energy-preserving. They are split off symmetrically
+//! (`dampers.rs`): an explicit half-kick at the start velocities and an implicit one solved
+//! with the μ-kick (conjugate gradients, one solve per iteration): the trapezoidal rule,
+//! second order and A-stable; a row stiffer than `x = h d/(2I) = 2` takes backward Euler
+//! at the start too (L-stable, first order).
 //!
 //! **Joint limits** are unilateral: a limit becomes an active equality row `q − bound = 0`
 //! in a step whose position solve would cross it, and the step is redone with it; an

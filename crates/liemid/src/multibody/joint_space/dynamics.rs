@@ -15,22 +15,25 @@ use crate::error::{Error, Result};
 use crate::linalg::Vec3;
 
 impl JointSpaceModel {
-    /// The passive generalised force on velocity `k` of a joint: `−k (q − q_ref) − d q̇` for
-    /// a hinge or slide; for a ball `−k θ_k − d ω_k`, `θ` the rotation vector of its
-    /// quaternion (MuJoCo's ball spring, the gradient of `½ k |θ|²`) and `ω` its relative
-    /// angular velocity; 0 for the others.
-    pub(super) fn passive(n: &Node, q: &[f64], v: &[f64], k: usize) -> f64 {
+    /// The passive generalised forces on the first velocities of a joint:
+    /// `−k (q − q_ref) − d q̇` for a hinge or slide; for a ball `−k θ − d ω`, `θ` the rotation
+    /// vector of its quaternion (MuJoCo's ball spring, the gradient of `½ k |θ|²`) and `ω`
+    /// its relative angular velocity; 0 for the others.
+    pub(super) fn passive(n: &Node, q: &[f64], v: &[f64]) -> [f64; 3] {
         match n.kind {
-            Kind::Hinge(_) | Kind::Slide(_) => -n.stiffness * (q[n.iq] - n.spring_ref) - n.damping * v[n.iv],
-            Kind::Ball => {
-                let spring = if n.stiffness == 0.0 {
-                    0.0
-                } else {
-                    n.stiffness * ball_angle(&q[n.iq..n.iq + 4])[k]
-                };
-                -spring - n.damping * v[n.iv + k]
+            Kind::Hinge(_) | Kind::Slide(_) => {
+                [-n.stiffness * (q[n.iq] - n.spring_ref) - n.damping * v[n.iv], 0.0, 0.0]
             }
-            _ => 0.0,
+            Kind::Ball => {
+                let theta = if n.stiffness == 0.0 {
+                    Vec3::ZERO
+                } else {
+                    ball_angle(&q[n.iq..n.iq + 4])
+                };
+                let w = Vec3::new(v[n.iv], v[n.iv + 1], v[n.iv + 2]);
+                (theta * -n.stiffness - w * n.damping).to_array()
+            }
+            _ => [0.0; 3],
         }
     }
 
@@ -95,8 +98,9 @@ impl JointSpaceModel {
             if nd == 1 {
                 d[0][0] += Self::armature(n);
             }
-            for k in 0..nd {
-                w.uu[i][k] += Self::passive(n, q, v, k);
+            // (A free joint's six velocities carry no passive force.)
+            for (u, f) in w.uu[i].iter_mut().zip(Self::passive(n, q, v)).take(nd) {
+                *u += f;
             }
             if nd > 0 {
                 w.dinv[i] = invert_small(&d, nd).ok_or_else(|| {
@@ -214,8 +218,8 @@ impl JointSpaceModel {
             if n.nd == 1 {
                 tau[n.iv] += Self::armature(n) * qdd[n.iv];
             }
-            for k in 0..n.nd {
-                tau[n.iv + k] -= Self::passive(n, q, v, k);
+            for (t, f) in tau[n.iv..n.iv + n.nd].iter_mut().zip(Self::passive(n, q, v)) {
+                *t -= f;
             }
             if let Some(p) = n.parent {
                 let fp = w.xf[i].force_to_parent(&w.pa[i]);

@@ -465,6 +465,7 @@ impl<'a, 'i> State<'a, 'i> {
                 total
             }
         };
+        let (file, line) = cx.locate(node);
         let mut body = RawBody {
             name,
             parent,
@@ -480,8 +481,8 @@ impl<'a, 'i> State<'a, 'i> {
             damping: 0.0,
             armature: 0.0,
             merge: Merge::IfMassless,
-            file: cx.locate(node).0,
-            line: cx.line(node),
+            file,
+            line,
             element: super::xml::describe(node),
         };
         let mut reference = 0.0;
