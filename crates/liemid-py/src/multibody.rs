@@ -4,7 +4,7 @@
 //! the bodies' poses, the energy and the hinge/slide coordinates at every `every`-th step.
 //! `python/liemid/multibody.py` shapes them.
 
-use liemid::multibody::{JointKind, JointSpaceModel, MultibodyState, MultibodySystem};
+use liemid::multibody::{JointKind, JointSpaceModel, MultibodyState, MultibodySystem, Simulation};
 use liemid::so3::Quaternion;
 use liemid_cli::multibody::scenario::{self, Method, MultibodyScenario};
 use liemid_cli::multibody::view;
@@ -185,22 +185,23 @@ fn multibody_run<'py>(
             // As the CLI: a rotor inertia has no exact form in maximal coordinates.
             model.joints.iter_mut().for_each(|j| j.armature = 0.0);
             let joints = model.joints.len();
-            let mut system = MultibodySystem::new(&model, m).map_err(|e| py_error(py, &e, &sc.name))?;
+            let mut sim = Simulation::new(&model, m).map_err(|e| py_error(py, &e, &sc.name))?;
             // As the CLI: a start off its loop-closing joints is projected onto them.
-            let (mut state, _, _) = system
+            let (mut state, _, _) = sim
                 .initial_state_on_loops(&model)
                 .map_err(|e| py_error(py, &e, &sc.name))?;
-            samples.push_maximal(&system, &state, joints);
+            let (system, integrator) = (&sim.system, &mut sim.integrator);
+            samples.push_maximal(system, &state, joints);
             py.detach(|| -> liemid::Result<()> {
                 for k in 1..=n {
                     let t_next = if k == n { t_end } else { k as f64 * step };
                     let h = t_next - state.t;
-                    let r = system.step(&mut state, h)?;
+                    let r = integrator.step(system, &mut state, h)?;
                     state.t = t_next;
                     max_pos = max_pos.max(r.position_violation);
                     max_vel = max_vel.max(r.velocity_violation);
                     if k % every == 0 || k == n {
-                        samples.push_maximal(&system, &state, joints);
+                        samples.push_maximal(system, &state, joints);
                     }
                 }
                 Ok(())

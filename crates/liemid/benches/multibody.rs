@@ -6,14 +6,14 @@
 //! body-steps.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use liemid::multibody::{problems, MultibodyEnsemble, MultibodyMethod, MultibodySystem};
+use liemid::multibody::{problems, MultibodyEnsemble, MultibodyMethod, Simulation};
 
 fn bench(c: &mut Criterion) {
     let mut group = c.benchmark_group("multibody");
     group.sample_size(10);
 
     let chain = problems::chain(1000);
-    let mut system = MultibodySystem::new(&chain, MultibodyMethod::Liemid).expect("the chain builds");
+    let mut system = Simulation::new(&chain, MultibodyMethod::Liemid).expect("the chain builds");
     let mut state = chain.initial_state().expect("the chain starts");
     group.throughput(Throughput::Elements(1000 * 10));
     group.bench_function("chain-1000, 10 steps of 1e-4", |b| {
@@ -40,7 +40,7 @@ fn bench(c: &mut Criterion) {
             1e-2,
         ),
     ] {
-        let mut system = MultibodySystem::new(&model, method).expect("the model builds");
+        let mut system = Simulation::new(&model, method).expect("the model builds");
         let mut state = model.initial_state().expect("the model starts");
         let bodies = state.len() as u64;
         group.throughput(Throughput::Elements(bodies * 100));

@@ -3,7 +3,7 @@
 //! constraint violations and the constraint solve's share of a step: `cargo run --release
 //! -p liemid --example profile_multibody [PROBLEM [METHOD [STEP [STEPS]]]]` (for profilers:
 //! one case when arguments are given).
-use liemid::multibody::{problems, MultibodyMethod, MultibodySystem};
+use liemid::multibody::{problems, MultibodyMethod, Simulation};
 
 fn cpu() -> f64 {
     // Process CPU time, so that a loaded machine does not inflate the figures.
@@ -29,7 +29,7 @@ fn run(name: &str, method: MultibodyMethod, h: f64, steps: u64) {
         "chain-1000" => problems::chain(1000),
         other => panic!("unknown problem {other}"),
     };
-    let mut system = MultibodySystem::new(&model, method).expect("the model builds");
+    let mut system = Simulation::new(&model, method).expect("the model builds");
     let mut state = model.initial_state().expect("the model starts");
     let (mut it, mut fac, mut pos, mut vel) = (0u64, 0u64, 0.0f64, 0.0f64);
     let c0 = cpu();
@@ -56,13 +56,13 @@ fn run(name: &str, method: MultibodyMethod, h: f64, steps: u64) {
     );
     // The share of the constraint solves (factorizations and solves of G M⁻¹ Gᵀ) in a step,
     // from the library's own timers, in a separate run (the timers cost a little).
-    let mut system = MultibodySystem::new(&model, method).expect("the model builds");
+    let mut system = Simulation::new(&model, method).expect("the model builds");
     let mut state = model.initial_state().expect("the model starts");
-    system.set_profiling(true);
+    system.integrator.set_profiling(true);
     for _ in 0..steps {
         system.step(&mut state, h).expect("the step converges");
     }
-    let (solver, step) = system.profile();
+    let (solver, step) = system.integrator.profile();
     println!(
         "{:<16} {:<11} constraint solve {:.1} % of the step (timed run)",
         "",

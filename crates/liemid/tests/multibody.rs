@@ -5,7 +5,7 @@
 use liemid::linalg::{Mat3, Vec3};
 use liemid::multibody::constraints::{JointGeometry, JointRows, Row};
 use liemid::multibody::problems;
-use liemid::multibody::{JointKind, Link, Model, MultibodyMethod, MultibodyState, MultibodySystem};
+use liemid::multibody::{JointKind, Link, Model, MultibodyMethod, MultibodyState, Simulation};
 use liemid::random::Rng;
 use liemid::{so3, Error, LieMidpointAlternating, RotationIntegrator};
 
@@ -16,24 +16,22 @@ use thread_counting::allocations;
 #[global_allocator]
 static GLOBAL: thread_counting::Counting = thread_counting::Counting;
 
-fn system(model: &Model, method: MultibodyMethod) -> (MultibodySystem, MultibodyState) {
-    (
-        MultibodySystem::new(model, method).unwrap(),
-        model.initial_state().unwrap(),
-    )
+fn system(model: &Model, method: MultibodyMethod) -> (Simulation, MultibodyState) {
+    (Simulation::new(model, method).unwrap(), model.initial_state().unwrap())
 }
 
-fn run(sys: &mut MultibodySystem, state: &mut MultibodyState, h: f64, steps: usize) {
+fn run(sys: &mut Simulation, state: &mut MultibodyState, h: f64, steps: usize) {
     for _ in 0..steps {
         sys.step(state, h).unwrap();
     }
 }
 
 /// Distance of two states in position: frame origins relative to `L` and attitudes.
-fn position_error(sys: &MultibodySystem, a: &MultibodyState, b: &MultibodyState) -> f64 {
+fn position_error(sys: &Simulation, a: &MultibodyState, b: &MultibodyState) -> f64 {
     let mut e: f64 = 0.0;
     for i in 0..a.len() {
-        e = e.max((sys.frame_origin(a, i) - sys.frame_origin(b, i)).max_abs() / sys.length_scale());
+        e = e
+            .max((sys.system.frame_origin(a, i) - sys.system.frame_origin(b, i)).max_abs() / sys.system.length_scale());
         e = e.max((a.rotation[i] - b.rotation[i]).max_abs());
     }
     e
@@ -139,16 +137,16 @@ fn initial_state_follows_the_joint_coordinates() {
     let (sys, s) = system(&model, MultibodyMethod::Liemid);
     let down = Vec3::new(0.0, 0.0, -1.0);
     let x1 = so3::exp(Vec3::new(0.0, 1.0, 0.0)) * down;
-    assert!((sys.frame_origin(&s, 1) - x1).max_abs() < 1e-15);
-    assert!((sys.joint_coordinate(&s, 0).unwrap() - 1.0).abs() < 1e-15);
-    assert!((sys.joint_coordinate(&s, 1).unwrap() - 0.5).abs() < 1e-15);
+    assert!((sys.system.frame_origin(&s, 1) - x1).max_abs() < 1e-15);
+    assert!((sys.system.joint_coordinate(&s, 0).unwrap() - 1.0).abs() < 1e-15);
+    assert!((sys.system.joint_coordinate(&s, 1).unwrap() - 0.5).abs() < 1e-15);
     let (pos, vel) = sys.constraint_violation(&s);
     assert!(pos < 1e-15 && vel == 0.0, "{pos:e} {vel:e}");
 
     let model = problems::test_chain();
     let (sys, s) = system(&model, MultibodyMethod::Liemid);
-    assert!((sys.joint_coordinate(&s, 0).unwrap() - 0.5).abs() < 1e-15);
-    assert!((sys.joint_coordinate(&s, 1).unwrap() + 0.3).abs() < 1e-15);
+    assert!((sys.system.joint_coordinate(&s, 0).unwrap() - 0.5).abs() < 1e-15);
+    assert!((sys.system.joint_coordinate(&s, 1).unwrap() + 0.3).abs() < 1e-15);
     assert!(sys.constraint_violation(&s).0 < 1e-15);
 
     // Velocities: a spinning top has its centre of mass moving with Ω × s and the joint rows
@@ -190,7 +188,7 @@ fn validation_names_the_culprit() {
     let mut m = problems::test_chain();
     m.joints[0].armature = 0.1;
     assert!(matches!(
-        MultibodySystem::new(&m, MultibodyMethod::Liemid),
+        Simulation::new(&m, MultibodyMethod::Liemid),
         Err(Error::InvalidModel { .. })
     ));
 }
@@ -264,7 +262,7 @@ fn chain_10_orders_2_and_4() {
 
 fn long_run(model: &Model, h: f64, steps: u64) -> (f64, f64, f64) {
     let (mut sys, mut s) = system(model, MultibodyMethod::Liemid);
-    let e0 = sys.energy(&s);
+    let e0 = sys.system.energy(&s);
     let tenth = steps / 10;
     let (mut first, mut last) = (0.0f64, 0.0f64);
     let (mut pos, mut vel) = (0.0f64, 0.0f64);
@@ -284,7 +282,7 @@ fn long_run(model: &Model, h: f64, steps: u64) -> (f64, f64, f64) {
     let (mut sys, mut s) = system(model, MultibodyMethod::Liemid);
     for k in 1..=steps {
         sys.step(&mut s, h).unwrap();
-        let e = sys.energy(&s);
+        let e = sys.system.energy(&s);
         scale = scale.max(e.abs());
         let de = (e - e0).abs();
         if k <= tenth {
@@ -364,15 +362,15 @@ fn hinge_limit_holds_the_pendulum() {
     m.qpos = Some(vec![0.2]);
     m.qvel = Some(vec![2.0]);
     let (mut sys, mut s) = system(&m, MultibodyMethod::Liemid);
-    let e0 = sys.energy(&s);
+    let e0 = sys.system.energy(&s);
     let (mut max_q, mut changes, mut worst) = (f64::NEG_INFINITY, 0, 0.0f64);
     for _ in 0..3000 {
         let r = sys.step(&mut s, 1e-3).unwrap();
         changes += r.limit_changes;
         worst = worst.max(r.position_violation.max(r.velocity_violation));
-        max_q = max_q.max(sys.joint_coordinate(&s, 0).unwrap());
+        max_q = max_q.max(sys.system.joint_coordinate(&s, 0).unwrap());
     }
-    let e1 = sys.energy(&s);
+    let e1 = sys.system.energy(&s);
     println!("limit: max angle {max_q:.15}, {changes} switches, constraints {worst:.1e}, energy {e0:.6} -> {e1:.6}");
     assert!(max_q <= 0.3 + 1e-12 && changes > 0 && worst < 1e-12);
     // The plastic impact removes the normal kinetic energy; nothing adds energy.
@@ -385,13 +383,13 @@ fn dampers_dissipate() {
     m.joints[0].damping = 0.05;
     m.joints[1].damping = 0.05;
     let (mut sys, mut s) = system(&m, MultibodyMethod::Liemid);
-    let e0 = sys.energy(&s);
+    let e0 = sys.system.energy(&s);
     let mut worst = 0.0f64;
     for _ in 0..5000 {
         let r = sys.step(&mut s, 1e-3).unwrap();
         worst = worst.max(r.position_violation.max(r.velocity_violation));
     }
-    let e1 = sys.energy(&s);
+    let e1 = sys.system.energy(&s);
     println!("dampers: energy {e0:.6} -> {e1:.6}, constraints {worst:.1e}");
     assert!(e1 < e0 - 0.1 && worst < 1e-12);
 }
@@ -408,7 +406,7 @@ fn reversal_distance(model: &Model, h: f64, n: usize) -> f64 {
     s.negate_momenta();
     let d = s.distance(&start);
     let pscale = start.p.iter().chain(&s.p).fold(1.0f64, |m, p| m.max(p.max_abs()));
-    let dist = (d[0] / sys.length_scale()).max(d[1]).max(d[2] / pscale);
+    let dist = (d[0] / sys.system.length_scale()).max(d[1]).max(d[2] / pscale);
     println!(
         "{}: {n} steps forward and back at h = {h}: distance {d:?} -> {dist:.2e}",
         model.name
@@ -428,19 +426,19 @@ fn reversible_to_round_off() {
 #[test]
 fn spacecraft_keeps_linear_and_angular_momentum() {
     let (mut sys, mut s) = system(&problems::spacecraft(), MultibodyMethod::Liemid);
-    let (p0, l0) = (sys.linear_momentum(&s), sys.angular_momentum(&s));
+    let (p0, l0) = (sys.system.linear_momentum(&s), sys.system.angular_momentum(&s));
     let pscale: f64 = s.p.iter().map(|p| p.norm()).sum::<f64>().max(1.0);
     let (mut dp, mut dl) = (0.0f64, 0.0f64);
     let mut worst = 0.0f64;
     for _ in 0..3000 {
         let r = sys.step(&mut s, 1e-3).unwrap();
         worst = worst.max(r.position_violation.max(r.velocity_violation));
-        dp = dp.max((sys.linear_momentum(&s) - p0).max_abs() / pscale);
-        dl = dl.max((sys.angular_momentum(&s) - l0).max_abs() / l0.norm());
+        dp = dp.max((sys.system.linear_momentum(&s) - p0).max_abs() / pscale);
+        dl = dl.max((sys.system.angular_momentum(&s) - l0).max_abs() / l0.norm());
     }
     println!(
         "spacecraft 3000 steps: |dP|/sum|p| {dp:.2e}, |dL|/|L| {dl:.2e}, constraints {worst:.2e}, panel angles {:?}",
-        (sys.joint_coordinate(&s, 1), sys.joint_coordinate(&s, 2))
+        (sys.system.joint_coordinate(&s, 1), sys.system.joint_coordinate(&s, 2))
     );
     assert!(dp < 1e-12 && dl < 1e-12, "{dp:e} {dl:e}");
     assert!(worst < 1e-12);
@@ -479,16 +477,16 @@ fn fast_top_on_a_ball_joint_converges_to_ea() {
 #[test]
 fn four_bar_keeps_redundant_constraints() {
     let (mut sys, mut s) = system(&problems::closed_loop(), MultibodyMethod::Liemid);
-    let e0 = sys.energy(&s);
+    let e0 = sys.system.energy(&s);
     let mut worst = 0.0f64;
     let mut max_de = 0.0f64;
     for _ in 0..5000 {
         let r = sys.step(&mut s, 1e-3).unwrap();
         assert!(s.is_finite());
         worst = worst.max(r.position_violation.max(r.velocity_violation));
-        max_de = max_de.max((sys.energy(&s) - e0).abs());
+        max_de = max_de.max((sys.system.energy(&s) - e0).abs());
     }
-    let angle = sys.joint_coordinate(&s, 0).unwrap();
+    let angle = sys.system.joint_coordinate(&s, 0).unwrap();
     println!(
         "four-bar 5000 steps: constraints {worst:.2e}, energy error {max_de:.2e} (|E0| {:.3}), crank angle {angle:.4}",
         e0.abs()
@@ -525,15 +523,15 @@ fn measurements() {
     run(&mut sys, &mut reference, 2e-4, 5000);
     for h in [4e-4, 2e-4, 1e-4] {
         let (mut sys, mut s) = system(&model, MultibodyMethod::Liemid);
-        let e0 = sys.energy(&s);
+        let e0 = sys.system.energy(&s);
         let (mut de, mut worst) = (0.0f64, 0.0f64);
         for _ in 0..(1.0 / h) as usize {
             let r = sys.step(&mut s, h).unwrap();
             worst = worst.max(r.position_violation.max(r.velocity_violation));
-            de = de.max(((sys.energy(&s) - e0) / e0).abs());
+            de = de.max(((sys.system.energy(&s) - e0) / e0).abs());
         }
         let origin = (0..3).fold(0.0f64, |m, i| {
-            m.max((sys.frame_origin(&s, i) - sys.frame_origin(&reference, i)).norm())
+            m.max((sys.system.frame_origin(&s, i) - sys.system.frame_origin(&reference, i)).norm())
         });
         println!("test-chain h = {h}: body-origin error {origin:.2e} m, max constraint {worst:.1e}, max relative energy error {de:.2e}");
     }
@@ -544,7 +542,7 @@ fn measurements() {
         let model = problems::chain(n);
         let (mut sys, mut s) = system(&model, MultibodyMethod::Liemid);
         run(&mut sys, &mut s, 1e-4, 10);
-        sys.set_profiling(true);
+        sys.integrator.set_profiling(true);
         let mut iterations = 0u64;
         let mut factorizations = 0u64;
         for _ in 0..steps {
@@ -552,7 +550,7 @@ fn measurements() {
             iterations += u64::from(r.iterations);
             factorizations += u64::from(r.factorizations);
         }
-        let (solve, total) = sys.profile();
+        let (solve, total) = sys.integrator.profile();
         let per = total.as_secs_f64() / (steps * n) as f64;
         println!(
             "chain-{n}: {:.1} ns per body-step ({:.2} us per step), constraint solve {:.0}% of the step, {:.2} iterations and {:.2} factorizations per step",
@@ -568,12 +566,12 @@ fn measurements() {
 /// The largest `|E − E₀|` in each tenth of a run.
 fn energy_by_tenth(model: &Model, h: f64, steps: u64) -> Vec<f64> {
     let (mut sys, mut s) = system(model, MultibodyMethod::Liemid);
-    let e0 = sys.energy(&s);
+    let e0 = sys.system.energy(&s);
     let mut out = vec![0.0f64; 10];
     for k in 0..steps {
         sys.step(&mut s, h).unwrap();
         let w = (k * 10 / steps) as usize;
-        out[w] = out[w].max((sys.energy(&s) - e0).abs());
+        out[w] = out[w].max((sys.system.energy(&s) - e0).abs());
     }
     out
 }
@@ -613,13 +611,13 @@ fn chain_energy_study() {
         (thick, MultibodyMethod::Liemid, 5e-4),
     ] {
         let (mut sys, mut s) = system(&model, method);
-        let e0 = sys.energy(&s);
+        let e0 = sys.system.energy(&s);
         let steps = (100.0 / h) as u64;
         let mut out = [0.0f64; 10];
         for k in 0..steps {
             sys.step(&mut s, h).unwrap();
             let w = (k * 10 / steps) as usize;
-            out[w] = out[w].max((sys.energy(&s) - e0).abs());
+            out[w] = out[w].max((sys.system.energy(&s) - e0).abs());
         }
         println!(
             "thick chain {} h = {h}, 100 s: per tenth {:?}",
@@ -635,14 +633,14 @@ fn chain_energy_study() {
         (MultibodyMethod::Liemid4, 1e-3),
     ] {
         let (mut sys, mut s) = system(&model, method);
-        let e0 = sys.energy(&s);
+        let e0 = sys.system.energy(&s);
         let steps = (20.0 / h) as u64;
         let mut out = [0.0f64; 10];
         let mut omega_max = 0.0f64;
         for k in 0..steps {
             sys.step(&mut s, h).unwrap();
             let w = (k * 10 / steps) as usize;
-            out[w] = out[w].max((sys.energy(&s) - e0).abs());
+            out[w] = out[w].max((sys.system.energy(&s) - e0).abs());
             if k % 100 == 0 {
                 for i in 0..s.len() {
                     let inertia = liemid::Inertia::from_matrix(model.bodies[i].inertia.m).unwrap();
@@ -690,7 +688,7 @@ fn force_hook_matches_gravity() {
     let (mut hooked, mut s2) = system(&free, MultibodyMethod::Liemid);
     let masses: Vec<f64> = model.bodies.iter().map(|b| b.mass).collect();
     let g = model.gravity;
-    hooked.set_force_hook(Box::new(
+    hooked.system.set_force_hook(Box::new(
         move |_t: f64, _c: &[Vec3], _r: &[Mat3], f: &mut [Vec3], _tq: &mut [Vec3]| {
             for (fi, m) in f.iter_mut().zip(&masses) {
                 *fi += g * *m;
@@ -738,13 +736,13 @@ fn energy_variants_study() {
     for (name, model) in variants {
         for h in [1e-3, 5e-4] {
             let (mut sys, mut s) = system(&model, MultibodyMethod::Liemid);
-            let e0 = sys.energy(&s);
+            let e0 = sys.system.energy(&s);
             let steps = (40.0 / h) as u64;
             let mut out = [0.0f64; 10];
             for k in 0..steps {
                 sys.step(&mut s, h).unwrap();
                 let w = (k * 10 / steps) as usize;
-                out[w] = out[w].max((sys.energy(&s) - e0).abs());
+                out[w] = out[w].max((sys.system.energy(&s) - e0).abs());
             }
             println!("{name} h = {h}, 40 s: per tenth {:?}", out.map(|e| format!("{e:.2e}")));
         }
@@ -758,7 +756,7 @@ fn one_force_evaluation_per_step() {
     let calls = Arc::new(AtomicUsize::new(0));
     let counter = Arc::clone(&calls);
     let (mut sys, mut s) = system(&problems::test_chain(), MultibodyMethod::Liemid);
-    sys.set_force_hook(Box::new(
+    sys.system.set_force_hook(Box::new(
         move |_t: f64, _c: &[Vec3], _r: &[Mat3], _f: &mut [Vec3], _tq: &mut [Vec3]| {
             counter.fetch_add(1, Ordering::Relaxed);
         },
@@ -803,8 +801,8 @@ fn ensemble_is_bitwise_the_same_for_any_thread_count() {
     // The copies did differ, and each kept its joints.
     assert_ne!(bits(&runs[0][0]), bits(&runs[0][6]));
     let e = liemid::multibody::MultibodyEnsemble::new(&model, MultibodyMethod::Liemid, 2, start).unwrap();
-    for (sys, s) in e.systems().iter().zip(&runs[0]) {
-        let (pos, vel) = sys.constraint_violation(s);
+    for s in &runs[0] {
+        let (pos, vel) = e.system().constraint_violation(s);
         assert!(pos < 1e-12 && vel < 1e-12, "{pos:e} {vel:e}");
     }
     assert!(liemid::multibody::MultibodyEnsemble::new(&model, MultibodyMethod::Liemid, 0, start).is_err());

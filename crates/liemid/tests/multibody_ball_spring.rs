@@ -5,7 +5,7 @@
 //! (error O(h²), no drift).
 
 use liemid::multibody::joint_space::JointSpaceModel;
-use liemid::multibody::{mjcf, problems, Model, MultibodyMethod, MultibodySystem};
+use liemid::multibody::{mjcf, problems, Model, MultibodyMethod, Simulation};
 
 #[test]
 fn a_pinned_ball_on_a_spring_oscillates_at_the_closed_form_frequency() {
@@ -30,9 +30,9 @@ fn a_pinned_ball_on_a_spring_oscillates_at_the_closed_form_frequency() {
     let t_end = 2.0;
     let mut errors = Vec::new();
     for h in [4e-3f64, 2e-3, 1e-3] {
-        let mut sys = MultibodySystem::new(&model, MultibodyMethod::Liemid).unwrap();
+        let mut sys = Simulation::new(&model, MultibodyMethod::Liemid).unwrap();
         let mut st = model.initial_state().unwrap();
-        let e0 = sys.energy(&st);
+        let e0 = sys.system.energy(&st);
         assert!((e0 - 0.5 * k * amplitude * amplitude).abs() < 1e-15, "{e0}");
         let n = (t_end / h).round() as usize;
         let mut worst: f64 = 0.0;
@@ -62,13 +62,13 @@ fn sprung_test_chain() -> Model {
 
 /// The largest body-origin difference at `t_end` between liemid at `h` and `reference`.
 fn error(model: &Model, method: MultibodyMethod, h: f64, t_end: f64, reference: &[(liemid::Vec3, f64)]) -> f64 {
-    let mut sys = MultibodySystem::new(model, method).unwrap();
+    let mut sys = Simulation::new(model, method).unwrap();
     let mut s = model.initial_state().unwrap();
     for _ in 0..(t_end / h).round() as usize {
         sys.step(&mut s, h).unwrap();
     }
     (0..s.len())
-        .map(|i| (sys.frame_origin(&s, i) - reference[i].0).max_abs())
+        .map(|i| (sys.system.frame_origin(&s, i) - reference[i].0).max_abs())
         .fold(0.0, f64::max)
 }
 
@@ -98,13 +98,13 @@ fn a_ball_spring_chain_converges_to_the_joint_space_reference_and_keeps_its_ener
     }
     // Energy (the spring's potential included): O(h²), halving the step quarters it.
     let worst = |h: f64| {
-        let mut sys = MultibodySystem::new(&model, MultibodyMethod::Liemid).unwrap();
+        let mut sys = Simulation::new(&model, MultibodyMethod::Liemid).unwrap();
         let mut s = model.initial_state().unwrap();
-        let e0 = sys.energy(&s);
+        let e0 = sys.system.energy(&s);
         let mut w: f64 = 0.0;
         for _ in 0..(4.0 / h).round() as usize {
             sys.step(&mut s, h).unwrap();
-            w = w.max((sys.energy(&s) - e0).abs() / e0.abs());
+            w = w.max((sys.system.energy(&s) - e0).abs() / e0.abs());
         }
         w
     };

@@ -7,7 +7,7 @@
 //! error, not a blow-up; no allocation per step.
 
 use liemid::multibody::joint_space::JointSpaceModel;
-use liemid::multibody::{mjcf, problems, Model, MultibodyMethod, MultibodySystem};
+use liemid::multibody::{mjcf, problems, Model, MultibodyMethod, Simulation};
 use liemid::Vec3;
 
 #[path = "common/thread_counting.rs"]
@@ -48,7 +48,7 @@ fn a_damper_decays_by_the_trapezoidal_factor_at_any_stiffness() {
     for x in [0.05, 1.5, 5.0, 50.0, 500.0] {
         let d = 2.0 * 0.2 * x / h;
         let model = wheel(d);
-        let mut sys = MultibodySystem::new(&model, MultibodyMethod::Liemid).unwrap();
+        let mut sys = Simulation::new(&model, MultibodyMethod::Liemid).unwrap();
         let mut s = model.initial_state().unwrap();
         let (g, drift) = damper_factors(x);
         let (mut rate, mut angle) = (3.0f64, 0.0f64);
@@ -64,7 +64,7 @@ fn a_damper_decays_by_the_trapezoidal_factor_at_any_stiffness() {
                 "x = {x}, step {n}: rate {measured} against {rate}"
             );
             let wrapped = (angle + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
-            let q = sys.joint_coordinate(&s, 0).unwrap();
+            let q = sys.system.joint_coordinate(&s, 0).unwrap();
             assert!(
                 (q - wrapped).abs() <= 1e-12,
                 "x = {x}, step {n}: angle {q} against {wrapped}"
@@ -87,7 +87,7 @@ fn a_ball_damper_decays_the_relative_spin_by_the_same_factor() {
              <keyframe><key qpos=\"1 0 0 0\" qvel=\"3 -1 2\"/></keyframe></mujoco>"
         );
         let model = mjcf::parse(&text, "ball.xml").unwrap().model;
-        let mut sys = MultibodySystem::new(&model, MultibodyMethod::Liemid).unwrap();
+        let mut sys = Simulation::new(&model, MultibodyMethod::Liemid).unwrap();
         let mut s = model.initial_state().unwrap();
         let (g, _) = damper_factors(x);
         let mut factor = 1.0f64;
@@ -108,7 +108,7 @@ fn a_ball_damper_decays_the_relative_spin_by_the_same_factor() {
 
 /// The first two joint coordinates at `t_end` by liemid at `h`.
 fn liemid_angles(model: &Model, method: MultibodyMethod, h: f64, t_end: f64) -> [f64; 2] {
-    let mut sys = MultibodySystem::new(model, method).unwrap();
+    let mut sys = Simulation::new(model, method).unwrap();
     let mut s = model.initial_state().unwrap();
     let n = (t_end / h).round() as usize;
     for _ in 0..n {
@@ -116,8 +116,8 @@ fn liemid_angles(model: &Model, method: MultibodyMethod, h: f64, t_end: f64) -> 
         assert!(r.position_violation < 1e-12 && r.velocity_violation < 1e-12);
     }
     [
-        sys.joint_coordinate(&s, 0).unwrap(),
-        sys.joint_coordinate(&s, 1).unwrap(),
+        sys.system.joint_coordinate(&s, 0).unwrap(),
+        sys.system.joint_coordinate(&s, 1).unwrap(),
     ]
 }
 
@@ -179,13 +179,13 @@ fn a_negative_sub_step_against_a_stiff_damper_is_an_error() {
     // liemid4's middle sub-step is −0.66 h: at x = h d/(2I) = 5 it anti-damps with |x| > 1.
     let h = 0.01;
     let model = wheel(2.0 * 0.2 * 5.0 / h);
-    let mut sys = MultibodySystem::new(&model, MultibodyMethod::Liemid4).unwrap();
+    let mut sys = Simulation::new(&model, MultibodyMethod::Liemid4).unwrap();
     let mut s = model.initial_state().unwrap();
     let err = sys.step(&mut s, h).unwrap_err().to_string();
     assert!(err.contains("negative sub-step"), "{err}");
     // At x = 0.5 every sub-step is fine.
     let model = wheel(2.0 * 0.2 * 0.5 / h);
-    let mut sys = MultibodySystem::new(&model, MultibodyMethod::Liemid4).unwrap();
+    let mut sys = Simulation::new(&model, MultibodyMethod::Liemid4).unwrap();
     let mut s = model.initial_state().unwrap();
     for _ in 0..100 {
         sys.step(&mut s, h).unwrap();
@@ -198,15 +198,15 @@ fn stiff_dampers_stay_stable_and_dissipate() {
     // x = h d / (2 I) = 30 and 15 at h = 1e-2 (each link's I about its joint 1/3 kg m²):
     // the explicit damper needs h below 6.7e-4 and 3.3e-4.
     let model = damped_double_pendulum(2000.0);
-    let mut sys = MultibodySystem::new(&model, MultibodyMethod::Liemid).unwrap();
+    let mut sys = Simulation::new(&model, MultibodyMethod::Liemid).unwrap();
     let mut s = model.initial_state().unwrap();
-    let e0 = sys.energy(&s);
+    let e0 = sys.system.energy(&s);
     let mut last = e0;
     let mut worst = 0.0f64;
     for _ in 0..2000 {
         let r = sys.step(&mut s, 1e-2).unwrap();
         worst = worst.max(r.position_violation.max(r.velocity_violation));
-        last = sys.energy(&s);
+        last = sys.system.energy(&s);
         assert!(
             last.is_finite() && last <= e0 + 1e-12 * e0.abs(),
             "energy {last} above {e0}"
@@ -226,7 +226,7 @@ fn damped_steps_allocate_nothing() {
         (20_000.0, MultibodyMethod::Liemid),
     ] {
         let model = damped_double_pendulum(d);
-        let mut sys = MultibodySystem::new(&model, method).unwrap();
+        let mut sys = Simulation::new(&model, method).unwrap();
         let mut s = model.initial_state().unwrap();
         sys.step(&mut s, 1e-3).unwrap();
         let before = allocations();
@@ -246,12 +246,12 @@ fn a_stiff_damper_under_a_load_creeps_at_the_exact_rate() {
     let text = "<mujoco><worldbody><body name=\"arm\"><joint name=\"j\" axis=\"0 1 0\" damping=\"100\"/>\
                 <inertial pos=\"0.1 0 0\" mass=\"1\" diaginertia=\"1e-4 1e-4 1e-4\"/></body></worldbody></mujoco>";
     let model = mjcf::parse(text, "creep.xml").unwrap().model;
-    let mut sys = MultibodySystem::new(&model, MultibodyMethod::Liemid).unwrap();
+    let mut sys = Simulation::new(&model, MultibodyMethod::Liemid).unwrap();
     let mut s = model.initial_state().unwrap();
     for _ in 0..20 {
         sys.step(&mut s, 1e-2).unwrap();
     }
-    let theta = sys.joint_coordinate(&s, 0).unwrap();
+    let theta = sys.system.joint_coordinate(&s, 0).unwrap();
     // The arm's rate about y: its body-frame spin Π / I_c (the axis is y in the body too).
     let omega_y = s.pi[0].y / 1e-4;
     // The hinge angle turns with the body about +y; gravity −z on the centre at x pulls it

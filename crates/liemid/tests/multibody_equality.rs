@@ -7,7 +7,7 @@ mod model_files;
 use model_files::refused;
 use std::path::PathBuf;
 
-use liemid::multibody::{mjcf, problems, JointKind, Link, Model, MultibodyMethod, MultibodySystem};
+use liemid::multibody::{mjcf, problems, JointKind, Link, Model, MultibodyMethod, Simulation};
 use liemid::{Mat3, Vec3};
 
 fn example(name: &str) -> PathBuf {
@@ -24,7 +24,7 @@ fn close_v(a: Vec3, b: Vec3, tol: f64) {
 /// Joint coordinates of the tree joints after `n` steps of `h`, and the largest constraint
 /// violation on the way.
 fn run(model: &Model, h: f64, n: usize) -> (Vec<f64>, f64) {
-    let mut sys = MultibodySystem::new(model, MultibodyMethod::Liemid).unwrap();
+    let mut sys = Simulation::new(model, MultibodyMethod::Liemid).unwrap();
     let mut s = model.initial_state().unwrap();
     let mut worst: f64 = 0.0;
     for _ in 0..n {
@@ -32,7 +32,7 @@ fn run(model: &Model, h: f64, n: usize) -> (Vec<f64>, f64) {
         worst = worst.max(r.position_violation).max(r.velocity_violation);
     }
     let q = (0..model.tree_joint_count())
-        .map(|k| sys.joint_coordinate(&s, k).unwrap())
+        .map(|k| sys.system.joint_coordinate(&s, k).unwrap())
         .collect();
     (q, worst)
 }
@@ -187,7 +187,7 @@ fn a_start_off_the_loop_is_projected_onto_it() {
     let mut m = mjcf::load(&example("four_bar.xml")).unwrap().model;
     // The crank turned by 0.01 rad with the rest as in the reference: the loop is open.
     m.qpos = Some(vec![0.01, 0.0, 0.0]);
-    let mut sys = MultibodySystem::new(&m, MultibodyMethod::Liemid).unwrap();
+    let mut sys = Simulation::new(&m, MultibodyMethod::Liemid).unwrap();
     let mut s = m.initial_state().unwrap();
     let before = sys.project_positions(&mut s).unwrap();
     assert!(before > 1e-3, "{before}");
@@ -204,7 +204,7 @@ fn a_start_off_the_loop_is_projected_onto_it() {
     let far = text.replace("<body name=\"crank\" ", "<body name=\"crank\" pos=\"1000 0 0\" ");
     let mut m = mjcf::parse(&far, "far.xml").unwrap().model;
     m.qpos = Some(vec![0.01, 0.0, 0.0]);
-    let mut sys = MultibodySystem::new(&m, MultibodyMethod::Liemid).unwrap();
+    let mut sys = Simulation::new(&m, MultibodyMethod::Liemid).unwrap();
     let (s, before, _) = sys.initial_state_on_loops(&m).unwrap();
     let (after, _) = sys.constraint_violation(&s);
     assert!(before > 1e-3 && after <= 1e-10, "{before:e} -> {after:e}");

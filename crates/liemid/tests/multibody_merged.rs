@@ -9,7 +9,7 @@ mod model_files;
 use liemid::linalg::{Mat3, Vec3};
 use liemid::multibody::constraints::{JointGeometry, JointRows, Row};
 use liemid::multibody::joint_space::JointSpaceModel;
-use liemid::multibody::{mjcf, JointKind, Loaded, Model, MultibodyMethod, MultibodyState, MultibodySystem};
+use liemid::multibody::{mjcf, JointKind, Loaded, Model, MultibodyMethod, MultibodyState, Simulation};
 use liemid::random::Rng;
 use liemid::so3;
 use model_files::refused;
@@ -200,8 +200,8 @@ fn axes_of(text: &str, i: usize) -> Vec<Vec3> {
         .collect()
 }
 
-fn run(model: &Model, method: MultibodyMethod, h: f64, t_end: f64) -> (MultibodySystem, MultibodyState, f64) {
-    let mut sys = MultibodySystem::new(model, method).unwrap();
+fn run(model: &Model, method: MultibodyMethod, h: f64, t_end: f64) -> (Simulation, MultibodyState, f64) {
+    let mut sys = Simulation::new(model, method).unwrap();
     let mut s = model.initial_state().unwrap();
     let mut worst: f64 = 0.0;
     for _ in 0..(t_end / h).round() as usize {
@@ -222,9 +222,9 @@ fn reference(model: &Model, h: f64, t_end: f64) -> Vec<Vec3> {
     js.forward_kinematics(&q).unwrap().into_iter().map(|(x, _)| x).collect()
 }
 
-fn largest_gap(sys: &MultibodySystem, s: &MultibodyState, xref: &[Vec3]) -> f64 {
+fn largest_gap(sys: &Simulation, s: &MultibodyState, xref: &[Vec3]) -> f64 {
     (0..s.len())
-        .map(|i| (sys.frame_origin(s, i) - xref[i]).max_abs())
+        .map(|i| (sys.system.frame_origin(s, i) - xref[i]).max_abs())
         .fold(0.0, f64::max)
 }
 
@@ -266,7 +266,7 @@ fn liemid_is_second_order_on_a_universal_joint() {
                 &sys,
                 &s,
                 &(0..s.len())
-                    .map(|i| sys.frame_origin(&reference, i))
+                    .map(|i| sys.system.frame_origin(&reference, i))
                     .collect::<Vec<_>>(),
             )
         })
@@ -373,7 +373,7 @@ fn a_universal_joint_in_code_is_validated() {
     };
     let err = m.validate().unwrap_err().to_string();
     assert!(err.contains("v1+v2") && err.contains("parallel"), "{err}");
-    assert!(MultibodySystem::new(&m, MultibodyMethod::Liemid).is_err());
+    assert!(Simulation::new(&m, MultibodyMethod::Liemid).is_err());
     m.joints[1].kind = JointKind::Universal {
         first: Vec3::new(0.0, 1.0, 0.0),
         second: Vec3::new(0.0, 0.0, 2.0),

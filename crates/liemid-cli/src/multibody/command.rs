@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use clap::Args;
 use liemid::error::Num;
-use liemid::multibody::{MultibodyState, MultibodySystem};
+use liemid::multibody::{MultibodyState, MultibodySystem, Simulation};
 use serde_json::json;
 
 use super::scenario::{self, Method, MultibodyScenario};
@@ -351,7 +351,7 @@ impl Sink {
 }
 
 struct Maximal<'a> {
-    system: &'a mut MultibodySystem,
+    system: &'a MultibodySystem,
     state: &'a MultibodyState,
     joints: usize,
 }
@@ -404,10 +404,9 @@ fn run_maximal(
     (h, t_end, every, n): (f64, f64, u64, u64),
     mut sink: Sink,
 ) -> Result<(serde_json::Value, Sink), Failure> {
-    let mut system =
-        MultibodySystem::new(&sc.model, method).map_err(|e| Failure::Input(format!("{}: {e}", sc.name)))?;
+    let mut sim = Simulation::new(&sc.model, method).map_err(|e| Failure::Input(format!("{}: {e}", sc.name)))?;
     // A keyframe written for MuJoCo's soft equalities may not close the loops exactly.
-    let (mut state, position, velocity) = system
+    let (mut state, position, velocity) = sim
         .initial_state_on_loops(&sc.model)
         .map_err(|e| Failure::Input(format!("{}: the start: {e}", sc.name)))?;
     if position > 1e-12 || velocity > 1e-12 {
@@ -419,11 +418,13 @@ fn run_maximal(
     }
     let bodies = state.len();
     let joints = sc.model.joints.len();
+    let system = &sim.system;
+    let integrator = &mut sim.integrator;
     let e0 = system.energy(&state);
     let p0 = system.linear_momentum(&state);
     let l0 = system.angular_momentum(&state);
     sink.observe(&mut Maximal {
-        system: &mut system,
+        system,
         state: &state,
         joints,
     })?;
@@ -438,7 +439,7 @@ fn run_maximal(
         }
         let t_next = if k == n { t_end } else { k as f64 * h };
         let h_k = t_next - state.t;
-        match system.step(&mut state, h_k) {
+        match integrator.step(system, &mut state, h_k) {
             Ok(r) => {
                 max_pos = max_pos.max(r.position_violation);
                 max_vel = max_vel.max(r.velocity_violation);
@@ -458,7 +459,7 @@ fn run_maximal(
         max_dl = max_dl.max((system.angular_momentum(&state) - l0).norm());
         if k % every == 0 || k == n {
             sink.observe(&mut Maximal {
-                system: &mut system,
+                system,
                 state: &state,
                 joints,
             })?;

@@ -39,11 +39,8 @@
 
 use crate::linalg::Mat3;
 
-use super::constraints::{JointRows, Row};
-use super::solver::{SingularPivot, PIVOT_TOLERANCE};
-
-type Blk = [[f64; 6]; 6];
-type V6 = [f64; 6];
+use super::blocks::{child_part, dot6_pairwise, parent_part, Blk, SingularPivot, PIVOT_TOLERANCE, V6};
+use super::constraints::JointRows;
 
 /// The factor data of one body and its own (tree) joint, contiguous for locality.
 #[derive(Clone, Copy, Debug)]
@@ -82,21 +79,6 @@ const ZERO_LINK: Link = Link {
 pub(super) struct SymmetricTree {
     parent: Vec<Option<usize>>,
     links: Vec<Link>,
-}
-
-#[inline(always)]
-fn parent_part(r: &Row) -> V6 {
-    [r.ci.x, r.ci.y, r.ci.z, r.ti.x, r.ti.y, r.ti.z]
-}
-
-#[inline(always)]
-fn child_part(r: &Row) -> V6 {
-    [r.cj.x, r.cj.y, r.cj.z, r.tj.x, r.tj.y, r.tj.z]
-}
-
-#[inline(always)]
-fn dot6(a: &V6, b: &V6) -> f64 {
-    (a[0] * b[0] + a[1] * b[1]) + (a[2] * b[2] + a[3] * b[3]) + (a[4] * b[4] + a[5] * b[5])
 }
 
 #[inline(always)]
@@ -260,7 +242,7 @@ impl SymmetricTree {
         }
         for i in 0..S {
             for j in 0..=i {
-                link.lj[i][j] = dot6(&link.yb[i], &link.yb[j]);
+                link.lj[i][j] = dot6_pairwise(&link.yb[i], &link.yb[j]);
             }
         }
         cholesky::<S>(&mut link.lj, &mut link.ilj).map_err(|ratio| SingularPivot {
@@ -338,7 +320,7 @@ impl SymmetricTree {
         z[bn] = u;
         let mut w = z[jn];
         for k in 0..S {
-            w[k] -= dot6(&link.yb[k], &u);
+            w[k] -= dot6_pairwise(&link.yb[k], &u);
         }
         apply_lower::<S>(&link.lj, &mut w);
         z[jn] = w;
@@ -359,7 +341,7 @@ impl SymmetricTree {
         if let Some(p) = self.parent[b] {
             let xp = z[body_node[p]];
             for k in 0..S {
-                w[k] -= dot6(&link.yj[k], &xp);
+                w[k] -= dot6_pairwise(&link.yj[k], &xp);
             }
         }
         apply_lower_t::<S>(&link.lj, &mut w);
@@ -376,10 +358,10 @@ impl SymmetricTree {
 
 #[cfg(test)]
 mod tests {
+    use super::super::constraints::pose;
     use super::super::constraints::JointGeometry;
     use super::super::model::{JointKind, Link, Model};
     use super::super::problems;
-    use super::super::rattle::pose;
     use super::super::solver::TreeSolver;
     use crate::linalg::Vec3;
     use crate::random::Rng;

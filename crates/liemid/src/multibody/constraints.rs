@@ -29,6 +29,7 @@
 
 use crate::linalg::{Mat3, Vec3};
 
+use super::method::LimitState;
 use super::model::{JointKind, Link, Model};
 
 /// Most rows of one joint: a weld's 6, or 5 of a hinge or slide plus a limit row.
@@ -291,4 +292,104 @@ fn dot_row(a: Vec3, b: Vec3, ri: &Mat3, rj: &Mat3, out: &mut JointRows) {
         tj: b.cross(rj.tr_mul_vec(ra)),
     };
     out.push(ra.dot(rb), grad, false);
+}
+
+/// A joint's force and limit parameters as the step uses them: spring stiffness and rest
+/// coordinate, damping, range (zero or `None` for the kinds that have none).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct JointParams {
+    pub stiffness: f64,
+    pub spring_ref: f64,
+    pub damping: f64,
+    pub range: Option<(f64, f64)>,
+}
+
+/// The poses `(c_i, R_i)`, `(c_j, R_j)` of a joint's parent (world: 0, I) and child.
+#[inline]
+pub(super) fn pose<'a>(g: &JointGeometry, c: &'a [Vec3], r: &'a [Mat3]) -> ((Vec3, &'a Mat3), (Vec3, &'a Mat3)) {
+    const IDENTITY: &Mat3 = &Mat3::IDENTITY;
+    let pi = g.parent.map_or((Vec3::ZERO, IDENTITY), |p| (c[p], &r[p]));
+    (pi, (c[g.child], &r[g.child]))
+}
+
+/// Add the rows' impulse `Gᵀ (scale · multipliers)` to the bodies' linear and (body-frame)
+/// angular momenta: the force on the centres of mass and the torque of each row, to the
+/// parent (if not the world) and the child.
+pub(super) fn add_impulse(
+    joints: &[JointGeometry],
+    rows: &[JointRows],
+    multipliers: &[[f64; 6]],
+    scale: f64,
+    linear: &mut [Vec3],
+    angular: &mut [Vec3],
+) {
+    for ((g, rows), mult) in joints.iter().zip(rows).zip(multipliers) {
+        for (gr, &mu) in rows.grad[..rows.n].iter().zip(mult) {
+            let m = mu * scale;
+            if let Some(p) = g.parent {
+                linear[p] += gr.ci * m;
+                angular[p] += gr.ti * m;
+            }
+            linear[g.child] += gr.cj * m;
+            angular[g.child] += gr.tj * m;
+        }
+    }
+}
+
+/// The rates `G v` of the rows: calls `f(joint, row, rate)` for every row of every joint,
+/// with the bodies' velocities `linear` and angular rates `angular` (the transpose of
+/// [`add_impulse`]).
+pub(super) fn for_each_rate(
+    joints: &[JointGeometry],
+    rows: &[JointRows],
+    linear: &[Vec3],
+    angular: &[Vec3],
+    mut f: impl FnMut(usize, usize, f64),
+) {
+    for (k, (g, jr)) in joints.iter().zip(rows).enumerate() {
+        let (vi, wi) = g.parent.map_or((Vec3::ZERO, Vec3::ZERO), |p| (linear[p], angular[p]));
+        let (vj, wj) = (linear[g.child], angular[g.child]);
+        for (r, gr) in jr.grad[..jr.n].iter().enumerate() {
+            f(k, r, gr.rate(vi, wi, vj, wj));
+        }
+    }
+}
+
+/// The rows (with active limit rows) of every joint at `(c, R)` into `out`.
+pub(super) fn rows_at(
+    joints: &[JointGeometry],
+    limit: &[LimitState],
+    params: &[JointParams],
+    c: &[Vec3],
+    r: &[Mat3],
+    out: &mut [JointRows],
+) {
+    for (k, g) in joints.iter().enumerate() {
+        let (pi, pj) = pose(g, c, r);
+        g.rows(pi, pj, &mut out[k]);
+        if limit[k] != LimitState::Inactive {
+            if let (Some((q, grad)), Some((lo, hi))) = (g.coordinate(pi, pj), params[k].range) {
+                let bound = if limit[k] == LimitState::Lower { lo } else { hi };
+                let length = matches!(g.kind, JointKind::Slide { .. });
+                out[k].push(q - bound, grad, length);
+            }
+        }
+    }
+}
+
+/// Add the generalized force `f` along the gradient `grad` to the bodies of joint `g`.
+#[inline]
+pub(super) fn apply(g: &JointGeometry, grad: &Row, f: f64, force: &mut [Vec3], torque: &mut [Vec3]) {
+    if let Some(p) = g.parent {
+        force[p] += grad.ci * f;
+        torque[p] += grad.ti * f;
+    }
+    force[g.child] += grad.cj * f;
+    torque[g.child] += grad.tj * f;
+}
+
+/// The rotation vector `θ = log(Qᵀ R_iᵀ R_j)` of a ball joint: the child's attitude relative
+/// to the parent's at the reference configuration (its spring's coordinate).
+pub(super) fn ball_angle(g: &JointGeometry, ri: &Mat3, rj: &Mat3) -> Vec3 {
+    crate::so3::log(&(g.q.transpose() * (ri.transpose() * *rj)))
 }

@@ -54,13 +54,12 @@
 use crate::error::{Error, Result};
 use crate::linalg::Vec3;
 
-use super::constraints::Row;
-use super::forces::apply;
+use super::constraints::{add_impulse, apply, pose, Row};
 use super::method::StepReport;
 use super::model::JointKind;
-use super::rattle::{add_impulse, pose, Matrix};
 use super::state::MultibodyState;
-use super::MultibodySystem;
+use super::system::MultibodySystem;
+use super::workspace::{Matrix, Workspace};
 
 /// Scratch of the damper half-kicks, three rows per joint (`None`/zero where there is no
 /// damper row).
@@ -131,35 +130,37 @@ impl DamperScratch {
     }
 }
 
-impl MultibodySystem {
+impl Workspace {
     /// The start half-kick: the damping forces at the state's velocities (`FE_D(h/2)`) into
     /// `damp_f`, `damp_t`, for the λ-kick to add; a stiff damper row (`x > 2`) instead
     /// backward Euler, solved at the start configuration (module docs). `t` and `hh = h/2`
     /// are the step's.
     pub(super) fn start_dampers(
         &mut self,
+        sys: &MultibodySystem,
         state: &MultibodyState,
         t: f64,
         hh: f64,
         report: &mut StepReport,
     ) -> Result<()> {
         let mut s = core::mem::take(&mut self.dampers);
-        let result = self.start_dampers_in(&mut s, state, t, hh, report);
+        let result = self.start_dampers_in(sys, &mut s, state, t, hh, report);
         self.dampers = s;
         result
     }
 
     fn start_dampers_in(
         &mut self,
+        sys: &MultibodySystem,
         s: &mut DamperScratch,
         state: &MultibodyState,
         t: f64,
         hh: f64,
         report: &mut StepReport,
     ) -> Result<()> {
-        s.gradients(self, &state.c, &state.rotation);
-        self.velocities(&state.p, &state.pi);
-        self.rates_into(&s.grad, &mut s.rates0);
+        s.gradients(sys, &state.c, &state.rotation);
+        self.velocities(sys, &state.p, &state.pi);
+        self.rates_into(sys, &s.grad, &mut s.rates0);
         let mut stiff = 0;
         for r in 0..s.sigma.len() {
             s.active[r] = false;
@@ -167,10 +168,10 @@ impl MultibodySystem {
             let Some(row) = s.grad[r] else { continue };
             // x = (h/2) d D M⁻¹ Dᵀ: the row's own response bounds the constrained one above.
             // Up to x = 2 the trapezoidal drift's factor 1 − x stays within [−1, 1].
-            let g = &self.joints[r / 3];
+            let g = &sys.joints[r / 3];
             let own = |i: Option<usize>, c: Vec3, w: Vec3| {
                 i.map_or(0.0, |i| {
-                    c.norm_squared() / self.mass[i] + w.dot(self.inertia[i].apply_inverse(w))
+                    c.norm_squared() / sys.mass[i] + w.dot(sys.inertia[i].apply_inverse(w))
                 })
             };
             let x = hh * s.damping[r] * (own(g.parent, row.ci, row.ti) + own(Some(g.child), row.cj, row.tj));
@@ -187,63 +188,76 @@ impl MultibodySystem {
             // creep under a steady load exact (σ = −F at rest), as the trapezoidal rule's.
             let any_rows = self.rows0.iter().any(|r| r.n > 0);
             if any_rows && !self.factor_rows0 {
-                self.factor(Matrix::Start)?;
+                self.factor(sys, Matrix::Start)?;
                 report.factorizations += 1;
             }
-            self.set_dampers(&s.grad, Some(&s.sigma));
-            for i in 0..self.mass.len() {
+            self.set_dampers(sys, &s.grad, Some(&s.sigma));
+            for i in 0..sys.mass.len() {
                 s.linear[i] = state.p[i] + (self.force[i] + self.damp_f[i]) * hh;
                 s.angular[i] = state.pi[i] + (self.torque[i] + self.damp_t[i]) * hh;
             }
-            self.project_momenta(s, hh, any_rows, true);
-            self.rates_into(&s.grad, &mut s.rates0);
-            self.solve_dampers(s, t, hh, any_rows, true)?;
+            self.project_momenta(sys, s, hh, any_rows, true);
+            self.rates_into(sys, &s.grad, &mut s.rates0);
+            self.solve_dampers(sys, s, t, hh, any_rows, true)?;
         }
-        self.set_dampers(&s.grad, Some(&s.sigma));
+        self.set_dampers(sys, &s.grad, Some(&s.sigma));
         Ok(())
     }
 
     /// The end half-kick `BE_D(h/2)` solved with the μ-kick (module docs), `hh = h/2`, in
     /// the step from `t`.
     /// Leaves `damp_f`, `damp_t` at the solved damping and `delta` at its μ.
-    pub(super) fn end_dampers(&mut self, t: f64, hh: f64, any_rows: bool, report: &mut StepReport) -> Result<()> {
+    pub(super) fn end_dampers(
+        &mut self,
+        sys: &MultibodySystem,
+        t: f64,
+        hh: f64,
+        any_rows: bool,
+        report: &mut StepReport,
+    ) -> Result<()> {
         let mut s = core::mem::take(&mut self.dampers);
-        let result = self.end_dampers_in(&mut s, t, hh, any_rows, report);
+        let result = self.end_dampers_in(sys, &mut s, t, hh, any_rows, report);
         self.dampers = s;
         result
     }
 
     fn end_dampers_in(
         &mut self,
+        sys: &MultibodySystem,
         s: &mut DamperScratch,
         t: f64,
         hh: f64,
         any_rows: bool,
         report: &mut StepReport,
     ) -> Result<()> {
-        let (c, r) = (core::mem::take(&mut self.c_new), core::mem::take(&mut self.r_new));
-        s.gradients(self, &c, &r);
-        self.c_new = c;
-        self.r_new = r;
+        s.gradients(sys, &self.c_new, &self.r_new);
         // r₀: the rates without end damping; this pass also settles the active limits.
-        self.set_dampers(&s.grad, None);
-        self.velocity_pass(hh, any_rows, report)?;
-        self.end_velocities(hh);
-        self.rates_into(&s.grad, &mut s.rates0);
+        self.set_dampers(sys, &s.grad, None);
+        self.velocity_pass(sys, hh, any_rows, report)?;
+        self.end_velocities(sys, hh);
+        self.rates_into(sys, &s.grad, &mut s.rates0);
         for r in 0..s.sigma.len() {
             s.active[r] = s.grad[r].is_some();
             s.sigma[r] = 0.0;
         }
-        self.solve_dampers(s, t, hh, any_rows, false)?;
+        self.solve_dampers(sys, s, t, hh, any_rows, false)?;
         // The μ-kick at the solved damping.
-        self.set_dampers(&s.grad, Some(&s.sigma));
-        self.velocity_pass(hh, any_rows, report)
+        self.set_dampers(sys, &s.grad, Some(&s.sigma));
+        self.velocity_pass(sys, hh, any_rows, report)
     }
 
     /// Backward Euler for the active damper rows: `(diag(1/d) + (h/2) A) σ = −r₀` on them by
     /// preconditioned conjugate gradients (module docs), the other rows' forces held; `A`
     /// projected on the start rows (`start`) or the end rows, whose factorization is current.
-    fn solve_dampers(&mut self, s: &mut DamperScratch, t: f64, hh: f64, any_rows: bool, start: bool) -> Result<()> {
+    fn solve_dampers(
+        &mut self,
+        sys: &MultibodySystem,
+        s: &mut DamperScratch,
+        t: f64,
+        hh: f64,
+        any_rows: bool,
+        start: bool,
+    ) -> Result<()> {
         let n = s.sigma.len();
         let mut count = 0;
         let mut scale: f64 = 0.0;
@@ -280,7 +294,7 @@ impl MultibodySystem {
                     break;
                 }
                 return Err(Error::NewtonDidNotConverge {
-                    method: self.method.name(),
+                    method: self.method_name,
                     equation: "the dampers' implicit half-kick (conjugate gradients)",
                     t,
                     h: 2.0 * hh,
@@ -290,7 +304,7 @@ impl MultibodySystem {
             }
             iterations += 1;
             // K p = p / d + (h/2) A p.
-            self.damper_response(s, hh, any_rows, start);
+            self.damper_response(sys, s, hh, any_rows, start);
             let mut pkp = 0.0;
             for r in 0..n {
                 if s.active[r] {
@@ -300,7 +314,7 @@ impl MultibodySystem {
             }
             if pkp.is_nan() || pkp <= 0.0 {
                 return Err(Error::NewtonDidNotConverge {
-                    method: self.method.name(),
+                    method: self.method_name,
                     equation:
                         "the dampers' implicit half-kick (indefinite: a negative sub-step with |h| d / (2 I) >= 1)",
                     t,
@@ -335,47 +349,47 @@ impl MultibodySystem {
     /// forces `Dᵀ p` (`p = s.direction`) alone, projected on `G v = 0` with the current
     /// factorization, of the start rows (`start`) or the end rows (linear: no other
     /// momentum enters, so nothing cancels).
-    fn damper_response(&mut self, s: &mut DamperScratch, hh: f64, any_rows: bool, start: bool) {
-        self.set_dampers(&s.grad, Some(&s.direction));
-        for i in 0..self.mass.len() {
+    fn damper_response(&mut self, sys: &MultibodySystem, s: &mut DamperScratch, hh: f64, any_rows: bool, start: bool) {
+        self.set_dampers(sys, &s.grad, Some(&s.direction));
+        for i in 0..sys.mass.len() {
             s.linear[i] = self.damp_f[i] * hh;
             s.angular[i] = self.damp_t[i] * hh;
         }
-        self.project_momenta(s, hh, any_rows, start);
-        self.rates_into(&s.grad, &mut s.image);
+        self.project_momenta(sys, s, hh, any_rows, start);
+        self.rates_into(sys, &s.grad, &mut s.image);
     }
 
     /// The velocities of the momenta `s.linear`, `s.angular` projected on `G v = 0` (the
     /// start rows or the end rows, factored), in `vel`, `omega` (the momenta are changed).
-    fn project_momenta(&mut self, s: &mut DamperScratch, hh: f64, any_rows: bool, start: bool) {
-        self.velocities(&s.linear, &s.angular);
+    fn project_momenta(&mut self, sys: &MultibodySystem, s: &mut DamperScratch, hh: f64, any_rows: bool, start: bool) {
+        self.velocities(sys, &s.linear, &s.angular);
         if any_rows {
-            self.rates_rhs(start, -1.0 / hh);
-            self.timed_solve();
+            self.rates_rhs(sys, start, -1.0 / hh);
+            self.timed_solve(sys);
             let rows = if start { &self.rows0 } else { &self.rows1 };
-            add_impulse(&self.joints, rows, &self.delta, hh, &mut s.linear, &mut s.angular);
-            self.velocities(&s.linear, &s.angular);
+            add_impulse(&sys.joints, rows, &self.delta, hh, &mut s.linear, &mut s.angular);
+            self.velocities(sys, &s.linear, &s.angular);
         }
     }
 
     /// The damping forces `Dᵀ σ` into `damp_f`, `damp_t` (`None`: zero).
-    fn set_dampers(&mut self, grad: &[Option<Row>], sigma: Option<&[f64]>) {
+    fn set_dampers(&mut self, sys: &MultibodySystem, grad: &[Option<Row>], sigma: Option<&[f64]>) {
         self.damp_f.iter_mut().for_each(|v| *v = Vec3::ZERO);
         self.damp_t.iter_mut().for_each(|v| *v = Vec3::ZERO);
         let Some(sigma) = sigma else { return };
         for (r, row) in grad.iter().enumerate() {
             if let Some(row) = row {
-                apply(&self.joints[r / 3], row, sigma[r], &mut self.damp_f, &mut self.damp_t);
+                apply(&sys.joints[r / 3], row, sigma[r], &mut self.damp_f, &mut self.damp_t);
             }
         }
     }
 
     /// The damper rows' rates `D_r v` at the velocities in `vel`, `omega`.
-    fn rates_into(&self, grad: &[Option<Row>], rates: &mut [f64]) {
+    fn rates_into(&self, sys: &MultibodySystem, grad: &[Option<Row>], rates: &mut [f64]) {
         for (r, row) in grad.iter().enumerate() {
             rates[r] = match row {
                 Some(row) => {
-                    let g = &self.joints[r / 3];
+                    let g = &sys.joints[r / 3];
                     let (vi, wi) = g
                         .parent
                         .map_or((Vec3::ZERO, Vec3::ZERO), |p| (self.vel[p], self.omega[p]));

@@ -1,18 +1,19 @@
-//! Many independent copies of a jointed system stepped together on threads: each copy is
-//! its own [`MultibodySystem`] and [`MultibodyState`], the copies are shared out in fixed
+//! Many independent copies of a jointed system stepped together on threads: one
+//! [`MultibodySystem`] shared by all, each copy its own [`Rattle`] and [`MultibodyState`], the copies are shared out in fixed
 //! contiguous parts (one per thread), and each copy's steps are computed the same way
 //! whichever thread takes it, so the states are bitwise identical for any thread count.
 //! For parameter sweeps and ensembles of initial conditions (a thousand 10-link chains).
 //!
-//! Reference: as [`MultibodySystem::step`] (RATTLE with EA's rotation; E. Hairer, C.
+//! Reference: as [`Rattle::step`] (RATTLE with EA's rotation; E. Hairer, C.
 //! Lubich, G. Wanner, *Geometric Numerical Integration*, 2nd ed., Springer 2006, VII.1).
 
-use super::{Model, MultibodyMethod, MultibodyState, MultibodySystem};
+use super::{Model, MultibodyMethod, MultibodyState, MultibodySystem, Rattle};
 use crate::error::{Error, Result};
 
 /// Copies of jointed systems advanced together.
 pub struct MultibodyEnsemble {
-    systems: Vec<MultibodySystem>,
+    system: MultibodySystem,
+    integrators: Vec<Rattle>,
     states: Vec<MultibodyState>,
 }
 
@@ -38,17 +39,22 @@ impl MultibodyEnsemble {
             });
         }
         let initial = model.initial_state()?;
-        let mut systems = Vec::with_capacity(copies);
+        let system = MultibodySystem::new(model)?;
+        let mut integrators = Vec::with_capacity(copies);
         let mut states = Vec::with_capacity(copies);
         for k in 0..copies {
-            let mut system = MultibodySystem::new(model, method)?;
+            let mut integrator = Rattle::new(&system, method);
             let mut state = initial.clone();
             start(k, &mut state);
-            system.project_velocities(&mut state)?;
-            systems.push(system);
+            integrator.project_velocities(&system, &mut state)?;
+            integrators.push(integrator);
             states.push(state);
         }
-        Ok(MultibodyEnsemble { systems, states })
+        Ok(MultibodyEnsemble {
+            system,
+            integrators,
+            states,
+        })
     }
 
     /// The copies' states.
@@ -57,10 +63,10 @@ impl MultibodyEnsemble {
         &self.states
     }
 
-    /// The copies' systems (energy, momenta, joint readouts of a state).
+    /// The system every copy steps (energy, momenta, joint readouts of a state).
     #[must_use]
-    pub fn systems(&self) -> &[MultibodySystem] {
-        &self.systems
+    pub fn system(&self) -> &MultibodySystem {
+        &self.system
     }
 
     /// Number of copies.
@@ -90,30 +96,31 @@ impl MultibodyEnsemble {
     pub fn advance(&mut self, h: f64, steps: u64, threads: usize) -> Result<()> {
         let threads = threads.clamp(1, self.states.len());
         let len = self.states.len();
-        let run = |systems: &mut [MultibodySystem], states: &mut [MultibodyState]| -> Result<()> {
-            for (system, state) in systems.iter_mut().zip(states.iter_mut()) {
+        let system = &self.system;
+        let run = |integrators: &mut [Rattle], states: &mut [MultibodyState]| -> Result<()> {
+            for (integrator, state) in integrators.iter_mut().zip(states.iter_mut()) {
                 for _ in 0..steps {
-                    system.step(state, h)?;
+                    integrator.step(system, state, h)?;
                 }
             }
             Ok(())
         };
         if threads == 1 {
-            return run(&mut self.systems, &mut self.states);
+            return run(&mut self.integrators, &mut self.states);
         }
         let results: Vec<Result<()>> = std::thread::scope(|scope| {
-            let mut systems: &mut [MultibodySystem] = &mut self.systems;
+            let mut integrators: &mut [Rattle] = &mut self.integrators;
             let mut states: &mut [MultibodyState] = &mut self.states;
             let mut handles = Vec::with_capacity(threads);
             let mut taken = 0;
             for part in 0..threads {
                 let end = (part + 1) * len / threads;
-                let (sys_part, sys_rest) = std::mem::take(&mut systems).split_at_mut(end - taken);
+                let (int_part, int_rest) = std::mem::take(&mut integrators).split_at_mut(end - taken);
                 let (st_part, st_rest) = std::mem::take(&mut states).split_at_mut(end - taken);
-                systems = sys_rest;
+                integrators = int_rest;
                 states = st_rest;
                 taken = end;
-                handles.push(scope.spawn(move || run(sys_part, st_part)));
+                handles.push(scope.spawn(move || run(int_part, st_part)));
             }
             handles
                 .into_iter()

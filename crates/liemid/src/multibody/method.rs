@@ -5,6 +5,12 @@
 
 use crate::composition::Scheme;
 
+/// Iteration cap of the position (λ) solve.
+pub const MAX_ITERATIONS: u32 = 60;
+
+/// Most re-solves of one step for joint limits switching on or off.
+pub const MAX_LIMIT_PASSES: u32 = 8;
+
 /// The integration method: the RATTLE/EA step or a symmetric composition of it.
 ///
 /// Reference: E. Hairer, C. Lubich, G. Wanner, *Geometric Numerical Integration*, V.3.
@@ -55,7 +61,7 @@ impl MultibodyMethod {
 
 /// What a step did.
 ///
-/// Reference: multibody spec section 5 (constraints at round-off every step).
+/// Reference: docs/theory/multibody.md §5 (constraints at round-off every step).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct StepReport {
     /// Quasi-Newton iterations of the position solve, over all stages.
@@ -80,12 +86,4 @@ pub enum LimitState {
     Lower,
     /// Held at the upper bound.
     Upper,
-}
-
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct JointParams {
-    pub stiffness: f64,
-    pub spring_ref: f64,
-    pub damping: f64,
-    pub range: Option<(f64, f64)>,
 }

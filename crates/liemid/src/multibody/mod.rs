@@ -9,7 +9,7 @@
 //! tree joints in body order, loop-closing joints, gravity and MuJoCo-layout joint
 //! coordinates; [`Model::initial_state`] does the forward kinematics.
 //!
-//! **Method.** [`MultibodySystem::step`] is RATTLE (a symmetric, symplectic constrained
+//! **Method.** [`Rattle::step`] is RATTLE (a symmetric, symplectic constrained
 //! Verlet) whose free rotation is LIEMID\[EA\]'s torque-free pair of midpoint half steps:
 //!
 //! ```text
@@ -36,31 +36,37 @@
 //! Dynamics*, Cambridge 2004, ch. 7-8; D. Baraff, "Linear-time dynamics using Lagrange
 //! multipliers", SIGGRAPH 1996; P. Krysl, Int. J. Numer. Meth. Engng 63 (2005).
 
+mod blocks;
 mod cholesky;
 pub mod constraints;
 mod dampers;
+pub mod driver;
 pub mod ensemble;
-pub mod forces;
+mod forces;
 pub mod joint_space;
 pub mod method;
 pub mod mjcf;
 pub mod model;
 mod positions;
+mod predictor;
 pub mod problems;
 mod projection;
 pub mod rattle;
 pub mod solver;
 pub mod state;
+pub mod system;
 pub mod urdf;
 mod velocities;
+mod workspace;
 mod xml;
 
 pub use constraints::{JointGeometry, JointRows, Row};
+pub use driver::{MultibodyRun, Simulation};
 pub use ensemble::MultibodyEnsemble;
-pub use forces::ForceHook;
 pub use joint_space::JointSpaceModel;
 pub use method::{LimitState, MultibodyMethod, StepReport};
 pub use model::{Body, Joint, JointKind, Link, Model};
-pub use rattle::MultibodySystem;
-pub use state::{MultibodyRun, MultibodyState};
+pub use rattle::Rattle;
+pub use state::MultibodyState;
+pub use system::{ForceHook, MultibodySystem};
 pub use xml::Loaded;

@@ -36,10 +36,11 @@ use crate::rigid::midpoint::{self, NotConverged};
 use crate::rigid::rotation::newton_error;
 use crate::so3;
 
-use super::constraints::JointRows;
-use super::method::{LimitState, StepReport};
-use super::rattle::{add_impulse, for_each_rate, pose, Matrix, MAX_ITERATIONS};
-use super::{MultibodyState, MultibodySystem};
+use super::constraints::{add_impulse, for_each_rate, pose, rows_at, JointRows};
+use super::method::{LimitState, StepReport, MAX_ITERATIONS};
+use super::state::MultibodyState;
+use super::system::MultibodySystem;
+use super::workspace::{Matrix, Workspace};
 
 /// EA's torque-free rotation of one body over `2 hh`: `Ψ₁` from (M) with `(P, hh)`,
 /// `Π_a = exp(−Ψ₁) P`, `Ψ₂` from (M) with `(Π_a, hh)`; returns `exp(Ψ₁)`, `Π_a`, `exp(Ψ₂)`.
@@ -102,29 +103,29 @@ enum Refine {
     Exact,
 }
 
-impl MultibodySystem {
+impl Workspace {
     /// The drift with multipliers `self.lambda`: `p½`, `P`, then `c⁺`, `R⁺`, `Π'`. With
     /// `warm`, the midpoint solves start from the last drift's `Ψ₁`, `Ψ₂` (the same stage,
     /// `λ` changed by a quasi-Newton correction) instead of the predictor: one Newton
     /// iteration each instead of two on the spacecraft's hub.
-    pub(super) fn drift(&mut self, state: &MultibodyState, h: f64, warm: bool) -> Result<()> {
+    pub(super) fn drift(&mut self, sys: &MultibodySystem, state: &MultibodyState, h: f64, warm: bool) -> Result<()> {
         let hh = 0.5 * h;
         self.p_half.copy_from_slice(&self.pb);
         self.big_p.copy_from_slice(&self.pib);
         add_impulse(
-            &self.joints,
+            &sys.joints,
             &self.rows0,
             &self.lambda,
             hh,
             &mut self.p_half,
             &mut self.big_p,
         );
-        for i in 0..self.mass.len() {
-            self.c_new[i] = state.c[i] + self.p_half[i] * (h / self.mass[i]);
+        for i in 0..sys.mass.len() {
+            self.c_new[i] = state.c[i] + self.p_half[i] * (h / sys.mass[i]);
             let guess = warm.then_some((self.psi1[i], self.psi2[i]));
-            let (inc1, pa, inc2) = match midpoint_pair(&self.inertia[i], self.big_p[i], hh, guess) {
+            let (inc1, pa, inc2) = match midpoint_pair(&sys.inertia[i], self.big_p[i], hh, guess) {
                 Ok(v) => v,
-                Err(e) => return Err(newton_error(self.method.name(), "midpoint equation (M)", state.t, h, e)),
+                Err(e) => return Err(newton_error(self.method_name, "midpoint equation (M)", state.t, h, e)),
             };
             self.psi1[i] = inc1.psi();
             self.psi2[i] = inc2.psi();
@@ -136,12 +137,12 @@ impl MultibodySystem {
     }
 
     /// Largest scaled `|g|` of `rows`.
-    pub(super) fn residual(&self, rows: &[JointRows]) -> f64 {
+    pub(super) fn residual(&self, sys: &MultibodySystem, rows: &[JointRows]) -> f64 {
         let mut r: f64 = 0.0;
         for jr in rows {
             for k in 0..jr.n {
                 let v = jr.value[k].abs();
-                r = max_or_nan(r, if jr.length[k] { v / self.length } else { v });
+                r = max_or_nan(r, if jr.length[k] { v / sys.length } else { v });
             }
         }
         r
@@ -152,16 +153,16 @@ impl MultibodySystem {
     /// `A₁ = J₁⁻¹ exp(−Ψ₁/2) h/2`, `B = exp(−Ψ₁)(1 + hat(P) Jr(−Ψ₁) A₁)`,
     /// `A₂ = J₂⁻¹ exp(−Ψ₂/2) (h/2) B`, `D = exp(−Ψ₂) Jr(Ψ₁) A₁ + Jr(Ψ₂) A₂`; stored as
     /// the effective inertia `h D⁻¹` (`= I` to leading order in `h`).
-    pub(super) fn drift_jacobian(&mut self, h: f64) {
+    pub(super) fn drift_jacobian(&mut self, sys: &MultibodySystem, h: f64) {
         let hh = 0.5 * h;
-        for i in 0..self.mass.len() {
+        for i in 0..sys.mass.len() {
             let (psi1, psi2) = (self.psi1[i], self.psi2[i]);
-            let inertia = &self.inertia[i];
+            let inertia = &sys.inertia[i];
             let j1 = midpoint::jacobian(inertia, self.big_p[i], hh, psi1);
             let j2 = midpoint::jacobian(inertia, self.pi_a[i], hh, psi2);
             let (Some(j1i), Some(j2i)) = (j1.inverse(), j2.inverse()) else {
-                self.effective[i] = self.inertia_matrix[i];
-                self.drift_rate[i] = self.inertia_matrix[i].inverse().unwrap_or(Mat3::IDENTITY);
+                self.effective[i] = sys.inertia_matrix[i];
+                self.drift_rate[i] = sys.inertia_matrix[i].inverse().unwrap_or(Mat3::IDENTITY);
                 continue;
             };
             let a1 = j1i * so3::exp(-psi1 * 0.5) * hh;
@@ -173,14 +174,20 @@ impl MultibodySystem {
                 self.effective[i] = d_inverse * h;
                 self.drift_rate[i] = d * (1.0 / h);
             } else {
-                self.effective[i] = self.inertia_matrix[i];
-                self.drift_rate[i] = self.inertia_matrix[i].inverse().unwrap_or(Mat3::IDENTITY);
+                self.effective[i] = sys.inertia_matrix[i];
+                self.drift_rate[i] = sys.inertia_matrix[i].inverse().unwrap_or(Mat3::IDENTITY);
             }
         }
     }
 
     /// The quasi-Newton iteration for λ.
-    pub(super) fn solve_positions(&mut self, state: &MultibodyState, h: f64, report: &mut StepReport) -> Result<()> {
+    pub(super) fn solve_positions(
+        &mut self,
+        sys: &MultibodySystem,
+        state: &MultibodyState,
+        h: f64,
+        report: &mut StepReport,
+    ) -> Result<()> {
         let any_rows = self.rows0.iter().any(|r| r.n > 0);
         let mut prev = f64::INFINITY;
         let mut factored = false;
@@ -193,11 +200,11 @@ impl MultibodySystem {
         loop {
             // Warm midpoint starts once the corrections are small (a long step's first
             // corrections can move Ψ farther than the predictor's error).
-            self.drift(state, h, prev <= 1e-6)?;
-            Self::rows_at(
-                &self.joints,
+            self.drift(sys, state, h, prev <= 1e-6)?;
+            rows_at(
+                &sys.joints,
                 &self.limit,
-                &self.params,
+                &sys.params,
                 &self.c_new,
                 &self.r_new,
                 &mut self.rows1,
@@ -205,9 +212,9 @@ impl MultibodySystem {
             if !any_rows {
                 return Ok(());
             }
-            let r = self.residual(&self.rows1);
+            let r = self.residual(sys, &self.rows1);
             let extent = self.c_new.iter().fold(0.0f64, |m, c| m.max(c.max_abs()));
-            let floor = 16.0 * f64::EPSILON * (1.0 + extent / self.length);
+            let floor = 16.0 * f64::EPSILON * (1.0 + extent / sys.length);
             if let Some(was) = refined {
                 // Learn the contraction of each kind of correction (log-average).
                 let rho = (r / prev).clamp(1e-12, 1.0).ln();
@@ -224,7 +231,7 @@ impl MultibodySystem {
             }
             if it >= MAX_ITERATIONS || !r.is_finite() {
                 return Err(Error::NewtonDidNotConverge {
-                    method: self.method.name(),
+                    method: self.method_name,
                     equation: "position constraints g(q+(lambda)) = 0",
                     t: state.t,
                     h,
@@ -237,14 +244,14 @@ impl MultibodySystem {
                 // solve; when that converges slowly (fast spin about an axis of small
                 // inertia), the exact drift Jacobian at the current iterate.
                 if !self.factor_rows0 {
-                    self.factor(Matrix::Start)?;
+                    self.factor(sys, Matrix::Start)?;
                     report.factorizations += 1;
                 }
                 factored = true;
                 start_matrix = true;
             } else if r > 0.25 * prev {
-                self.drift_jacobian(h);
-                self.factor(Matrix::Exact)?;
+                self.drift_jacobian(sys, h);
+                self.factor(sys, Matrix::Exact)?;
                 report.factorizations += 1;
                 start_matrix = false;
             }
@@ -254,7 +261,7 @@ impl MultibodySystem {
                     self.rhs[k][r] = jr.value[r] * s;
                 }
             }
-            self.timed_solve();
+            self.timed_solve(sys);
             // Refine when, by the learned contractions, it saves position iterations.
             let need = (floor / r).ln();
             let iterations = |rho: f64| (need / rho.min(-1e-3)).ceil();
@@ -276,10 +283,10 @@ impl MultibodySystem {
             };
             match choice {
                 Refine::None => {}
-                Refine::Spec => self.refine_correction(h, floor, false),
+                Refine::Spec => self.refine_correction(sys, h, floor, false),
                 Refine::Exact => {
-                    self.drift_jacobian(h);
-                    self.refine_correction(h, floor, true);
+                    self.drift_jacobian(sys, h);
+                    self.refine_correction(sys, h, floor, true);
                 }
             }
             // Only corrections with the start matrix teach the estimates (after the exact
@@ -315,31 +322,31 @@ impl MultibodySystem {
     /// impulse `D`, [`MultibodySystem::drift_jacobian`], in place of `I⁻¹`): the passes
     /// then converge to Newton's correction, gaining `O(h |Ω|)` each, up to
     /// `EXACT_REFINE_PASSES`.
-    fn refine_correction(&mut self, h: f64, floor: f64, exact: bool) {
+    fn refine_correction(&mut self, sys: &MultibodySystem, h: f64, floor: f64, exact: bool) {
         let g_scale = 0.5 * h * h;
         let mut last = f64::INFINITY;
         for _ in 0..if exact { EXACT_REFINE_PASSES } else { REFINE_PASSES } {
             self.vel.iter_mut().for_each(|v| *v = Vec3::ZERO);
             self.omega.iter_mut().for_each(|v| *v = Vec3::ZERO);
             add_impulse(
-                &self.joints,
+                &sys.joints,
                 &self.rows0,
                 &self.delta,
                 1.0,
                 &mut self.vel,
                 &mut self.omega,
             );
-            for i in 0..self.mass.len() {
-                self.vel[i] = self.vel[i] * (1.0 / self.mass[i]);
+            for i in 0..sys.mass.len() {
+                self.vel[i] = self.vel[i] * (1.0 / sys.mass[i]);
                 self.omega[i] = if exact {
                     self.drift_rate[i] * self.omega[i]
                 } else {
-                    self.inertia[i].apply_inverse(self.omega[i])
+                    sys.inertia[i].apply_inverse(self.omega[i])
                 };
             }
             let mut worst: f64 = 0.0;
-            let (rhs, inner_rhs, length) = (&self.rhs, &mut self.inner_rhs, self.length);
-            for_each_rate(&self.joints, &self.rows1, &self.vel, &self.omega, |k, r, rate| {
+            let (rhs, inner_rhs, length) = (&self.rhs, &mut self.inner_rhs, sys.length);
+            for_each_rate(&sys.joints, &self.rows1, &self.vel, &self.omega, |k, r, rate| {
                 let res = rhs[k][r] - rate;
                 inner_rhs[k][r] = res;
                 let v = (res * g_scale).abs();
@@ -355,7 +362,7 @@ impl MultibodySystem {
             }
             last = worst;
             let start = self.profiling.then(std::time::Instant::now);
-            self.solver.solve(&self.pairs, &self.inner_rhs, &mut self.inner_delta);
+            self.solver.solve(&sys.pairs, &self.inner_rhs, &mut self.inner_delta);
             if let Some(start) = start {
                 self.solver_time += start.elapsed();
             }
@@ -365,14 +372,14 @@ impl MultibodySystem {
 
     /// Switch limits on where the end coordinate crossed a bound, off where the multiplier
     /// pulls. Returns whether anything changed.
-    pub(super) fn update_limits_after_positions(&mut self) -> bool {
+    pub(super) fn update_limits_after_positions(&mut self, sys: &MultibodySystem) -> bool {
         let mut changed = false;
-        for k in 0..self.joints.len() {
-            let Some((lo, hi)) = self.params[k].range else { continue };
-            let base = self.joints[k].kind.rows();
+        for k in 0..sys.joints.len() {
+            let Some((lo, hi)) = sys.params[k].range else { continue };
+            let base = sys.joints[k].kind.rows();
             match self.limit[k] {
                 LimitState::Inactive => {
-                    let g = &self.joints[k];
+                    let g = &sys.joints[k];
                     let (pi, pj) = pose(g, &self.c_new, &self.r_new);
                     if let Some((q, _)) = g.coordinate(pi, pj) {
                         if q < lo || q > hi {

@@ -39,6 +39,8 @@
 
 use crate::linalg::Mat3;
 
+use super::blocks::{child_part, dot6_sequential, parent_part, Blk, V6};
+pub use super::blocks::{SingularPivot, PIVOT_TOLERANCE};
 use super::cholesky::SymmetricTree;
 use super::constraints::{JointRows, Row};
 
@@ -47,12 +49,6 @@ use super::constraints::{JointRows, Row};
 /// dependent rows at a few `1e-16` relative; the smallest non-zero one of the test
 /// four-bar is about `1e-2` relative, so `1e-10` separates them with margin both ways.
 pub const PSEUDO_INVERSE_TOLERANCE: f64 = 1e-10;
-
-/// Relative pivot below which a tree block is singular.
-pub const PIVOT_TOLERANCE: f64 = 1e-13;
-
-type Blk = [[f64; 6]; 6];
-type V6 = [f64; 6];
 
 #[derive(Clone, Copy, Debug)]
 enum NodeKind {
@@ -65,17 +61,6 @@ struct Node {
     kind: NodeKind,
     parent: Option<usize>,
     size: usize,
-}
-
-/// A tree block whose pivot vanished: the rows of a joint depend on others.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SingularPivot {
-    /// The joint of the block, or `None` for a body block.
-    pub joint: Option<usize>,
-    /// The body of the block, or `None` for a joint block.
-    pub body: Option<usize>,
-    /// The pivot relative to the block's largest entry.
-    pub ratio: f64,
 }
 
 /// The factorization of `A = G(q') M⁻¹ G(q)ᵀ`, preallocated for a model's tree and loops.
@@ -156,18 +141,6 @@ fn lu_solve(a: &Blk, n: usize, piv: &[usize; 6], b: &mut V6) {
         }
         b[k] = s / a[k][k];
     }
-}
-
-fn parent_part(r: &Row) -> V6 {
-    [r.ci.x, r.ci.y, r.ci.z, r.ti.x, r.ti.y, r.ti.z]
-}
-
-fn child_part(r: &Row) -> V6 {
-    [r.cj.x, r.cj.y, r.cj.z, r.tj.x, r.tj.y, r.tj.z]
-}
-
-fn dot6(a: &V6, b: &V6) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 impl TreeSolver {
@@ -398,9 +371,9 @@ impl TreeSolver {
             let g = self.loop_left[l];
             for m in 0..nl {
                 let wm = &self.w[m];
-                let mut v = dot6(&child_part(&g), &wm[self.body_node[ch]]);
+                let mut v = dot6_sequential(&child_part(&g), &wm[self.body_node[ch]]);
                 if let Some(p) = pa {
-                    v += dot6(&parent_part(&g), &wm[self.body_node[p]]);
+                    v += dot6_sequential(&parent_part(&g), &wm[self.body_node[p]]);
                 }
                 self.s[l * nl + m] = -v;
             }
@@ -465,9 +438,9 @@ impl TreeSolver {
                 let (k, row) = self.loop_rows[l];
                 let (pa, ch) = joints[k];
                 let g = &self.loop_left[l];
-                let mut v = dot6(&child_part(g), &self.z[self.body_node[ch]]);
+                let mut v = dot6_sequential(&child_part(g), &self.z[self.body_node[ch]]);
                 if let Some(p) = pa {
-                    v += dot6(&parent_part(g), &self.z[self.body_node[p]]);
+                    v += dot6_sequential(&parent_part(g), &self.z[self.body_node[p]]);
                 }
                 self.rhs_l[l] = r[k][row] - v;
             }

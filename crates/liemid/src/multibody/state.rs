@@ -1,19 +1,19 @@
-//! The multibody state (multibody spec section 1), its readouts and the fixed-step driver.
+//! The multibody state (docs/theory/multibody.md §1) and the system's readouts of it
+//! (frames, joint coordinates, energy, momenta, constraint violations).
 
-use crate::error::{Error, Result};
 use crate::linalg::{Mat3, Vec3};
 use crate::so3::Quaternion;
 
-use super::constraints::JointRows;
-use super::method::StepReport;
+use super::constraints::{ball_angle, pose, rows_at, JointRows};
+use super::method::LimitState;
 use super::model::JointKind;
-use super::rattle::{pose, MultibodySystem};
+use super::system::MultibodySystem;
 
 /// The state of `n` bodies in maximal coordinates: per body `i` the centre of mass `c_i`,
 /// the linear momentum `p_i = m_i v_i`, the attitude `R_i` (body to space) and the body
 /// angular momentum `Π_i = I_i Ω_i` about the centre of mass.
 ///
-/// Reference: multibody spec section 1; E. Hairer, C. Lubich, G. Wanner, *Geometric
+/// Reference: docs/theory/multibody.md §1; E. Hairer, C. Lubich, G. Wanner, *Geometric
 /// Numerical Integration*, VII.1.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MultibodyState {
@@ -95,25 +95,6 @@ impl MultibodyState {
     }
 }
 
-/// What a run did: steps and the extremes over every step.
-///
-/// Reference: multibody spec section 5.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct MultibodyRun {
-    /// Steps taken.
-    pub steps: u64,
-    /// Largest relative position violation over the steps.
-    pub max_position_violation: f64,
-    /// Largest relative velocity violation over the steps.
-    pub max_velocity_violation: f64,
-    /// Largest iteration count of one step.
-    pub max_iterations: u32,
-    /// Total position iterations.
-    pub total_iterations: u64,
-    /// Largest `|E − E₀| / |E₀|` (absolute when `E₀ = 0`).
-    pub max_energy_error: f64,
-}
-
 impl MultibodySystem {
     /// MuJoCo's `xpos` of body `i`: the frame origin `c_i − R_i s_i`.
     #[must_use]
@@ -154,7 +135,7 @@ impl MultibodySystem {
             }
             let (pi, pj) = pose(g, &state.c, &state.rotation);
             if g.kind == JointKind::Ball {
-                e += 0.5 * par.stiffness * super::forces::ball_angle(g, pi.1, pj.1).norm_squared();
+                e += 0.5 * par.stiffness * ball_angle(g, pi.1, pj.1).norm_squared();
             } else if let Some((q, _)) = g.coordinate(pi, pj) {
                 e += 0.5 * par.stiffness * (q - par.spring_ref).powi(2);
             }
@@ -177,9 +158,17 @@ impl MultibodySystem {
     }
 
     /// The relative position and velocity constraint violations of `state` (as in
-    /// [`StepReport`]), active limit rows included.
+    /// [`super::StepReport`]) of the joints, without limit rows (an integrator's active
+    /// limits: [`super::Rattle::constraint_violation`]).
     #[must_use]
     pub fn constraint_violation(&self, state: &MultibodyState) -> (f64, f64) {
+        self.constraint_violation_with(state, &[])
+    }
+
+    /// As [`Self::constraint_violation`], with the limit rows active in `limits` (one per
+    /// joint; missing entries are inactive).
+    #[must_use]
+    pub fn constraint_violation_with(&self, state: &MultibodyState, limits: &[LimitState]) -> (f64, f64) {
         let mut pos: f64 = 0.0;
         let mut vel: f64 = 0.0;
         let mut rows = JointRows::default();
@@ -191,9 +180,10 @@ impl MultibodySystem {
         }
         for (k, g) in self.joints.iter().enumerate() {
             let one = core::slice::from_mut(&mut rows);
-            MultibodySystem::rows_at(
+            let limit = [limits.get(k).copied().unwrap_or(LimitState::Inactive)];
+            rows_at(
                 core::slice::from_ref(g),
-                &self.limit[k..=k],
+                &limit,
                 &self.params[k..=k],
                 &state.c,
                 &state.rotation,
@@ -216,43 +206,5 @@ impl MultibodySystem {
             }
         }
         (pos, if vscale > 0.0 { vel / vscale } else { vel })
-    }
-
-    /// Integrate from `state.t` to `t_end` with step `h` (the last step lands on `t_end`),
-    /// calling `observer(k, state, report)` after every step; returns the extremes.
-    ///
-    /// # Errors
-    /// The step's errors, [`crate::rigid::driver::step_count`]'s, and
-    /// [`Error::ObserverFailed`] when the observer returns an error.
-    ///
-    /// Reference: `crate::rigid::driver::integrate` (the same time stepping).
-    pub fn integrate<O>(
-        &mut self,
-        state: &mut MultibodyState,
-        t_end: f64,
-        h: f64,
-        mut observer: O,
-    ) -> Result<MultibodyRun>
-    where
-        O: FnMut(u64, &MultibodyState, &StepReport) -> core::result::Result<(), String>,
-    {
-        let t0 = state.t;
-        let n = crate::rigid::driver::step_count(t0, t_end, h)?;
-        let e0 = self.energy(state);
-        let mut run = MultibodyRun::default();
-        for k in 1..=n {
-            let t_next = if k == n { t_end } else { t0 + k as f64 * h };
-            let report = self.step(state, t_next - state.t)?;
-            self.set_time(state, t_next);
-            run.steps = k;
-            run.max_position_violation = run.max_position_violation.max(report.position_violation);
-            run.max_velocity_violation = run.max_velocity_violation.max(report.velocity_violation);
-            run.max_iterations = run.max_iterations.max(report.iterations);
-            run.total_iterations += u64::from(report.iterations);
-            let de = (self.energy(state) - e0).abs();
-            run.max_energy_error = run.max_energy_error.max(if e0 != 0.0 { de / e0.abs() } else { de });
-            observer(k, state, &report).map_err(|reason| Error::ObserverFailed { t: state.t, reason })?;
-        }
-        Ok(run)
     }
 }

@@ -1,0 +1,193 @@
+//! The multibody system: what a [`Model`] says, in the form the step reads it (mass
+//! properties, joint geometry, force parameters), immutable while stepping. The working
+//! memory of a method lives apart, in [`super::workspace::Workspace`] inside
+//! [`super::Rattle`]; one system can be stepped by several integrators (as Pinocchio's
+//! `Model` by several `Data`, MuJoCo's `mjModel` by several `mjData`).
+//!
+//! Reference: docs/theory/multibody.md §1 (state and model), §2 (joints).
+
+use crate::error::{Error, Result};
+use crate::linalg::{Mat3, Vec3};
+use crate::rigid::inertia::Inertia;
+
+use super::constraints::{JointGeometry, JointParams};
+use super::model::{JointKind, Model};
+
+/// A force law added to gravity, springs and constant loads: given the time and the
+/// configuration (centres of mass `c`, attitudes `R`), add to each body's force (space,
+/// at the centre of mass) and torque (body frame). Forces that depend on the positions
+/// only keep the step symplectic when they are the gradient of a potential. A hook is part
+/// of the system, which steps read only: it takes `&self` (keep counters in atomics).
+///
+/// Reference: docs/theory/multibody.md §3 (`F(q)`, `T(q)`).
+pub trait ForceHook: Send + Sync {
+    /// Add the forces and body torques at `(t, c, rotation)`.
+    fn add(&self, t: f64, c: &[Vec3], rotation: &[Mat3], force: &mut [Vec3], torque: &mut [Vec3]);
+}
+
+impl<F> ForceHook for F
+where
+    F: Fn(f64, &[Vec3], &[Mat3], &mut [Vec3], &mut [Vec3]) + Send + Sync,
+{
+    fn add(&self, t: f64, c: &[Vec3], rotation: &[Mat3], force: &mut [Vec3], torque: &mut [Vec3]) {
+        self(t, c, rotation, force, torque);
+    }
+}
+
+/// A multibody system built from a validated [`Model`]: structure, mass properties and
+/// forces. Stepped by [`super::Rattle`], which holds every scratch array.
+///
+/// Reference: docs/theory/multibody.md §1-§2.
+pub struct MultibodySystem {
+    pub(super) name: String,
+    pub(super) mass: Vec<f64>,
+    pub(super) inertia: Vec<Inertia>,
+    pub(super) inertia_matrix: Vec<Mat3>,
+    pub(super) com: Vec<Vec3>,
+    pub(super) joints: Vec<JointGeometry>,
+    pub(super) pairs: Vec<(Option<usize>, usize)>,
+    pub(super) params: Vec<JointParams>,
+    pub(super) gravity: Vec3,
+    pub(super) length: f64,
+    pub(super) has_damping: bool,
+    pub(super) const_force: Vec<Vec3>,
+    pub(super) const_torque: Vec<Vec3>,
+    pub(super) hook: Option<Box<dyn ForceHook>>,
+    /// Counts the edits of the forces ([`Self::set_body_load`], [`Self::set_force_hook`]),
+    /// so that an integrator's cached start forces are known to be stale.
+    pub(super) revision: u64,
+}
+
+impl core::fmt::Debug for MultibodySystem {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("MultibodySystem")
+            .field("name", &self.name)
+            .field("bodies", &self.mass.len())
+            .field("joints", &self.joints.len())
+            .finish_non_exhaustive()
+    }
+}
+
+impl MultibodySystem {
+    /// Build the system of a model: validate it, precompute the joint geometry and the
+    /// force parameters.
+    ///
+    /// # Errors
+    /// [`Model::validate`]'s errors; [`Error::InvalidModel`] for a joint with armature
+    /// (not representable exactly in maximal coordinates).
+    pub fn new(model: &Model) -> Result<Self> {
+        model.validate()?;
+        let nb = model.bodies.len();
+        let nj = model.joints.len();
+        for (k, j) in model.joints.iter().enumerate() {
+            if j.armature != 0.0 {
+                return Err(Error::InvalidModel {
+                    reason: format!(
+                        "joint `{}` ({k}): armature = {} is not supported: a rotor inertia in joint space has no exact \
+                         counterpart in maximal coordinates (remove it or model the rotor as a body)",
+                        j.name, j.armature
+                    ),
+                });
+            }
+        }
+        let inertia = (0..nb).map(|i| model.inertia(i)).collect::<Result<Vec<_>>>()?;
+        let joints: Vec<JointGeometry> = (0..nj).map(|k| JointGeometry::new(model, k)).collect();
+        let pairs: Vec<_> = joints.iter().map(|g| (g.parent, g.child)).collect();
+        let params: Vec<_> = model
+            .joints
+            .iter()
+            .map(|j| {
+                let one_dof = matches!(j.kind, JointKind::Hinge { .. } | JointKind::Slide { .. });
+                JointParams {
+                    stiffness: if one_dof || j.kind == JointKind::Ball {
+                        j.stiffness
+                    } else {
+                        0.0
+                    },
+                    spring_ref: j.spring_ref,
+                    damping: if one_dof || j.kind == JointKind::Ball {
+                        j.damping
+                    } else {
+                        0.0
+                    },
+                    range: if one_dof { j.range } else { None },
+                }
+            })
+            .collect();
+        let z3 = vec![Vec3::ZERO; nb];
+        Ok(MultibodySystem {
+            name: model.name.clone(),
+            mass: model.bodies.iter().map(|b| b.mass).collect(),
+            inertia_matrix: inertia.iter().map(|i| *i.matrix()).collect(),
+            inertia,
+            com: model.bodies.iter().map(|b| b.com).collect(),
+            has_damping: params.iter().any(|p| p.damping > 0.0),
+            params,
+            pairs,
+            joints,
+            gravity: model.gravity,
+            length: model.length_scale(),
+            const_force: z3.clone(),
+            const_torque: z3,
+            hook: None,
+            revision: 0,
+        })
+    }
+
+    /// The model's name.
+    #[must_use]
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The model's length scale `L` (see [`Model::length_scale`]).
+    #[must_use]
+    pub fn length_scale(&self) -> f64 {
+        self.length
+    }
+
+    /// The floor `√(|g| L)` of the velocity scale of the relative velocity violation, so
+    /// that a body at rest (against a limit, at the bottom of a swing) does not divide a
+    /// round-off rate by a round-off speed.
+    #[must_use]
+    pub fn velocity_floor(&self) -> f64 {
+        (self.gravity.norm() * self.length).sqrt()
+    }
+
+    /// Number of bodies.
+    #[must_use]
+    pub fn body_count(&self) -> usize {
+        self.mass.len()
+    }
+
+    /// Number of joints (tree joints first, then loop-closing ones).
+    #[must_use]
+    pub fn joint_count(&self) -> usize {
+        self.joints.len()
+    }
+
+    /// A constant force (space, at the centre of mass) and body-frame torque on body `i`;
+    /// the force has the potential `−F·c` (included in the energy), the body torque none.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for an index out of range or a non-finite vector.
+    pub fn set_body_load(&mut self, i: usize, force: Vec3, torque: Vec3) -> Result<()> {
+        if i >= self.mass.len() || !force.is_finite() || !torque.is_finite() {
+            return Err(Error::InvalidParameter {
+                name: "body load",
+                value: i as f64,
+                reason: "body index out of range or load not finite",
+            });
+        }
+        self.const_force[i] = force;
+        self.const_torque[i] = torque;
+        self.revision += 1;
+        Ok(())
+    }
+
+    /// Install a force hook (replacing any earlier one).
+    pub fn set_force_hook(&mut self, hook: Box<dyn ForceHook>) {
+        self.hook = Some(hook);
+        self.revision += 1;
+    }
+}

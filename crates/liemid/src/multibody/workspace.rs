@@ -1,0 +1,277 @@
+//! The working memory of the multibody step: every scratch array of one integrator, sized
+//! once for a system so that a step allocates nothing, the start-of-step cache (forces,
+//! rows, the factorization of `G M⁻¹ Gᵀ`), the multipliers and their history, the joint
+//! limits' states, the tree solver and the timers (as Pinocchio's `Data`, MuJoCo's `mjData`).
+//! The model is [`MultibodySystem`]; the algorithm that fills this memory is in
+//! `rattle.rs` (the stage), `positions.rs`, `velocities.rs` and `dampers.rs`.
+//!
+//! Reference: docs/theory/multibody.md §3-§4.
+
+use crate::error::{Error, Result};
+use crate::linalg::{Mat3, Vec3};
+
+use super::constraints::{rows_at, JointRows};
+use super::dampers::DamperScratch;
+use super::method::LimitState;
+use super::predictor::HISTORY;
+use super::solver::TreeSolver;
+use super::state::MultibodyState;
+use super::system::MultibodySystem;
+
+/// The start of the learned contractions (logarithms) of the position solve's plain and
+/// refined corrections: `1e-2` and `1e-6`, so that the first corrections are refined.
+const RHO_PLAIN_START: f64 = -4.605_170_185_988_091;
+const RHO_REFINED_START: f64 = -13.815_510_557_964_274;
+
+/// The scratch of one multibody integrator (see the module docs).
+pub(super) struct Workspace {
+    /// The method's name, for errors.
+    pub(super) method_name: &'static str,
+    /// Cached start-of-step quantities, valid for (cache_t, cache_c, cache_r) and the
+    /// system's revision `cache_revision`.
+    pub(super) cache_valid: bool,
+    pub(super) cache_t: f64,
+    pub(super) cache_revision: u64,
+    pub(super) cache_c: Vec<Vec3>,
+    pub(super) cache_r: Vec<Mat3>,
+    pub(super) force: Vec<Vec3>,
+    pub(super) torque: Vec<Vec3>,
+    pub(super) rows0: Vec<JointRows>,
+    pub(super) rows1: Vec<JointRows>,
+    pub(super) limit: Vec<LimitState>,
+    pub(super) lambda: Vec<[f64; 6]>,
+    /// The converged `λ` of the three stages before the last, and the steps of the last
+    /// four converged stages (NaN: none), for the extrapolated start of the position solve.
+    pub(super) lambda_prev: Vec<[[f64; 6]; 3]>,
+    pub(super) lambda_steps: [f64; 4],
+    /// The converged `λ` of each stage of a composition (`stages × joints`, stage-major) in
+    /// the last `HISTORY` steps, newest first, and those steps (NaN: none): stage `k` of a
+    /// step is extrapolated from stage `k` of the steps before, which took the same sub-step.
+    pub(super) stage_lambda: Vec<[[f64; 6]; HISTORY]>,
+    pub(super) scheme_steps: [f64; HISTORY],
+    pub(super) delta: Vec<[f64; 6]>,
+    /// Scratch of the position solve's inner refinement (`positions.rs`).
+    pub(super) inner_rhs: Vec<[f64; 6]>,
+    pub(super) inner_delta: Vec<[f64; 6]>,
+    /// Log-averages of the residual's contraction per position iteration with the plain
+    /// and the refined correction, which decide whether to refine (`positions.rs`).
+    pub(super) rho_plain: f64,
+    pub(super) rho_refined: f64,
+    /// The same with the correction refined toward the exact drift Jacobian.
+    pub(super) rho_exact: f64,
+    pub(super) rhs: Vec<[f64; 6]>,
+    pub(super) pb: Vec<Vec3>,
+    pub(super) pib: Vec<Vec3>,
+    pub(super) p_half: Vec<Vec3>,
+    pub(super) big_p: Vec<Vec3>,
+    pub(super) c_new: Vec<Vec3>,
+    pub(super) r_new: Vec<Mat3>,
+    pub(super) pi_new: Vec<Vec3>,
+    pub(super) force1: Vec<Vec3>,
+    pub(super) torque1: Vec<Vec3>,
+    pub(super) damp_f: Vec<Vec3>,
+    pub(super) damp_t: Vec<Vec3>,
+    /// Scratch of the implicit damper solve (`dampers.rs`).
+    pub(super) dampers: DamperScratch,
+    pub(super) vel: Vec<Vec3>,
+    pub(super) omega: Vec<Vec3>,
+    pub(super) solver: TreeSolver,
+    pub(super) backup: MultibodyState,
+    // The drift's midpoint data per body (Ψ₁, Ψ₂, P, Π_a) and the effective inertia blocks
+    // `h (∂θ⁺/∂P)⁻¹` of the exact drift Jacobian.
+    pub(super) psi1: Vec<Vec3>,
+    pub(super) psi2: Vec<Vec3>,
+    pub(super) pi_a: Vec<Vec3>,
+    pub(super) effective: Vec<Mat3>,
+    /// The drift's rotation per unit angular impulse over the step, `D / h` (`= I⁻¹` to
+    /// leading order in `h`), from the same Jacobian.
+    pub(super) drift_rate: Vec<Mat3>,
+    /// Whether the solver holds the factorization of `G(q) M⁻¹ G(q)ᵀ` at `rows0` (the
+    /// last velocity solve's, kept for the next position solve).
+    pub(super) factor_rows0: bool,
+    pub(super) profiling: bool,
+    pub(super) solver_time: std::time::Duration,
+    pub(super) step_time: std::time::Duration,
+}
+
+/// The matrices of the constraint solve.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Matrix {
+    /// `G(q) M⁻¹ G(q)ᵀ` at the stage's start (`rows0`): the position solve's quasi-Newton
+    /// matrix, which the previous stage's velocity solve has factored already.
+    Start,
+    /// `G(q⁺) M⁻¹ G(q⁺)ᵀ` at the end (`rows1`): the velocity solve's.
+    End,
+    /// `G(q⁺) D G(q)ᵀ` with `D` the exact drift Jacobian at the current iterate (the
+    /// effective inertia blocks): the position solve's fallback when the quasi-Newton
+    /// iteration converges slowly.
+    Exact,
+}
+
+impl Workspace {
+    /// The memory for stepping `sys` with `stages` stages of a composition (0 for the base
+    /// step).
+    pub(super) fn new(sys: &MultibodySystem, method_name: &'static str, stages: usize) -> Self {
+        let nb = sys.mass.len();
+        let nj = sys.joints.len();
+        let tree_rows: Vec<bool> = sys.joints[..nb].iter().map(|g| g.kind.rows() > 0).collect();
+        let parents: Vec<Option<usize>> = sys.joints[..nb].iter().map(|g| g.parent).collect();
+        let loops: Vec<_> = (nb..nj)
+            .map(|k| (k, sys.joints[k].parent, sys.joints[k].child))
+            .collect();
+        let z3 = vec![Vec3::ZERO; nb];
+        Workspace {
+            method_name,
+            cache_valid: false,
+            cache_t: 0.0,
+            cache_revision: 0,
+            cache_c: z3.clone(),
+            cache_r: vec![Mat3::IDENTITY; nb],
+            force: z3.clone(),
+            torque: z3.clone(),
+            rows0: vec![JointRows::default(); nj],
+            rows1: vec![JointRows::default(); nj],
+            limit: vec![LimitState::Inactive; nj],
+            lambda: vec![[0.0; 6]; nj],
+            lambda_prev: vec![[[0.0; 6]; 3]; nj],
+            lambda_steps: [f64::NAN; 4],
+            stage_lambda: vec![[[0.0; 6]; HISTORY]; stages * nj],
+            scheme_steps: [f64::NAN; HISTORY],
+            delta: vec![[0.0; 6]; nj],
+            inner_rhs: vec![[0.0; 6]; nj],
+            inner_delta: vec![[0.0; 6]; nj],
+            rho_plain: RHO_PLAIN_START,
+            rho_refined: RHO_REFINED_START,
+            rho_exact: RHO_REFINED_START,
+            rhs: vec![[0.0; 6]; nj],
+            pb: z3.clone(),
+            pib: z3.clone(),
+            p_half: z3.clone(),
+            big_p: z3.clone(),
+            c_new: z3.clone(),
+            r_new: vec![Mat3::IDENTITY; nb],
+            pi_new: z3.clone(),
+            force1: z3.clone(),
+            torque1: z3.clone(),
+            damp_f: z3.clone(),
+            damp_t: z3.clone(),
+            dampers: DamperScratch::new(3 * nj, nb),
+            vel: z3.clone(),
+            omega: z3,
+            solver: TreeSolver::new(&parents, &tree_rows, &loops),
+            backup: MultibodyState::zeros(nb),
+            psi1: vec![Vec3::ZERO; nb],
+            psi2: vec![Vec3::ZERO; nb],
+            pi_a: vec![Vec3::ZERO; nb],
+            effective: vec![Mat3::IDENTITY; nb],
+            drift_rate: vec![Mat3::IDENTITY; nb],
+            factor_rows0: false,
+            profiling: false,
+            solver_time: std::time::Duration::ZERO,
+            step_time: std::time::Duration::ZERO,
+        }
+    }
+
+    /// Forget the cached forces, rows and multipliers and the learned contractions of the
+    /// position solve's corrections (after editing a state by hand the cache is detected
+    /// as stale anyway).
+    pub(super) fn reset(&mut self) {
+        self.cache_valid = false;
+        self.factor_rows0 = false;
+        self.lambda_steps = [f64::NAN; 4];
+        self.scheme_steps = [f64::NAN; HISTORY];
+        self.lambda.iter_mut().for_each(|l| *l = [0.0; 6]);
+        self.forget_contractions();
+    }
+
+    /// The position solve's learned contractions back to their starting values.
+    pub(super) fn forget_contractions(&mut self) {
+        self.rho_plain = RHO_PLAIN_START;
+        self.rho_refined = RHO_REFINED_START;
+        self.rho_exact = RHO_REFINED_START;
+    }
+
+    /// Make the start-of-step forces and rows current for `state`.
+    pub(super) fn prepare(&mut self, sys: &MultibodySystem, state: &MultibodyState) {
+        let valid = self.cache_valid
+            && self.cache_revision == sys.revision
+            && self.cache_t == state.t
+            && self.cache_c == state.c
+            && self.cache_r.iter().zip(&state.rotation).all(|(a, b)| a.bitwise_eq(b));
+        if valid {
+            return;
+        }
+        sys.forces(state.t, &state.c, &state.rotation, &mut self.force, &mut self.torque);
+        rows_at(
+            &sys.joints,
+            &self.limit,
+            &sys.params,
+            &state.c,
+            &state.rotation,
+            &mut self.rows0,
+        );
+        self.factor_rows0 = false;
+        self.lambda_steps = [f64::NAN; 4];
+        self.scheme_steps = [f64::NAN; HISTORY];
+        self.remember(sys, state);
+    }
+
+    /// Set the state's time to `t` (the driver's exact step times), keeping the cache.
+    pub(super) fn set_time(&mut self, state: &mut MultibodyState, t: f64) {
+        if self.cache_valid && self.cache_t == state.t {
+            self.cache_t = t;
+        }
+        state.t = t;
+    }
+
+    pub(super) fn remember(&mut self, sys: &MultibodySystem, state: &MultibodyState) {
+        self.cache_t = state.t;
+        self.cache_revision = sys.revision;
+        self.cache_c.copy_from_slice(&state.c);
+        self.cache_r.copy_from_slice(&state.rotation);
+        self.cache_valid = true;
+    }
+
+    pub(super) fn velocities(&mut self, sys: &MultibodySystem, p: &[Vec3], pi: &[Vec3]) {
+        for i in 0..sys.mass.len() {
+            self.vel[i] = p[i] * (1.0 / sys.mass[i]);
+            self.omega[i] = sys.inertia[i].apply_inverse(pi[i]);
+        }
+    }
+
+    /// Factor a matrix of the constraint solve (see [`Matrix`]).
+    pub(super) fn factor(&mut self, sys: &MultibodySystem, matrix: Matrix) -> Result<()> {
+        let start = self.profiling.then(std::time::Instant::now);
+        self.factor_rows0 = false;
+        let result = match matrix {
+            Matrix::Start => self
+                .solver
+                .factor_symmetric(&sys.mass, &sys.inertia_matrix, &sys.pairs, &self.rows0),
+            Matrix::End => self
+                .solver
+                .factor_symmetric(&sys.mass, &sys.inertia_matrix, &sys.pairs, &self.rows1),
+            Matrix::Exact => self
+                .solver
+                .factor(&sys.mass, &self.effective, &sys.pairs, &self.rows1, &self.rows0),
+        };
+        if let Some(start) = start {
+            self.solver_time += start.elapsed();
+        }
+        self.factor_rows0 = result.is_ok() && matrix == Matrix::Start;
+        result.map_err(|s| Error::InvalidModel {
+            reason: format!(
+                "dependent constraint rows at joint {:?} / body {:?}: relative pivot {:.3e} (a joint set with \
+                     redundant rows in the tree, or a singular configuration)",
+                s.joint, s.body, s.ratio
+            ),
+        })
+    }
+
+    pub(super) fn timed_solve(&mut self, sys: &MultibodySystem) {
+        let start = self.profiling.then(std::time::Instant::now);
+        self.solver.solve(&sys.pairs, &self.rhs, &mut self.delta);
+        if let Some(start) = start {
+            self.solver_time += start.elapsed();
+        }
+    }
+}
