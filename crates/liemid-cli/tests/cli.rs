@@ -22,7 +22,7 @@ fn run_without_a_file_runs_the_fast_top() {
     assert_eq!(rows.len(), 8001);
     let last = rows.last().unwrap();
     assert_eq!(last[0], 0.8);
-    // Against the shipped reference at t = 0.8 (heavy-top.md): EA at h = 1e-4 is within
+    // Against the shipped reference at t = 0.8 (docs/theory/rigid.md §8): EA at h = 1e-4 is within
     // its error of about 1e-5.
     assert!((last[1] - 0.001294760157741989).abs() < 2e-5 && (last[2] - 0.008576777914107317).abs() < 2e-5);
     // The vertical spatial momentum column is constant to round-off.
@@ -242,7 +242,7 @@ fn converge_reproduces_the_papers_table_and_writes_both_plots() {
         .map(|v| v.as_f64().unwrap())
         .collect();
     assert_eq!(steps.len(), 6);
-    // heavy-top.md: EA at 1e-3, 2.5e-4, 1.25e-4.
+    // docs/theory/rigid.md §8: EA at 1e-3, 2.5e-4, 1.25e-4.
     for (h, pm, pr) in [
         (1e-3, 8.2e-4, 1.2e-3),
         (2.5e-4, 5.1e-5, 7.5e-5),
@@ -256,7 +256,7 @@ fn converge_reproduces_the_papers_table_and_writes_both_plots() {
     }
     let order = ea["observed_order_attitude"].as_f64().unwrap();
     assert!((order - 2.0).abs() < 0.1, "EA order {order}");
-    // The reference agrees with the shipped DOP853 solution (heavy-top.md) to 1e-9.
+    // The reference agrees with the shipped DOP853 solution (docs/theory/rigid.md §8) to 1e-9.
     let r = study["reference"]["rotation"].as_array().unwrap();
     assert!((r[0].as_f64().unwrap() - 0.30596975078721866).abs() < 1e-9);
 }

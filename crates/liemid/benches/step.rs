@@ -2,7 +2,7 @@
 //! method pays: a bare Lie-Euler step `R ← R exp(hΩ)` with one torque evaluation.
 //!
 //! Every measurement is a run of [`STEPS`] steps of `h = 1e-4` from the initial state
-//! (`t ∈ [0, 0.1]`, the spec's short run), so that all methods, the floor included, are
+//! (`t ∈ [0, 0.1]`, the short run of docs/theory/rigid.md §8), so that all methods, the floor included, are
 //! timed on the same physical states. Stepping one state for as long as criterion samples
 //! (millions of steps) would not: explicit Lie-Euler is unstable on the fast top and its
 //! state is NaN by step 10,000, and timing arithmetic on NaN says nothing about the

@@ -1,7 +1,7 @@
 //! The rotation group SO(3): hat and vee, the exponential and logarithm maps, their
 //! Jacobians, the Cayley map, unit quaternions and re-orthonormalisation.
 //!
-//! Conventions (see `integrators.md`, section 1):
+//! Conventions (see docs/theory/rigid.md §1):
 //! - `hat(a)` is the skew matrix with `hat(a) b = a × b`; [`vee`] is its inverse.
 //! - `exp(a) = I + (sin θ/θ) hat(a) + ((1 − cos θ)/θ²) hat(a)²`, `θ = |a|` (Rodrigues).
 //! - Right Jacobian `Jr(a) = I − ((1 − cos θ)/θ²) hat(a) + ((θ − sin θ)/θ³) hat(a)²`, so that

@@ -1,5 +1,5 @@
 //! Observed orders of accuracy from step-halving sequences against tight references, and
-//! the paper's fast-top comparison (`heavy-top.md`).
+//! the paper's fast-top comparison (docs/theory/rigid.md §8).
 
 mod common;
 
@@ -120,7 +120,7 @@ fn own_fast_top_reference_agrees_with_the_shipped_one() {
 fn fast_top_ea_reproduces_the_paper_table_and_leads_the_line_up() {
     let top = problems::fast_top();
     let reference = fast_top_reference();
-    // (h, momentum error, attitude error) from heavy-top.md.
+    // (h, momentum error, attitude error) from docs/theory/rigid.md §8.
     let table = [
         (1e-3, 8.2e-4, 1.2e-3),
         (2.5e-4, 5.1e-5, 7.5e-5),

@@ -1,4 +1,4 @@
-//! The multibody domain against multibody spec section 5: gradients, forward kinematics,
+//! The multibody domain against docs/theory/multibody.md §5: gradients, forward kinematics,
 //! orders, constraints at round-off, bounded energy, reversibility, momentum, the fast top
 //! against LIEMID[EA], closed loops with redundant rows, validation, no allocation.
 
@@ -517,7 +517,7 @@ fn steps_allocate_nothing() {
 #[test]
 #[ignore = "timing and growth measurements, printed"]
 fn measurements() {
-    // The spec's table (section 5) on our test chain, against MB-LIEMID8 at h = 2e-4.
+    // The table of docs/theory/multibody.md §5 on our test chain, against MB-LIEMID8 at h = 2e-4.
     let model = problems::test_chain();
     let (mut sys, mut reference) = system(&model, MultibodyMethod::Liemid8);
     run(&mut sys, &mut reference, 2e-4, 5000);

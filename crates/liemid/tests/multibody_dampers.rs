@@ -149,7 +149,7 @@ fn damped_double_pendulum(d: f64) -> Model {
     m
 }
 
-/// The spec's spatial test chain (hinge about y, hinge about x carried by the first link,
+/// The spatial test chain of docs/theory/multibody.md §5 (hinge about y, hinge about x carried by the first link,
 /// ball; centres off the axes, full inertias) with every joint damped.
 fn damped_test_chain() -> Model {
     let mut m = problems::test_chain();

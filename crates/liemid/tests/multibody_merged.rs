@@ -228,7 +228,7 @@ fn largest_gap(sys: &Simulation, s: &MultibodyState, xref: &[Vec3]) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// As the CLI's test of the spec's test chain (`multibody_cli.rs`, 1e-9 m there): `liemid8`
+/// As the CLI's test of the test chain (`multibody_cli.rs`, 1e-9 m there): `liemid8`
 /// at h = 1 ms and joint-space RK4 at h = 1e-4 meet at t = 0.5 (measured 3e-15 and 8e-15
 /// m, asserted below 1e-11), `liemid` at h = 1e-4 to its O(h²) (measured 9e-9, 2.4e-8 m;
 /// asserted below 1e-7); and the constraints stay at round-off at every step.

@@ -68,7 +68,7 @@ fn reference(
 
 #[test]
 fn each_piece_of_a_dmi_bond_flows_exactly() {
-    // The spec's split: A = J 1 − skew(D) = ρ Q − g u uᵀ, Q = rot(u, −φ). Each piece's flow
+    // The split of docs/theory/spins.md §6: A = J 1 − skew(D) = ρ Q − g u uᵀ, Q = rot(u, −φ). Each piece's flow
     // against RK4 at 2·10⁴ steps (its error ~ (ωΔt)⁴ ωh below 1e-14), for ferro- and
     // antiferromagnetic J, damped and not.
     let k0 = GYROMAGNETIC_RATIO / MU_B;

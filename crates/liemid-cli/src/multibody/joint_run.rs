@@ -18,8 +18,8 @@ use liemid::{Mat3, Vec3};
 use ode_solvers::{DVector, System};
 use serde_json::json;
 
-use super::command::{Poses, Sink};
 use super::scenario::MultibodyScenario;
+use super::sink::{Poses, Sink};
 use crate::shared::command::Failure;
 use crate::shared::interrupt::{progress, Interrupt};
 

@@ -29,7 +29,7 @@ pub fn describe(name: &str) -> &'static str {
         }
         "closed-loop" => "a four-bar linkage of four hinges (3 redundant rows) under gravity; t = 2 s",
         "chain-1000" => "a thousand links on ball joints under gravity (built in code); t = 0.1 s",
-        "test-chain" => "the spec's chain: two hinges and a ball, off-axis centres, full inertia; t = 1 s",
+        "test-chain" => "the test chain of docs/theory/multibody.md §5: two hinges and a ball, off-axis centres, full inertia; t = 1 s",
         _ => "",
     }
 }

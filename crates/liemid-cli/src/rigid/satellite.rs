@@ -20,7 +20,7 @@ use ode_solvers::{SVector, System};
 use serde::Serialize;
 use serde_json::json;
 
-use crate::rigid::command::{parse_method, WorkPrecisionArgs};
+use crate::rigid::command::args::{parse_method, WorkPrecisionArgs};
 use crate::shared::command::{check_positive, check_study_outputs, emit_json, write_json, CmdResult, Failure};
 use crate::shared::cpu_time::thread_seconds;
 use crate::shared::output::OutputPlan;

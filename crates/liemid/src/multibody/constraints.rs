@@ -1,4 +1,4 @@
-//! Joints as holonomic constraints: the rows `g(q)` of multibody spec section 2 and their
+//! Joints as holonomic constraints: the rows `g(q)` of docs/theory/multibody.md §2 and their
 //! gradients with respect to the centres of mass `c` and the body-frame rotation
 //! increments `R → R exp(δθ)` of the parent `i` and the child `j`.
 //!
@@ -39,7 +39,7 @@ pub const MAX_ROWS: usize = 6;
 /// rotation `θ_i`, and the child's `c_j`, `θ_j`. A multiplier `λ` of the row applies the
 /// forces `λ ci`, `λ cj` (space) and the body-frame torques `λ ti`, `λ tj`.
 ///
-/// Reference: multibody spec section 1 (`G_cᵀ λ`, `G_θᵀ λ`).
+/// Reference: docs/theory/multibody.md §1 (`G_cᵀ λ`, `G_θᵀ λ`).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Row {
     /// `∂g/∂c_i`.
@@ -64,7 +64,7 @@ impl Row {
 /// The rows of one joint at one configuration: values, gradients and whether each row is
 /// a length (m; reported relative to the model's length scale) or dimensionless.
 ///
-/// Reference: multibody spec section 2.
+/// Reference: docs/theory/multibody.md §2.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct JointRows {
     /// Active rows.
@@ -89,7 +89,7 @@ impl JointRows {
 /// One joint's geometry, precomputed from the model: parent and child, anchors from the
 /// centres of mass, reference rotation and the axes.
 ///
-/// Reference: multibody spec section 2.
+/// Reference: docs/theory/multibody.md §2.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct JointGeometry {
     /// The kind and axis (child frame).

@@ -59,43 +59,11 @@ use super::method::StepReport;
 use super::model::JointKind;
 use super::state::MultibodyState;
 use super::system::MultibodySystem;
-use super::workspace::{Matrix, Workspace};
+use super::workspace::{DamperScratch, Matrix, Workspace};
 
 /// Scratch of the damper half-kicks, three rows per joint (`None`/zero where there is no
 /// damper row).
-#[derive(Clone, Debug, Default)]
-pub(super) struct DamperScratch {
-    /// The coordinate gradient of each damped joint at the half-kick's configuration.
-    grad: Vec<Option<Row>>,
-    damping: Vec<f64>,
-    sigma: Vec<f64>,
-    rates0: Vec<f64>,
-    residual: Vec<f64>,
-    direction: Vec<f64>,
-    image: Vec<f64>,
-    /// The rows solved implicitly by [`MultibodySystem::solve_dampers`].
-    active: Vec<bool>,
-    /// Per body: the response's momenta.
-    linear: Vec<Vec3>,
-    angular: Vec<Vec3>,
-}
-
 impl DamperScratch {
-    pub(super) fn new(rows: usize, bodies: usize) -> Self {
-        DamperScratch {
-            grad: vec![None; rows],
-            damping: vec![0.0; rows],
-            sigma: vec![0.0; rows],
-            rates0: vec![0.0; rows],
-            residual: vec![0.0; rows],
-            direction: vec![0.0; rows],
-            image: vec![0.0; rows],
-            active: vec![false; rows],
-            linear: vec![Vec3::ZERO; bodies],
-            angular: vec![Vec3::ZERO; bodies],
-        }
-    }
-
     /// The damper rows at poses `(c, R)`, three slots per joint (row `3k + m`): a hinge's or
     /// slide's coordinate gradient in slot 0, a ball's relative angular velocity along the
     /// world axes `e_m` in slots 0-2 (`e_m·(R_j Ω_j − R_i Ω_i)`: `∂/∂Ω_i = −R_iᵀ e_m`,

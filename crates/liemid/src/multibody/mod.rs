@@ -27,7 +27,7 @@
 //!
 //! **Problems** ([`problems`]): a double pendulum, ball-joint chains (`chain(10)`,
 //! `chain(1000)`), a spinning spacecraft with hinged panels, a four-bar linkage of four
-//! hinges, and the spec's test chain (two hinges and a ball). [`MultibodyEnsemble`] steps
+//! hinges, and the test chain of docs/theory/multibody.md §5 (two hinges and a ball). [`MultibodyEnsemble`] steps
 //! independent copies on threads, bitwise the same for any thread count. Tests:
 //! `tests/multibody.rs`.
 //!

@@ -167,7 +167,7 @@ impl JointKind {
         }
     }
 
-    /// Holonomic constraint rows (multibody spec section 2): ball 3, universal 4, hinge 5,
+    /// Holonomic constraint rows (docs/theory/multibody.md §2): ball 3, universal 4, hinge 5,
     /// slide 5, weld 6, free 0; that is `6 − nv`.
     #[must_use]
     pub fn rows(&self) -> usize {

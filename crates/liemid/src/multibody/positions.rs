@@ -1,19 +1,19 @@
 //! The position solve of the multibody step: the drift as a function of the multipliers
-//! `λ` and the quasi-Newton iteration on `g(q⁺(λ)) = 0` (multibody spec section 3).
+//! `λ` and the quasi-Newton iteration on `g(q⁺(λ)) = 0` (docs/theory/multibody.md §3).
 //!
 //! The drift with `λ`: `p½ = p + (h/2)(F + G_cᵀλ)`, `P = Π + (h/2)(T + G_θᵀλ)`,
 //! `c⁺ = c + h M⁻¹ p½`, and EA's torque-free rotation, two midpoint solves (M) of step
 //! `h/2`. Its exact Jacobian in `λ` is `(h²/2) G(q⁺) D G(q)ᵀ` with `D = M⁻¹ + O(h)` (the
 //! drift's derivative in the impulse), so `(h²/2) G(q) M⁻¹ G(q)ᵀ` is a quasi-Newton matrix
-//! with an `O(h)` relative error, as the spec's `(h²/2) G(q⁺) M⁻¹ G(q)ᵀ`: the iteration
+//! with an `O(h)` relative error, as the end-row matrix `(h²/2) G(q⁺) M⁻¹ G(q)ᵀ` of docs/theory/multibody.md §3: the iteration
 //! contracts by `O(h)` per step either way. It is the matrix that the previous step's
 //! velocity solve factored (same configuration, same rows), so a step factors once. When a
 //! correction reduces the residual by less than 4x (fast spin about an axis of small
 //! inertia), the exact Jacobian at the current iterate is factored instead.
 //!
 //! The `O(h)` difference between the two matrices is mostly the rows turning with the
-//! bodies over the step; the spec's matrix has only the drift's `D − M⁻¹` left. A correction
-//! can therefore be refined toward the spec's system with the factored start matrix, by
+//! bodies over the step; the end-row matrix has only the drift's `D − M⁻¹` left. A correction
+//! can therefore be refined toward the end-row system with the factored start matrix, by
 //! products with `G(q⁺) M⁻¹ G(q)ᵀ` and solves, no drift
 //! ([`MultibodySystem::refine_correction`]); it is done when the contractions learned so
 //! far say it saves position iterations (the double pendulum: yes, 3.43 → 1.25 iterations
@@ -94,7 +94,7 @@ const REFINE_PASSES: usize = 3;
 /// Most passes toward the exact drift Jacobian (each gains `O(h |Ω|)`).
 const EXACT_REFINE_PASSES: usize = 8;
 
-/// The correction of a position iteration: the start matrix's, refined toward the spec's
+/// The correction of a position iteration: the start matrix's, refined toward the end-row
 /// `G(q⁺) M⁻¹ G(q)ᵀ`, or refined toward the exact Jacobian `G(q⁺) D G(q)ᵀ`.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 enum Refine {
@@ -300,8 +300,8 @@ impl Workspace {
     }
 
     /// Refine the correction `δ = B⁻¹ b` of the start matrix `B = G(q) M⁻¹ G(q)ᵀ` toward the
-    /// solution of the spec's quasi-Newton system `A δ = b`, `A = G(q⁺) M⁻¹ G(q)ᵀ`
-    /// (multibody spec section 3, `q⁺` the current iterate), by the inner iteration
+    /// solution of the end-row quasi-Newton system `A δ = b`, `A = G(q⁺) M⁻¹ G(q)ᵀ`
+    /// (docs/theory/multibody.md §3, `q⁺` the current iterate), by the inner iteration
     /// `δ ← δ + B⁻¹ (b − A δ)`: a product with `A` (the impulse `G(q)ᵀ δ`, `M⁻¹`, the
     /// rates of the rows at `q⁺`) and a solve with the factored `B` each, no drift. `B`
     /// differs from `A` by `O(h)` (the rows turn with the bodies over the step), so each pass

@@ -5,17 +5,7 @@
 //! Reference: docs/theory/multibody.md §3; E. Hairer, C. Lubich, G. Wanner, *Geometric
 //! Numerical Integration*, 2nd ed., Springer 2006, VII.1 (starting approximations).
 
-use super::workspace::Workspace;
-
-/// How many converged multipliers of a composition's stage the extrapolated start of its
-/// position solve uses at most: the polynomial through the last `HISTORY` values (degree
-/// 6). Iterations per stage (`examples/profile_multibody.rs`), degree 3 (the cubic) against
-/// 6: spacecraft liemid6 at h = 2.5e-3 3.10 → 2.02 (degree 4, 5, 7, 8, 9: 2.81, 2.40, 1.78,
-/// 1.69, 1.76), liemid4 at 1e-3 1.99 → 1.00; double pendulum liemid4 at 1e-2 3.87 → 3.29,
-/// at 2.5e-3 1.81 → 1.05. Degrees 7 to 9 were worse on the small steps (liemid4 at 1e-3
-/// 1.06 to 1.52 iterations): the round-off of the converged values is amplified by the
-/// weights' sum `2ⁿ − 1`.
-pub(super) const HISTORY: usize = 7;
+use super::workspace::{Workspace, HISTORY};
 
 /// `BINOMIAL[n - 1][j] = (−1)ʲ C(n, j + 1)`: the weights of the polynomial extrapolation
 /// through `n` equally spaced values, newest first (`λ = Σ_j w_j λₙ₋ⱼ`).

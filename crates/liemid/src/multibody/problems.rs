@@ -1,7 +1,7 @@
 //! Multibody test problems built in code. Each returns a [`Model`], the type the file
 //! loaders produce, so problems and files share one path into [`super::MultibodySystem`].
 //!
-//! Reference: multibody spec section 5 (the test chain); E. Hairer, C. Lubich, G. Wanner,
+//! Reference: docs/theory/multibody.md §5 (the test chain); E. Hairer, C. Lubich, G. Wanner,
 //! *Geometric Numerical Integration*, VII.1.
 
 use crate::linalg::{Mat3, Vec3};
@@ -317,7 +317,7 @@ pub fn closed_loop() -> Model {
     }
 }
 
-/// The spec's test chain (multibody spec section 5): a hinge about `y` at the origin, a
+/// The test chain (docs/theory/multibody.md §5): a hinge about `y` at the origin, a
 /// hinge about `x` and a ball joint, links of 0.5 m and 1, 0.8, 0.6 kg along `−z` with the
 /// centres of mass off the link axis and full inertia tensors, released from rest at the
 /// hinge angles (0.5, −0.3) rad and the ball turned 0.3 rad about `(1, 1, 0)/√2`.

@@ -43,10 +43,10 @@ use crate::linalg::Vec3;
 
 use super::constraints::rows_at;
 use super::method::{LimitState, MultibodyMethod, StepReport, MAX_LIMIT_PASSES};
-use super::predictor::{extrapolate, push_front, HISTORY};
+use super::predictor::{extrapolate, push_front};
 use super::state::MultibodyState;
 use super::system::MultibodySystem;
-use super::workspace::Workspace;
+use super::workspace::{Workspace, HISTORY};
 
 /// The multibody integrator: the method (RATTLE/EA or a composition of it) and its
 /// working memory, sized for one [`MultibodySystem`]; `step(&system, &mut state, h)`

@@ -1,6 +1,6 @@
 //! The velocity solve of the multibody step: the μ-kick, one linear solve of
 //! `(h/2) G M⁻¹ Gᵀ μ = −G (v, Ω)` at the end configuration so that `G(q⁺)(v⁺, Ω⁺) = 0`
-//! (multibody spec section 3), with the end damping force (solved implicitly with it, see
+//! (docs/theory/multibody.md §3), with the end damping force (solved implicitly with it, see
 //! `dampers.rs`) and the release of plastic limit rows that pull.
 //!
 //! Reference: E. Hairer, C. Lubich, G. Wanner, *Geometric Numerical Integration*, 2nd ed.,

@@ -10,10 +10,8 @@
 use crate::error::{Error, Result};
 use crate::linalg::{Mat3, Vec3};
 
-use super::constraints::{rows_at, JointRows};
-use super::dampers::DamperScratch;
+use super::constraints::{rows_at, JointRows, Row};
 use super::method::LimitState;
-use super::predictor::HISTORY;
 use super::solver::TreeSolver;
 use super::state::MultibodyState;
 use super::system::MultibodySystem;
@@ -22,6 +20,52 @@ use super::system::MultibodySystem;
 /// refined corrections: `1e-2` and `1e-6`, so that the first corrections are refined.
 const RHO_PLAIN_START: f64 = -4.605_170_185_988_091;
 const RHO_REFINED_START: f64 = -13.815_510_557_964_274;
+
+/// How many converged multipliers of a composition's stage the extrapolated start of its
+/// position solve uses at most: the polynomial through the last `HISTORY` values (degree
+/// 6). Iterations per stage (`examples/profile_multibody.rs`), degree 3 (the cubic) against
+/// 6: spacecraft liemid6 at h = 2.5e-3 3.10 → 2.02 (degree 4, 5, 7, 8, 9: 2.81, 2.40, 1.78,
+/// 1.69, 1.76), liemid4 at 1e-3 1.99 → 1.00; double pendulum liemid4 at 1e-2 3.87 → 3.29,
+/// at 2.5e-3 1.81 → 1.05. Degrees 7 to 9 were worse on the small steps (liemid4 at 1e-3
+/// 1.06 to 1.52 iterations): the round-off of the converged values is amplified by the
+/// weights' sum `2ⁿ − 1`.
+pub(super) const HISTORY: usize = 7;
+
+/// Scratch of the dampers' implicit half-kicks (`dampers.rs`): per damper row its
+/// gradient, damping, force and the conjugate-gradient vectors, per body a momentum pair.
+#[derive(Clone, Debug, Default)]
+pub(super) struct DamperScratch {
+    /// The coordinate gradient of each damped joint at the half-kick's configuration.
+    pub(super) grad: Vec<Option<Row>>,
+    pub(super) damping: Vec<f64>,
+    pub(super) sigma: Vec<f64>,
+    pub(super) rates0: Vec<f64>,
+    pub(super) residual: Vec<f64>,
+    pub(super) direction: Vec<f64>,
+    pub(super) image: Vec<f64>,
+    /// The rows solved implicitly by the dampers' conjugate gradients.
+    pub(super) active: Vec<bool>,
+    /// Per body: the response's momenta.
+    pub(super) linear: Vec<Vec3>,
+    pub(super) angular: Vec<Vec3>,
+}
+
+impl DamperScratch {
+    pub(super) fn new(rows: usize, bodies: usize) -> Self {
+        DamperScratch {
+            grad: vec![None; rows],
+            damping: vec![0.0; rows],
+            sigma: vec![0.0; rows],
+            rates0: vec![0.0; rows],
+            residual: vec![0.0; rows],
+            direction: vec![0.0; rows],
+            image: vec![0.0; rows],
+            active: vec![false; rows],
+            linear: vec![Vec3::ZERO; bodies],
+            angular: vec![Vec3::ZERO; bodies],
+        }
+    }
+}
 
 /// The scratch of one multibody integrator (see the module docs).
 pub(super) struct Workspace {

@@ -244,7 +244,7 @@ impl HeavyTop {
         })
     }
 
-    /// The fast Lagrangian top of the reference test case (`heavy-top.md`): an aluminium
+    /// The fast Lagrangian top of the reference test case (docs/theory/rigid.md §8): an aluminium
     /// block 0.06 x 0.06 x 0.24 m (density 2700 kg/m³) pivoting at one end, under
     /// `g = (0, 0, −9.81)`.
     #[must_use]

@@ -38,7 +38,7 @@ fn block_top(name: &'static str, description: &'static str, spin: f64) -> RigidP
     }
 }
 
-/// The fast Lagrangian top of the paper (`heavy-top.md`): an aluminium block spinning at
+/// The fast Lagrangian top of the paper (docs/theory/rigid.md §8): an aluminium block spinning at
 /// `Ω₀ = (0, 0, 313π)` rad/s, tilted by 0.05 rad about `e₁`, to `t = 0.8` s.
 #[must_use]
 pub fn fast_top() -> RigidProblem<HeavyTop> {

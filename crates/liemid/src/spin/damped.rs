@@ -2,7 +2,7 @@
 //!
 //! LLG for a part `E_p` of the energy, with every other spin frozen, is
 //! `dS/dt = −k [S × F + α S × (S × F)]`, `F = −∂E_p/∂S`, `k = γ/((1+α²) μ_s μ_B)`. For each
-//! part of the splitting this flow has a closed form (spec `spins.md`, checked there
+//! part of the splitting this flow has a closed form (docs/theory/spins.md §4, checked there
 //! against DOP853 to 1e-13): the undamped rotation plus a relaxation of one angle.
 //!
 //! - Bond `−J S_i·S_j`, `c = kJ`, `δ = 2cαh`: `L = S_i + S_j` keeps its direction, `u =

@@ -13,8 +13,8 @@
 //!   follow `a_i' = −c a_j (1 − a_i²)`, `c = kαg`, and its mirror. In `x = artanh a`
 //!   this is `x_i' = −c tanh x_j`; `cosh x_i / cosh x_j` is constant, so `w = sinh x_i`,
 //!   `v = sinh x_j` obey the linear `w' = −c r v`, `v' = −c w / r` (`r = cosh x_i / cosh x_j`),
-//!   with the closed form below (found for this code; the spec expected to integrate the
-//!   pair numerically). With `p_i = |S_i − a_i u|`, `N_i = a_i cosh ch − a_j sinh ch` and
+//!   with the closed form below (found for this code, where integrating the pair
+//!   numerically was the first plan). With `p_i = |S_i − a_i u|`, `N_i = a_i cosh ch − a_j sinh ch` and
 //!   `R_i = √(N_i² + p_i²)`:
 //!
 //!   ```text
@@ -32,7 +32,7 @@
 //! and, undamped, a Poisson map. The bond colouring and the outer compositions stay as
 //! they are, so `split4`, `split6`, `split8` reach orders 4, 6, 8 with DMI too.
 //!
-//! Reference: the splitting of `A` is the spec's (`spins.md`, "A bond with
+//! Reference: the splitting of `A` is docs/theory/spins.md §6 ("A bond with
 //! Dzyaloshinskii-Moriya interaction"); the bond flows of R. I. McLachlan, K. Modin,
 //! O. Verdier, *Symplectic integrators for spin systems*, Phys. Rev. E 89 (2014); LLG in
 //! the form of G. P. Müller et al., Phys. Rev. B 99, 224414 (2019).

@@ -25,11 +25,14 @@ pub mod hamiltonian;
 pub mod lattice;
 pub mod problems;
 
+#[cfg(all(feature = "simd", target_arch = "x86_64"))]
+mod avx;
 mod damped;
 mod dmi;
 mod explicit;
 mod lanes;
 mod midpoint;
+mod pieces;
 mod splitting;
 mod sweep;
 mod topology;

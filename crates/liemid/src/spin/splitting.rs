@@ -33,6 +33,7 @@ use super::dmi::{self, DmiBond, DmiShape};
 use super::hamiltonian::{Rates, SpinSystem};
 use super::lanes::sinc_cos;
 use super::lanes::{bond_flow, rodrigues_series, site_flow, unit, SERIES_LIMIT};
+use super::pieces::{DampedPiece, Kernel, Piece};
 use super::sweep::{team, Shared};
 use crate::linalg::Vec3;
 use crate::so3::rodrigues;
@@ -83,46 +84,11 @@ fn renormalize(s: Vec3) -> Vec3 {
     unit(s.into()).into()
 }
 
-/// A piece of a fused sweep over the bonds of colour 0.
-#[derive(Clone, Copy)]
-pub(crate) enum Piece {
-    /// The on-site flow of both spins over this time.
-    Site(f64),
-    /// The bond's flow over this time.
-    Bond(f64),
-    /// [`renormalize`] both spins (the end of a step).
-    Unit,
-}
-
-/// A [`Piece`] with its damped flow's constants.
-#[derive(Clone, Copy)]
-pub(crate) enum DampedPiece {
-    Site(damped::SiteStep),
-    Skip,
-    Bond(damped::BondStep),
-    Unit,
-}
-
-/// What the lanes need of the system (rates in rad/ps); read only by the SIMD lanes.
-#[cfg_attr(not(all(feature = "simd", target_arch = "x86_64")), allow(dead_code))]
-pub(crate) struct Kernel {
-    /// `γJ/(μ_s μ_B)`.
-    pub rate: f64,
-    /// `n`.
-    pub axis: Vec3,
-    /// `γB`.
-    pub field: Vec3,
-    /// `γ 2K/(μ_s μ_B)`.
-    pub anisotropy: f64,
-    /// Whether there is an on-site term at all.
-    pub onsite_terms: bool,
-}
-
 /// Whether the bond sweeps can run in AVX lanes here.
 fn avx_available() -> bool {
     #[cfg(all(feature = "simd", target_arch = "x86_64"))]
     {
-        super::lanes::use_avx()
+        super::avx::use_avx()
     }
     #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
     {
@@ -389,7 +355,7 @@ fn run(
                 let units = &db.unit[base..base + bonds.len()];
                 // SAFETY: AVX was detected; the pointer and length are the spins'; the bonds
                 // are this part's share of a matching, alone until the barrier.
-                unsafe { super::lanes::sweep_avx_dmi(ptr, len, bonds, base, units, &kernel, pieces, steps, &scalar) };
+                unsafe { super::avx::sweep_avx_dmi(ptr, len, bonds, base, units, &kernel, pieces, steps, &scalar) };
                 return;
             }
             // SAFETY: this part's bonds of a matching, alone until the barrier.
@@ -424,7 +390,7 @@ fn run(
                 let (ptr, len) = shared.raw();
                 // SAFETY: AVX was detected; the pointer and length are the spins'; the bonds
                 // are this part's share of a matching, alone until the barrier.
-                unsafe { super::lanes::sweep_avx_damped(ptr, len, bonds, steps, &scalar) };
+                unsafe { super::avx::sweep_avx_damped(ptr, len, bonds, steps, &scalar) };
                 return;
             }
             // SAFETY: this part's bonds of a matching, alone until the barrier.
@@ -450,7 +416,7 @@ fn run(
             let (ptr, len) = shared.raw();
             // SAFETY: AVX was detected; the pointer and length are the spins'; the bonds are
             // this part's share of a matching, alone until the barrier.
-            unsafe { super::lanes::sweep_avx(ptr, len, bonds, &kernel, pieces, &scalar) };
+            unsafe { super::avx::sweep_avx(ptr, len, bonds, &kernel, pieces, &scalar) };
             return;
         }
         let _ = (&kernel, lanes);

@@ -1,5 +1,5 @@
 //! Mechanical systems on a vector space, `p' = f(u, t)`, `u' = M⁻¹ p`, and the impulse
-//! integrators they are built from (`integrators.md`, section 2):
+//! integrators they are built from (docs/theory/rigid.md §2):
 //!
 //! | method | step | order |
 //! |---|---|---|

@@ -252,7 +252,7 @@ impl JointSpaceModel {
     }
 
     /// The total linear momentum `Σ m_i ċ_i` and angular momentum about the world origin
-    /// `Σ c_i × m_i ċ_i + R_i I_i ω_i`, in world coordinates (the spec's
+    /// `Σ c_i × m_i ċ_i + R_i I_i ω_i`, in world coordinates (docs/theory/multibody.md §5's
     /// `Σ c_i × p_i + R_i Π_i`); kept by the exact flow when no external force or joint to
     /// the world acts (armature, a rotor fixed in no body, is not counted).
     ///

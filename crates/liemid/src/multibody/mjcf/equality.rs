@@ -1,8 +1,8 @@
 //! MJCF `<equality>`: `connect` and `weld` as exact loop-closing joints.
 //!
 //! MuJoCo enforces equality constraints softly (`solref`, `solimp`); maximal coordinates
-//! hold them as holonomic rows like any joint, exactly (a loop closure, multibody spec
-//! section 4). As in MuJoCo the constraint is satisfied in the model's reference pose
+//! hold them as holonomic rows like any joint, exactly (a loop closure,
+//! docs/theory/multibody.md §4). As in MuJoCo the constraint is satisfied in the model's reference pose
 //! (`qpos0`):
 //! - `connect body1 body2 anchor`: a ball joint at `anchor` (body1's frame); the point on
 //!   body2 (or the world when `body2` is omitted) is where that anchor is in the reference
