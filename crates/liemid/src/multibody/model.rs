@@ -493,7 +493,7 @@ impl Model {
     /// Then `c = x + R s`, `p = m v_c`, `Π = I Rᵀ ω`. Loop-closing joints are not used:
     /// the coordinates must satisfy them; check with
     /// [`super::MultibodySystem::constraint_violation`] and bring loop-violating velocities
-    /// onto the constraints with [`super::MultibodySystem::project_velocities`].
+    /// onto the constraints with [`super::Rattle::project_velocities`].
     ///
     /// # Errors
     /// Whatever [`Model::validate`] reports, and a zero quaternion.

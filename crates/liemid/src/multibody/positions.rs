@@ -15,11 +15,11 @@
 //! bodies over the step; the end-row matrix has only the drift's `D − M⁻¹` left. A correction
 //! can therefore be refined toward the end-row system with the factored start matrix, by
 //! products with `G(q⁺) M⁻¹ G(q)ᵀ` and solves, no drift
-//! ([`MultibodySystem::refine_correction`]); it is done when the contractions learned so
+//! ([`Workspace::refine_correction`]); it is done when the contractions learned so
 //! far say it saves position iterations (the double pendulum: yes, 3.43 → 1.25 iterations
 //! per stage of liemid4 at h = 1e-2). Where the drift's own `D − M⁻¹` is not small (a
 //! spinning body, a swinging chain at a long step) the correction is refined toward the
-//! exact Jacobian `G(q⁺) D G(q)ᵀ` instead, with `D` from [`MultibodySystem::drift_jacobian`]
+//! exact Jacobian `G(q⁺) D G(q)ᵀ` instead, with `D` from [`Workspace::drift_jacobian`]
 //! in the products: the outer iteration is then Newton's (the spacecraft's liemid8 at
 //! h = 1e-2: 5.42 → 2.01 iterations per stage, 165 → 136 µs per step; chain-10 at 1e-3:
 //! 3.42 → 1.12, 18.8 → 16.6 µs). Each kind's contraction is learned and the one that
@@ -89,7 +89,7 @@ fn add_rows(rows: &[JointRows], scale: f64, src: &[[f64; 6]], dst: &mut [[f64; 6
     }
 }
 
-/// Most passes of [`MultibodySystem::refine_correction`] per position iteration.
+/// Most passes of [`Workspace::refine_correction`] per position iteration.
 const REFINE_PASSES: usize = 3;
 /// Most passes toward the exact drift Jacobian (each gains `O(h |Ω|)`).
 const EXACT_REFINE_PASSES: usize = 8;
@@ -319,7 +319,7 @@ impl Workspace {
     /// ed., Springer 2006, VII.1 (the simplified Newton iteration of RATTLE).
     ///
     /// With `exact`, `A` is the exact Jacobian `G(q⁺) D G(q)ᵀ` (the drift's rotation per
-    /// impulse `D`, [`MultibodySystem::drift_jacobian`], in place of `I⁻¹`): the passes
+    /// impulse `D`, [`Workspace::drift_jacobian`], in place of `I⁻¹`): the passes
     /// then converge to Newton's correction, gaining `O(h |Ω|)` each, up to
     /// `EXACT_REFINE_PASSES`.
     fn refine_correction(&mut self, sys: &MultibodySystem, h: f64, floor: f64, exact: bool) {

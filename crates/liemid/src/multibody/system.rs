@@ -1,6 +1,6 @@
 //! The multibody system: what a [`Model`] says, in the form the step reads it (mass
 //! properties, joint geometry, force parameters), immutable while stepping. The working
-//! memory of a method lives apart, in [`super::workspace::Workspace`] inside
+//! memory of a method lives apart, in the `Workspace` (`workspace.rs`) inside
 //! [`super::Rattle`]; one system can be stepped by several integrators (as Pinocchio's
 //! `Model` by several `Data`, MuJoCo's `mjModel` by several `mjData`).
 //!
