@@ -36,7 +36,7 @@ use crate::rigid::midpoint::{self, NotConverged};
 use crate::rigid::rotation::newton_error;
 use crate::so3;
 
-use super::constraints::{add_impulse, for_each_rate, pose, rows_at, JointRows};
+use super::constraints::{add_impulse, for_each_rate, pose, JointRows};
 use super::method::{LimitState, StepReport, MAX_ITERATIONS};
 use super::state::MultibodyState;
 use super::system::MultibodySystem;
@@ -201,14 +201,7 @@ impl Workspace {
             // Warm midpoint starts once the corrections are small (a long step's first
             // corrections can move Ψ farther than the predictor's error).
             self.drift(sys, state, h, prev <= 1e-6)?;
-            rows_at(
-                &sys.joints,
-                &self.limit,
-                &sys.params,
-                &self.c_new,
-                &self.r_new,
-                &mut self.rows1,
-            );
+            self.end_rows(sys);
             if !any_rows {
                 return Ok(());
             }

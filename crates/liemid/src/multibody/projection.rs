@@ -9,7 +9,7 @@
 use crate::error::{Error, Result};
 use crate::linalg::Vec3;
 
-use super::constraints::{add_impulse, rows_at};
+use super::constraints::add_impulse;
 use super::model::Model;
 use super::rattle::Rattle;
 use super::state::MultibodyState;
@@ -78,14 +78,7 @@ impl Workspace {
     /// The rows at `state` into `rows1` and `G M⁻¹ Gᵀ` of them factored; `false` when
     /// there are no rows (nothing factored).
     fn factor_rows_of(&mut self, sys: &MultibodySystem, state: &MultibodyState) -> Result<bool> {
-        rows_at(
-            &sys.joints,
-            &self.limit,
-            &sys.params,
-            &state.c,
-            &state.rotation,
-            &mut self.rows1,
-        );
+        self.end_rows_at(sys, &state.c, &state.rotation);
         if self.rows1.iter().all(|r| r.n == 0) {
             return Ok(false);
         }

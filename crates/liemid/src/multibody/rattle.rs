@@ -41,7 +41,6 @@
 use crate::error::{Error, Result};
 use crate::linalg::Vec3;
 
-use super::constraints::rows_at;
 use super::method::{LimitState, MultibodyMethod, StepReport, MAX_LIMIT_PASSES};
 use super::predictor::{extrapolate, push_front};
 use super::state::MultibodyState;
@@ -279,14 +278,7 @@ impl Workspace {
                 break;
             }
             self.factor_rows0 = false;
-            rows_at(
-                &sys.joints,
-                &self.limit,
-                &sys.params,
-                &state.c,
-                &state.rotation,
-                &mut self.rows0,
-            );
+            self.start_rows_at(sys, state);
         }
         // End forces (position-dependent: cached for the next step).
         let t1 = t + h;

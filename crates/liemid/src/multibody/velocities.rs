@@ -9,7 +9,7 @@
 use crate::error::Result;
 use crate::linalg::Vec3;
 
-use super::constraints::{add_impulse, for_each_rate, rows_at};
+use super::constraints::{add_impulse, for_each_rate};
 use super::method::{LimitState, StepReport, MAX_LIMIT_PASSES};
 use super::system::MultibodySystem;
 use super::workspace::{Matrix, Workspace};
@@ -107,14 +107,7 @@ impl Workspace {
             }
             limit_pass += 1;
             report.limit_changes += 1;
-            rows_at(
-                &sys.joints,
-                &self.limit,
-                &sys.params,
-                &self.c_new,
-                &self.r_new,
-                &mut self.rows1,
-            );
+            self.end_rows(sys);
             self.factor(sys, Matrix::End)?;
             report.factorizations += 1;
         }

@@ -235,6 +235,35 @@ impl Workspace {
         self.rho_exact = RHO_REFINED_START;
     }
 
+    /// The start rows `rows0` (active limit rows included) at `state`.
+    pub(super) fn start_rows_at(&mut self, sys: &MultibodySystem, state: &MultibodyState) {
+        rows_at(
+            &sys.joints,
+            &self.limit,
+            &sys.params,
+            &state.c,
+            &state.rotation,
+            &mut self.rows0,
+        );
+    }
+
+    /// The end rows `rows1` (active limit rows included) at the poses `(c, R)`.
+    pub(super) fn end_rows_at(&mut self, sys: &MultibodySystem, c: &[Vec3], r: &[Mat3]) {
+        rows_at(&sys.joints, &self.limit, &sys.params, c, r, &mut self.rows1);
+    }
+
+    /// The end rows `rows1` at the drift's end poses `c_new`, `r_new`.
+    pub(super) fn end_rows(&mut self, sys: &MultibodySystem) {
+        rows_at(
+            &sys.joints,
+            &self.limit,
+            &sys.params,
+            &self.c_new,
+            &self.r_new,
+            &mut self.rows1,
+        );
+    }
+
     /// Make the start-of-step forces and rows current for `state`.
     pub(super) fn prepare(&mut self, sys: &MultibodySystem, state: &MultibodyState) {
         let valid = self.cache_valid
@@ -246,14 +275,7 @@ impl Workspace {
             return;
         }
         sys.forces(state.t, &state.c, &state.rotation, &mut self.force, &mut self.torque);
-        rows_at(
-            &sys.joints,
-            &self.limit,
-            &sys.params,
-            &state.c,
-            &state.rotation,
-            &mut self.rows0,
-        );
+        self.start_rows_at(sys, state);
         self.factor_rows0 = false;
         self.lambda_steps = [f64::NAN; 4];
         self.scheme_steps = [f64::NAN; HISTORY];
