@@ -1,12 +1,12 @@
 //! `liemid._liemid` beams: run a built-in benchmark or a structure file's text with the
-//! explicit splitting or Newmark, as `liemid beam` does (the same `liemid_cli` runner), and
+//! explicit splitting or Newmark, as `liemid beam` does (the same `liemid_app` runner), and
 //! return the sampled histories as flat arrays. `python/liemid/beam.py` shapes them.
 
 use std::collections::HashMap;
 
 use liemid::beam::problems;
-use liemid_cli::beam::scenario::{self, BeamIntegrator};
-use liemid_cli::beam::study::{self, RunFailure};
+use liemid_app::beam::scenario::{self, BeamIntegrator};
+use liemid_app::beam::study::{self, RunFailure};
 use numpy::{IntoPyArray, PyArray1};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;

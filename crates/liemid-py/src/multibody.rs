@@ -6,8 +6,8 @@
 
 use liemid::multibody::{JointKind, JointSpaceModel, MultibodyState, MultibodySystem, Simulation};
 use liemid::so3::Quaternion;
-use liemid_cli::multibody::scenario::{self, Method, MultibodyScenario};
-use liemid_cli::multibody::view;
+use liemid_app::multibody::scenario::{self, Method, MultibodyScenario};
+use liemid_app::multibody::view;
 use numpy::{IntoPyArray, PyReadonlyArray1};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;

@@ -19,6 +19,7 @@ use pyo3::types::PyDict;
 use rayon::prelude::*;
 
 use crate::convert::{mat, py_error, v3, Array, Triple};
+use liemid_app::shared::progress::Silent;
 
 /// A body's torque model: built-in terms summed in order, and optionally a Python callable
 /// (through the adapter of the Python layer, which takes `(R row-major 9-tuple, t)` and
@@ -550,10 +551,10 @@ fn methods() -> Vec<(&'static str, &'static str, u32, &'static str, &'static str
 #[pyfunction]
 #[allow(clippy::type_complexity)]
 fn problem(name: &str) -> PyResult<(String, Vec<f64>, GravitySpec, Vec<f64>, Triple, f64, f64)> {
-    let sc = liemid_cli::rigid::scenario::builtin(name).map_err(PyValueError::new_err)?;
-    let description = liemid_cli::rigid::scenario::describe(name).to_string();
+    let sc = liemid_app::rigid::scenario::builtin(name).map_err(PyValueError::new_err)?;
+    let description = liemid_app::rigid::scenario::describe(name).to_string();
     let (inertia, gravity) = match &sc.system {
-        liemid_cli::rigid::scenario::ScenarioSystem::Gravity(top) => (
+        liemid_app::rigid::scenario::ScenarioSystem::Gravity(top) => (
             top.inertia,
             vec![(
                 top.mass,
@@ -575,10 +576,10 @@ fn problem(name: &str) -> PyResult<(String, Vec<f64>, GravitySpec, Vec<f64>, Tri
     ))
 }
 
-fn scenario_of(problem: &str, scenario_text: Option<&str>) -> PyResult<liemid_cli::rigid::scenario::Scenario> {
+fn scenario_of(problem: &str, scenario_text: Option<&str>) -> PyResult<liemid_app::rigid::scenario::Scenario> {
     match scenario_text {
-        Some(text) => liemid_cli::rigid::scenario::parse(text, "scenario").map_err(PyValueError::new_err),
-        None => liemid_cli::rigid::scenario::builtin(problem).map_err(PyValueError::new_err),
+        Some(text) => liemid_app::rigid::scenario::parse(text, "scenario").map_err(PyValueError::new_err),
+        None => liemid_app::rigid::scenario::builtin(problem).map_err(PyValueError::new_err),
     }
 }
 
@@ -606,7 +607,7 @@ fn converge(
     }
     let t_end = t_end.unwrap_or(sc.t_end);
     let study = py
-        .detach(|| liemid_cli::rigid::converge::study(&sc, &methods, &steps, t_end))
+        .detach(|| liemid_app::rigid::converge::study(&sc, &methods, &steps, t_end, &Silent))
         .map_err(|e| py_error(py, &e, "reference"))?;
     serde_json::to_string(&study).map_err(|e| PyValueError::new_err(e.to_string()))
 }
@@ -626,7 +627,7 @@ fn work_precision(
     min_error: f64,
     max_points: usize,
 ) -> PyResult<String> {
-    use liemid_cli::rigid::study::{study, Entry, Options};
+    use liemid_app::rigid::study::{study, Entry, Options};
     let sc = scenario_of(problem, scenario_text)?;
     let entries = match methods {
         None => Entry::all(),
@@ -650,7 +651,7 @@ fn work_precision(
     };
     let t_end = t_end.unwrap_or(sc.t_end);
     let result = py
-        .detach(|| study(&sc, t_end, &options))
+        .detach(|| study(&sc, t_end, &options, &Silent))
         .map_err(PyValueError::new_err)?;
     serde_json::to_string(&result).map_err(|e| PyValueError::new_err(e.to_string()))
 }

@@ -1,7 +1,7 @@
-//! The 3-D page of a run (`liemid_cli::shared::view`) for every domain's Python result: the
+//! The 3-D page of a run (`liemid_app::shared::view`) for every domain's Python result: the
 //! Python layer describes the scene as JSON and hands the frames as one flat array.
 
-use liemid_cli::shared::view::{Scene, ViewPage};
+use liemid_app::shared::view::{Scene, ViewPage};
 use numpy::PyReadonlyArray1;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -50,7 +50,7 @@ fn view_page(
 pub(crate) fn finish(page: &ViewPage, total_steps: u64, path: Option<String>) -> PyResult<String> {
     match path {
         Some(p) => {
-            let mut plan = liemid_cli::shared::output::OutputPlan::new(&[]);
+            let mut plan = liemid_app::shared::output::OutputPlan::new(&[]);
             plan.add("view", std::path::Path::new(&p))
                 .map_err(PyValueError::new_err)?;
             page.write(std::path::Path::new(&p), total_steps)

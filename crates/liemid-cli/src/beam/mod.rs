@@ -1,7 +1,7 @@
-//! Flexible beams: `liemid beam` and `liemid beam work-precision` (`command`), the
-//! structure file and built-in frames (`scenario`), the sampled runs and the study against
-//! Newmark (`study`).
+//! Flexible beams: `liemid beam` and `liemid beam work-precision` (`command`). The
+//! structure file (`scenario`) and the sampled runs and study against Newmark (`study`)
+//! are the application crate's, named here as the command uses them.
 
 pub mod command;
-pub mod scenario;
-pub mod study;
+
+pub use liemid_app::beam::{scenario, study};

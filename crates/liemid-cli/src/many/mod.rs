@@ -1,5 +1,6 @@
-//! Many interacting rigid bodies: `liemid many` (`command`) and its scenario file
-//! (`scenario`).
+//! Many interacting rigid bodies: `liemid many` (`command`); its scenario file
+//! (`scenario`) is the application crate's.
 
 pub mod command;
-pub mod scenario;
+
+pub use liemid_app::many::scenario;

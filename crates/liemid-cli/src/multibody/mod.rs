@@ -1,10 +1,10 @@
-//! Jointed rigid bodies: `liemid multibody` (`command`), the model files, scenario files
-//! and built-in problems it runs (`scenario`), its runs in joint coordinates (`joint_run`:
-//! RK4 and the DOP853 reference), where a run's observations go (`sink`) and its `--view`
-//! page (`view`).
+//! Jointed rigid bodies: `liemid multibody` (`command`), its runs in joint coordinates
+//! (`joint_run`: RK4 and the DOP853 reference) and where a run's observations go (`sink`).
+//! The model and scenario files (`scenario`) and the `--view` page (`view`) are the
+//! application crate's, named here as the command uses them.
 
 pub mod command;
 mod joint_run;
-pub mod scenario;
 mod sink;
-pub mod view;
+
+pub use liemid_app::multibody::{scenario, view};

@@ -18,7 +18,7 @@ mod summary;
 use crate::rigid::scenario::{self, Conservation, Format, Scenario};
 use crate::shared::checkpoint::{Checkpoint, Settings, Source};
 use crate::shared::command::{check_positive, check_study_outputs, report, CmdResult, Failure};
-use crate::shared::interrupt::{progress, Interrupt};
+use crate::shared::interrupt::{progress, Bar, Interrupt};
 use crate::shared::output::{plural, OutputPlan, TrajectoryWriter, COLUMNS};
 use crate::shared::view::{self, Scene, ViewPage};
 use adaptive_run::run_adaptive;
@@ -599,7 +599,8 @@ pub fn converge_cmd(args: ConvergeArgs) -> CmdResult {
     }
     let t_end = study_end(&sc, args.t_end)?;
     check_study_outputs(args.scenario.as_deref(), &args.plot, args.no_plot, args.json.as_deref())?;
-    let study = converge::study(&sc, &methods, &steps, t_end).map_err(|e| Failure::Run(format!("reference: {e}")))?;
+    let study = converge::study(&sc, &methods, &steps, t_end, &Bar::new())
+        .map_err(|e| Failure::Run(format!("reference: {e}")))?;
     report(
         &converge::table(&study),
         &study,
@@ -671,7 +672,7 @@ pub fn work_precision_cmd(args: WorkPrecisionArgs) -> CmdResult {
         max_points: args.max_points.max(1),
     };
     check_study_outputs(args.scenario.as_deref(), &args.plot, args.no_plot, args.json.as_deref())?;
-    let study = work_precision::study(&sc, t_end, &options).map_err(Failure::Run)?;
+    let study = work_precision::study(&sc, t_end, &options, &Bar::new()).map_err(Failure::Run)?;
     report(
         &work_precision::table(&study),
         &study,

@@ -1,11 +1,9 @@
 //! A rigid body about a fixed point: `liemid run` (`command`, also `converge`,
-//! `work-precision`, `methods`), the scenario file and the built-in tops (`scenario`), the
-//! work-precision study (`study`), the convergence study of the paper's Figure 1
-//! (`converge`) and the DOP853 baseline (`baseline`).
+//! `work-precision`, `methods`) and the eccentric satellite (`satellite`). The scenario file
+//! and built-in tops (`scenario`), the studies (`study`, `converge`) and the DOP853 baseline
+//! (`baseline`) are the application crate's, named here as the command uses them.
 
-pub mod baseline;
 pub mod command;
-pub mod converge;
 pub mod satellite;
-pub mod scenario;
-pub mod study;
+
+pub use liemid_app::rigid::{baseline, converge, scenario, study};

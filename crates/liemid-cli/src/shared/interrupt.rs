@@ -43,6 +43,34 @@ impl Interrupt {
     }
 }
 
+/// A study's progress as a bar on standard error (see [`progress`]), made when the study
+/// says how many units it will run.
+#[derive(Default)]
+pub struct Bar(std::sync::OnceLock<ProgressBar>);
+
+impl Bar {
+    /// A bar not yet started.
+    pub fn new() -> Self {
+        Bar::default()
+    }
+}
+
+impl liemid_app::shared::progress::Progress for Bar {
+    fn start(&self, total: u64, unit: &str) {
+        let _ = self.0.set(progress(total, unit, true));
+    }
+    fn advance(&self) {
+        if let Some(bar) = self.0.get() {
+            bar.inc(1);
+        }
+    }
+    fn finish(&self) {
+        if let Some(bar) = self.0.get() {
+            bar.finish_and_clear();
+        }
+    }
+}
+
 /// A progress bar with an ETA on standard error, drawn only on a terminal and only for
 /// work expected to take a while (`total` units, `long` when it is worth a bar).
 pub fn progress(total: u64, unit: &str, long: bool) -> ProgressBar {

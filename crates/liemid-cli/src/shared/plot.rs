@@ -9,6 +9,8 @@ use std::sync::Once;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
+pub use liemid_app::shared::figure::{work_series, Axes, Figure, Histories, Series};
+
 static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
 static REGISTER: Once = Once::new();
 
@@ -193,21 +195,6 @@ fn nice_label(v: &f64) -> String {
     }
 }
 
-/// The series of one panel: label, points.
-pub type Series = (String, Vec<(f64, f64)>);
-
-/// Axis names and options of one panel.
-pub struct Axes<'a> {
-    /// The panel's title.
-    pub title: &'a str,
-    /// The horizontal axis.
-    pub x_desc: &'a str,
-    /// The vertical axis.
-    pub y_desc: &'a str,
-    /// Draw reference slopes 1 and 2.
-    pub slopes: bool,
-}
-
 fn panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, axes: &Axes, series: &[Series]) -> Result<(), String> {
     let all: Vec<(f64, f64)> = series.iter().flat_map(|s| s.1.iter().copied()).collect();
     if all.is_empty() {
@@ -294,23 +281,6 @@ fn two_panels<DB: DrawingBackend>(
     }
     root.present().map_err(e)?;
     Ok(())
-}
-
-/// The series `(label, [(seconds, error)])` of a work-precision study, positive points only.
-pub fn work_series<'a, P: 'a>(
-    curves: impl Iterator<Item = (&'a str, &'a [P])>,
-    seconds: impl Fn(&P) -> f64,
-    error: impl Fn(&P) -> f64,
-) -> Vec<Series> {
-    curves
-        .map(|(label, points)| {
-            let pts = points
-                .iter()
-                .map(|p| (seconds(p), error(p)))
-                .filter(|p| p.0 > 0.0 && p.1 > 0.0);
-            (label.to_string(), pts.collect())
-        })
-        .collect()
 }
 
 /// The files a plot option names: `NAME` writes `NAME.svg` and `NAME.png`; a name ending
@@ -405,18 +375,6 @@ pub fn spin_snapshot(path: &Path, size: &[usize; 3], spins: &[liemid::Vec3], tit
     Ok(())
 }
 
-/// A study's figure: two side-by-side log-log panels under `title`, with the legend of
-/// `labels` (and the reference slopes, when the panels draw them) in its own strip. Each
-/// domain's study builds its own (`rigid::converge`, `rigid::study`, `spin::study`).
-pub struct Figure<'a> {
-    /// Above both panels.
-    pub title: String,
-    /// The legend's entries, in order.
-    pub labels: Vec<String>,
-    /// The two panels.
-    pub panels: [(Axes<'a>, Vec<Series>); 2],
-}
-
 fn render<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, figure: &Figure) -> Result<(), String> {
     two_panels(root, &figure.title, &figure.labels, &figure.panels)
 }
@@ -430,21 +388,6 @@ pub fn write(path: &Path, figure: &Figure) -> Result<(), String> {
         Some("png") => render(BitMapBackend::new(path, size).into_drawing_area(), figure),
         _ => Err(format!("plot: {}: use a .svg or .png file name", path.display())),
     }
-}
-
-/// Lines `y(t)` with a legend, and optional reference points (published data), on linear
-/// axes: the displacement histories of `liemid beam`.
-pub struct Histories<'a> {
-    /// Title.
-    pub title: &'a str,
-    /// Axis descriptions.
-    pub x_desc: &'a str,
-    /// Axis descriptions.
-    pub y_desc: &'a str,
-    /// Labelled lines.
-    pub lines: &'a [(String, Vec<(f64, f64)>)],
-    /// Labelled reference points.
-    pub points: &'a [(String, Vec<(f64, f64)>)],
 }
 
 fn draw_histories<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, h: &Histories<'_>) -> Result<(), String> {

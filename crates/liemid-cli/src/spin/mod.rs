@@ -1,6 +1,7 @@
-//! Spin lattices: `liemid spins` and `liemid spins work-precision` (`command`), the spin
-//! scenario file and built-in lattices (`scenario`), the work-precision study (`study`).
+//! Spin lattices: `liemid spins` and `liemid spins work-precision` (`command`). The spin
+//! scenario file (`scenario`) and the work-precision study (`study`) are the application
+//! crate's, named here as the command uses them.
 
 pub mod command;
-pub mod scenario;
-pub mod study;
+
+pub use liemid_app::spin::{scenario, study};

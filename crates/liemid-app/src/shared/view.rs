@@ -1,5 +1,5 @@
 //! `--view FILE.html`: one self-contained page that animates a run in 3-D (three.js,
-//! vendored in `assets/three/` and embedded at build time), with play/pause, a time slider,
+//! vendored in `vendor/three/` and embedded at build time), with play/pause, a time slider,
 //! a speed control, orbit and zoom with the mouse, and the energy error along the run in a
 //! side panel that follows the slider.
 //!
@@ -11,7 +11,7 @@
 //! Numbers go into the page as base64 of little-endian `f32`, never as JSON numbers.
 //!
 //! ```no_run
-//! use liemid_cli::shared::view::{Scene, ViewPage};
+//! use liemid_app::shared::view::{Scene, ViewPage};
 //! let mut page = ViewPage::new(Scene::RigidBody { half_extents: [1.0, 0.6, 0.3] }, "a top");
 //! for k in 0..100u32 {
 //!     let t = k as f64 * 0.01;
@@ -52,10 +52,10 @@ pub fn body_stride(count: usize) -> usize {
 /// Energy-error samples a page holds at most (subsampled like the frames).
 pub const MAX_ENERGY_POINTS: usize = 20_000;
 
-const THREE_CORE: &str = include_str!("../../assets/three/three.core.min.js");
-const THREE_MODULE: &str = include_str!("../../assets/three/three.module.min.js");
-const ORBIT_CONTROLS: &str = include_str!("../../assets/three/OrbitControls.js");
-const THREE_LICENSE: &str = include_str!("../../assets/three/LICENSE");
+const THREE_CORE: &str = include_str!("../../vendor/three/three.core.min.js");
+const THREE_MODULE: &str = include_str!("../../vendor/three/three.module.min.js");
+const ORBIT_CONTROLS: &str = include_str!("../../vendor/three/OrbitControls.js");
+const THREE_LICENSE: &str = include_str!("../../vendor/three/LICENSE");
 const VIEWER_JS: &str = include_str!("../../assets/viewer.js");
 const VIEWER_CSS: &str = include_str!("../../assets/viewer.css");
 

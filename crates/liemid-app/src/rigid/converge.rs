@@ -5,7 +5,8 @@ use liemid::{integrate_to, RigidState, RotationIntegrator, RotationMethod, Runge
 use serde::Serialize;
 
 use crate::rigid::scenario::Scenario;
-use crate::shared::plot::{Axes, Figure, Series};
+use crate::shared::figure::{Axes, Figure, Series};
+use crate::shared::progress::Progress;
 
 /// One method's errors.
 #[derive(Clone, Debug, Serialize)]
@@ -117,22 +118,23 @@ pub fn reference(scenario: &Scenario, t_end: f64, h_min: f64) -> Result<(RigidSt
     Ok((fine, reference))
 }
 
-/// Run the study; methods run in parallel threads, results in the order given.
+/// Run the study; methods run in parallel threads, results in the order given, each run
+/// reported to `progress` as it ends.
 pub fn study(
     scenario: &Scenario,
     methods: &[RotationMethod],
     steps: &[f64],
     t_end: f64,
+    progress: &dyn Progress,
 ) -> Result<Study, liemid::Error> {
     let h_min = steps.iter().copied().fold(f64::INFINITY, f64::min);
     let (ref_state, reference) = reference(scenario, t_end, h_min)?;
-    let bar = crate::shared::interrupt::progress((methods.len() * steps.len()) as u64, "runs", true);
+    progress.start((methods.len() * steps.len()) as u64, "runs");
     let results: Vec<MethodErrors> = std::thread::scope(|scope| {
         let handles: Vec<_> = methods
             .iter()
             .map(|&method| {
                 let ref_state = &ref_state;
-                let bar = bar.clone();
                 scope.spawn(move || {
                     let mut momentum = Vec::new();
                     let mut attitude = Vec::new();
@@ -152,7 +154,7 @@ pub fn study(
                                 failure.push(Some(e.to_string()));
                             }
                         }
-                        bar.inc(1);
+                        progress.advance();
                     }
                     MethodErrors {
                         name: method.key().into(),
@@ -173,7 +175,7 @@ pub fn study(
             .map(|h| h.join().expect("a convergence thread panicked"))
             .collect()
     });
-    bar.finish_and_clear();
+    progress.finish();
     Ok(Study {
         problem: scenario.name.clone(),
         t_end,

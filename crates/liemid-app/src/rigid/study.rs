@@ -10,7 +10,8 @@ use serde::Serialize;
 use crate::rigid::baseline;
 use crate::rigid::converge::Reference;
 use crate::rigid::scenario::Scenario;
-use crate::shared::plot::{work_series, Axes, Figure};
+use crate::shared::figure::{work_series, Axes, Figure};
+use crate::shared::progress::Progress;
 
 /// A method in the study: fixed-step liemid method or the adaptive baseline.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -492,11 +493,11 @@ fn reference(scenario: &Scenario, t_end: f64) -> Result<(RigidState, Reference),
     ))
 }
 
-/// Run the study.
-pub fn study(scenario: &Scenario, t_end: f64, options: &Options) -> Result<Study, String> {
+/// Run the study, each method reported to `progress` as it ends.
+pub fn study(scenario: &Scenario, t_end: f64, options: &Options, progress: &dyn Progress) -> Result<Study, String> {
     let (ref_state, reference) = reference(scenario, t_end)?;
     let mut methods = Vec::new();
-    let bar = crate::shared::interrupt::progress(options.entries.len() as u64, "methods", true);
+    progress.start(options.entries.len() as u64, "methods");
     for entry in &options.entries {
         let curve = match entry {
             Entry::Fixed(m) => curve_fixed(scenario, *m, t_end, &ref_state, options),
@@ -504,9 +505,9 @@ pub fn study(scenario: &Scenario, t_end: f64, options: &Options) -> Result<Study
             Entry::Adaptive(m) => curve_adaptive(scenario, *m, t_end, &ref_state, options),
         };
         methods.push(curve);
-        bar.inc(1);
+        progress.advance();
     }
-    bar.finish_and_clear();
+    progress.finish();
     let targets = [1e-3, 1e-6, 1e-9]
         .iter()
         .map(|&target| {

@@ -10,10 +10,11 @@
 ///
 /// Reference: E. Hairer, S. P. Nørsett, G. Wanner, *Solving Ordinary Differential
 /// Equations I*, 2nd ed., Springer (1993), section II.10 (DOP853).
+#[macro_export]
 macro_rules! dop853 {
     ($system:expr, $t0:expr, $t_end:expr, $dx:expr, $y0:expr, $rtol:expr $(,)?) => {{
         let (dx, rtol) = ($dx, $rtol);
-        ode_solvers::Dop853::from_param(
+        $crate::shared::dop853::ode_solvers::Dop853::from_param(
             $system,
             $t0,
             $t_end,
@@ -29,8 +30,10 @@ macro_rules! dop853 {
             0.0,
             u32::MAX,
             1000,
-            ode_solvers::OutputType::Sparse,
+            $crate::shared::dop853::ode_solvers::OutputType::Sparse,
         )
     }};
 }
-pub(crate) use dop853;
+pub use crate::dop853;
+/// The solver the macro configures, for callers that name its types.
+pub use ode_solvers;

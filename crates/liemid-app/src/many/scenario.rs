@@ -9,7 +9,8 @@ use liemid::many::FreeRotation;
 use crate::shared::toml_table::{parse_table, Section};
 
 /// Which built-in many-body model.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum Model {
     /// Fast Lagrangian tops in uniform gravity, each about its own pivot.
     Independent,
@@ -20,7 +21,8 @@ pub enum Model {
 }
 
 /// How each body turns between the impulses (`--rotation`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum Rotation {
     /// The torque-free midpoint Lie rotation in two half steps, as in `liemid-ea`.
     Midpoint,

@@ -10,7 +10,7 @@ use liemid::Vec3;
 use serde::Serialize;
 
 use crate::shared::cpu_time::process_seconds;
-use crate::shared::plot::{work_series, Axes, Figure};
+use crate::shared::figure::{work_series, Axes, Figure};
 use crate::spin::scenario::SpinScenario;
 
 /// One run.

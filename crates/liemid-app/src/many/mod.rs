@@ -1,0 +1,3 @@
+//! Many interacting rigid bodies: the scenario file (`scenario`).
+
+pub mod scenario;

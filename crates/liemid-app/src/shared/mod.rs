@@ -1,0 +1,15 @@
+//! Machinery every domain uses: output paths and trajectory files (`output`), checkpoints,
+//! `.npy` and extended XYZ files, the TOML tables of scenario files (`toml_table`), what a
+//! plot shows (`figure`), a study's progress (`progress`), the 3-D page of a run (`view`),
+//! CPU time for studies (`cpu_time`) and the DOP853 baseline's settings (`dop853`).
+
+pub mod checkpoint;
+pub mod cpu_time;
+pub mod dop853;
+pub mod figure;
+pub mod npy;
+pub mod output;
+pub mod progress;
+pub mod toml_table;
+pub mod view;
+pub mod xyz;
