@@ -4,7 +4,9 @@
 //! the bodies' poses, the energy and the hinge/slide coordinates at every `every`-th step.
 //! `python/liemid/multibody.py` shapes them.
 
-use liemid::multibody::{JointKind, JointSpaceModel, MultibodyState, MultibodySystem, Simulation};
+use liemid::multibody::{
+    joint_space_notes, JointKind, JointSpaceModel, MultibodyState, MultibodySystem, Prepared, Simulation,
+};
 use liemid::so3::Quaternion;
 use liemid_app::multibody::scenario::{self, Method, MultibodyScenario};
 use liemid_app::multibody::view;
@@ -179,59 +181,53 @@ fn multibody_run<'py>(
     let sc = &model.scenario;
     let mut samples = Samples::default();
     let (mut max_pos, mut max_vel) = (0.0f64, 0.0f64);
+    let notes;
     let name = match method {
         Method::Liemid(m) => {
-            let mut model = sc.model.clone();
-            // As the CLI: a rotor inertia has no exact form in maximal coordinates.
-            model.joints.iter_mut().for_each(|j| j.armature = 0.0);
-            let joints = model.joints.len();
-            let mut sim = Simulation::new(&model, m).map_err(|e| py_error(py, &e, &sc.name))?;
-            // As the CLI: a start off its loop-closing joints is projected onto them.
-            let (mut state, _, _) = sim
-                .initial_state_on_loops(&model)
-                .map_err(|e| py_error(py, &e, &sc.name))?;
-            let (system, integrator) = (&sim.system, &mut sim.integrator);
+            // The library's model policy, as the command's: armature dropped, the start
+            // projected onto loop-closing joints; the notes say so.
+            let Prepared {
+                simulation: mut sim,
+                mut state,
+                notes: said,
+            } = Simulation::prepare(&sc.model, m).map_err(|e| py_error(py, &e, &sc.name))?;
+            notes = said;
+            let joints = sc.model.joints.len();
+            let system = &sim.system;
             samples.push_maximal(system, &state, joints);
-            py.detach(|| -> liemid::Result<()> {
-                for k in 1..=n {
-                    let t_next = if k == n { t_end } else { k as f64 * step };
-                    let h = t_next - state.t;
-                    let r = integrator.step(system, &mut state, h)?;
-                    state.t = t_next;
-                    max_pos = max_pos.max(r.position_violation);
-                    max_vel = max_vel.max(r.velocity_violation);
-                    if k % every == 0 || k == n {
-                        samples.push_maximal(system, &state, joints);
-                    }
-                }
-                Ok(())
-            })
-            .map_err(|e| py_error(py, &e, &sc.name))?;
+            let run = py
+                .detach(|| {
+                    sim.integrator.integrate(system, &mut state, t_end, step, |k, state, _| {
+                        if k % every == 0 || k == n {
+                            samples.push_maximal(system, state, joints);
+                        }
+                        Ok(())
+                    })
+                })
+                .map_err(|e| py_error(py, &e, &sc.name))?;
+            (max_pos, max_vel) = (run.max_position_violation, run.max_velocity_violation);
             m.name().to_string()
         }
         Method::Rk4 => {
+            notes = joint_space_notes(&sc.model);
             let mut js = JointSpaceModel::new(&sc.model).map_err(|e| py_error(py, &e, &sc.name))?;
+            let mut seen = JointSpaceModel::new(&sc.model).map_err(|e| py_error(py, &e, &sc.name))?;
             let kinds: Vec<JointKind> = sc.model.joints.iter().map(|j| j.kind).collect();
             let (mut q, mut v) = (js.initial_q().to_vec(), js.initial_v().to_vec());
             samples
-                .push_joint_space(&mut js, &kinds, 0.0, &q, &v)
+                .push_joint_space(&mut seen, &kinds, 0.0, &q, &v)
                 .map_err(|e| py_error(py, &e, &sc.name))?;
-            py.detach(|| -> liemid::Result<()> {
-                let mut t = 0.0;
-                for k in 1..=n {
-                    let t_next = if k == n { t_end } else { k as f64 * step };
-                    js.rk4_step(&mut q, &mut v, t_next - t)?;
-                    t = t_next;
-                    if !q.iter().chain(&v).all(|x| x.is_finite()) {
-                        return Err(liemid::Error::NonFiniteResult { method: "RK4 (joint coordinates)", t, h: step });
-                    }
+            py.detach(|| {
+                js.integrate_rk4(&mut q, &mut v, (0.0, t_end, step), |k, t, q, v| {
                     if k % every == 0 || k == n {
-                        let mut unit = q.clone();
-                        js.normalize_quaternions(&mut unit)?;
-                        samples.push_joint_space(&mut js, &kinds, t, &unit, &v)?;
+                        let mut unit = q.to_vec();
+                        seen.normalize_quaternions(&mut unit).map_err(|e| e.to_string())?;
+                        samples
+                            .push_joint_space(&mut seen, &kinds, t, &unit, v)
+                            .map_err(|e| e.to_string())?;
                     }
-                }
-                Ok(())
+                    Ok(())
+                })
             })
             .map_err(|e| py_error(py, &e, &sc.name))?;
             "RK4 (joint coordinates)".to_string()
@@ -261,6 +257,7 @@ fn multibody_run<'py>(
     )?;
     d.set_item("max_position_constraint_violation", max_pos)?;
     d.set_item("max_velocity_constraint_violation", max_vel)?;
+    d.set_item("notes", notes.iter().map(ToString::to_string).collect::<Vec<_>>())?;
     Ok(d)
 }
 

@@ -93,3 +93,23 @@ def test_the_module_example_runs() -> None:
 
     result = doctest.testmod(multibody)
     assert result.attempted > 0 and result.failed == 0
+
+
+def test_the_run_says_what_the_model_policy_left_out_as_the_cli_does(tmp_path: Path) -> None:
+    # An armature the maximal-coordinate methods drop, a range the joint-space RK4 ignores:
+    # both said in the run's notes and as a warning, each by the method it concerns.
+    xml = tmp_path / "arm.xml"
+    xml.write_text(
+        """<mujoco model="noted"><worldbody><body name="arm">
+        <joint name="shoulder" axis="0 1 0" armature="0.1" range="-1 1" limited="true"/>
+        <inertial pos="0.1 0 0" mass="0.1" diaginertia="1e-4 1e-4 1e-4"/>
+        </body></worldbody></mujoco>"""
+    )
+    model = multibody.load(xml)
+    with pytest.warns(UserWarning, match="armature"):
+        maximal = model.run("liemid", step=1e-3, t_end=0.01)
+    assert len(maximal.notes) == 1 and "armature" in maximal.notes[0]
+    with pytest.warns(UserWarning, match="joint limits"):
+        joint_space = model.run("rk4", step=1e-3, t_end=0.01)
+    assert len(joint_space.notes) == 1 and "joint limits" in joint_space.notes[0]
+    assert multibody.problem("double-pendulum").run(step=1e-3, t_end=0.01).notes == []

@@ -50,32 +50,23 @@ impl Method {
     /// The keys on the command line and in files.
     pub const KEYS: [&'static str; 6] = ["liemid", "liemid4", "liemid6", "liemid8", "rk4", "dop853"];
 
-    /// The method named `key`.
+    /// The method named `key`: the library's keys ([`MultibodyMethod::from_key`]) and the
+    /// joint-space references `rk4` and `dop853`.
     pub fn from_key(key: &str) -> Result<Method, String> {
-        Ok(match key {
-            "liemid" => Method::Liemid(MultibodyMethod::Liemid),
-            "liemid4" => Method::Liemid(MultibodyMethod::Liemid4),
-            "liemid6" => Method::Liemid(MultibodyMethod::Liemid6),
-            "liemid8" => Method::Liemid(MultibodyMethod::Liemid8),
-            "rk4" => Method::Rk4,
-            "dop853" => Method::Dop853,
-            other => {
-                return Err(format!(
-                    "unknown method \"{other}\" (known: {})",
-                    Method::KEYS.join(", ")
-                ))
-            }
-        })
+        match key {
+            "rk4" => Ok(Method::Rk4),
+            "dop853" => Ok(Method::Dop853),
+            other => MultibodyMethod::from_key(other)
+                .map(Method::Liemid)
+                .ok_or_else(|| format!("unknown method \"{other}\" (known: {})", Method::KEYS.join(", "))),
+        }
     }
 
     /// The key of the method.
     #[must_use]
     pub fn key(self) -> &'static str {
         match self {
-            Method::Liemid(MultibodyMethod::Liemid) => "liemid",
-            Method::Liemid(MultibodyMethod::Liemid4) => "liemid4",
-            Method::Liemid(MultibodyMethod::Liemid6) => "liemid6",
-            Method::Liemid(MultibodyMethod::Liemid8) => "liemid8",
+            Method::Liemid(m) => m.key(),
             Method::Rk4 => "rk4",
             Method::Dop853 => "dop853",
         }

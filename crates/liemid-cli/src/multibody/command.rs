@@ -7,11 +7,11 @@ use std::time::Instant;
 
 use clap::Args;
 use liemid::error::Num;
-use liemid::multibody::{MultibodyState, MultibodySystem, Simulation};
+use liemid::multibody::{MultibodyState, MultibodySystem, Prepared, Simulation};
 use serde_json::json;
 
 use super::scenario::{self, Method, MultibodyScenario};
-use super::sink::{Poses, Record, Sink};
+use super::sink::{Halt, Poses, Record, Sink};
 use crate::shared::command::{check_positive, emit_json, CmdResult, Failure};
 use crate::shared::interrupt::{progress, Interrupt};
 use crate::shared::output::OutputPlan;
@@ -109,19 +109,20 @@ pub fn multibody(args: &MultibodyArgs) -> CmdResult {
             "--rtol sets dop853's tolerance; this run's method has a fixed step (--step)".into(),
         ));
     }
-    if matches!(method, Method::Liemid(_)) && sc.model.joints.iter().any(|j| j.armature != 0.0) {
-        // A rotor inertia in joint space has no exact counterpart in maximal coordinates.
-        for j in &mut sc.model.joints {
-            j.armature = 0.0;
-        }
-        sc.ignored
-            .push("joint armature (no exact form in maximal coordinates; --method rk4 keeps it)".into());
-    }
-    if !matches!(method, Method::Liemid(_)) && sc.model.joints.iter().any(|j| j.range.is_some()) {
-        // The joint-space reference integrates the joints free of their ranges.
-        sc.ignored
-            .push("joint limits (the joint-space reference has none; the liemid methods keep them)".into());
-    }
+    // The model policy of the run (the library's, as Python's): what is left out, and the
+    // start projected onto loop-closing joints.
+    let prepared = match method {
+        Method::Liemid(m) => Some(
+            Simulation::prepare(&sc.model, m).map_err(|e| Failure::Input(format!("{}: the start: {e}", sc.name)))?,
+        ),
+        Method::Rk4 | Method::Dop853 => None,
+    };
+    let notes = match &prepared {
+        Some(p) => p.notes.clone(),
+        None => liemid::multibody::joint_space_notes(&sc.model),
+    };
+    sc.ignored
+        .extend(notes.iter().filter(|n| n.is_ignored_content()).map(ToString::to_string));
     if !sc.ignored.is_empty() {
         eprintln!(
             "liemid: note: {} holds what is not simulated, ignored: {}",
@@ -129,12 +130,15 @@ pub fn multibody(args: &MultibodyArgs) -> CmdResult {
             sc.ignored.join(", ")
         );
     }
+    for note in notes.iter().filter(|n| !n.is_ignored_content()) {
+        eprintln!("liemid: note: {}: {note}", sc.name);
+    }
     let n = liemid::rigid::driver::step_count(0.0, t_end, step).map_err(|e| input(e.to_string()))?;
     let sink = Sink::new(&sc, out.as_deref(), args.view.is_some())?;
-    let (summary, sink) = match method {
-        Method::Liemid(m) => run_maximal(&sc, m, (step, t_end, every, n), sink)?,
-        Method::Rk4 => super::joint_run::rk4(&sc, (step, t_end, every, n), sink)?,
-        Method::Dop853 => super::joint_run::dop853(&sc, rtol, t_end, every, sink)?,
+    let (summary, sink) = match (method, prepared) {
+        (Method::Liemid(m), Some(prepared)) => run_maximal(&sc, m, prepared, (step, t_end, n), every, sink)?,
+        (Method::Rk4, _) => super::joint_run::rk4(&sc, (step, t_end, every, n), sink)?,
+        (_, _) => super::joint_run::dop853(&sc, rtol, t_end, every, sink)?,
     };
     let quiet = args.json.as_deref() == Some("-") || out.as_deref() == Some(Path::new("-"));
     if let Some(base) = &args.plot {
@@ -256,28 +260,19 @@ fn stiff_damper(
 fn run_maximal(
     sc: &MultibodyScenario,
     method: liemid::multibody::MultibodyMethod,
-    (h, t_end, every, n): (f64, f64, u64, u64),
+    prepared: Prepared,
+    (h, t_end, n): (f64, f64, u64),
+    every: u64,
     mut sink: Sink,
 ) -> Result<(serde_json::Value, Sink), Failure> {
-    let mut sim = Simulation::new(&sc.model, method).map_err(|e| Failure::Input(format!("{}: {e}", sc.name)))?;
-    // A keyframe written for MuJoCo's soft equalities may not close the loops exactly.
-    let (mut state, position, velocity) = sim
-        .initial_state_on_loops(&sc.model)
-        .map_err(|e| Failure::Input(format!("{}: the start: {e}", sc.name)))?;
-    if position > 1e-12 || velocity > 1e-12 {
-        eprintln!(
-            "liemid: note: {}: the start violated the loop-closing joints (relative position {position:.1e}, \
-             velocity {velocity:.1e}); projected onto them",
-            sc.name
-        );
-    }
+    let Prepared {
+        simulation: mut sim,
+        mut state,
+        ..
+    } = prepared;
     let bodies = state.len();
     let joints = sc.model.joints.len();
     let system = &sim.system;
-    let integrator = &mut sim.integrator;
-    let e0 = system.energy(&state);
-    let p0 = system.linear_momentum(&state);
-    let l0 = system.angular_momentum(&state);
     sink.observe(&mut Maximal {
         system,
         state: &state,
@@ -286,42 +281,37 @@ fn run_maximal(
     let interrupt = Interrupt::install();
     let bar = progress(n, "steps", n >= 200_000);
     let started = Instant::now();
-    let (mut max_dp, mut max_dl, mut max_pos, mut max_vel, mut max_energy) = (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
-    for k in 1..=n {
-        if let Some(stop) = interrupt.requested() {
-            bar.finish_and_clear();
-            return Err(sink.stopped(stop, state.t, k - 1, n));
-        }
-        let t_next = if k == n { t_end } else { k as f64 * h };
-        let h_k = t_next - state.t;
-        match integrator.step(system, &mut state, h_k) {
-            Ok(r) => {
-                max_pos = max_pos.max(r.position_violation);
-                max_vel = max_vel.max(r.velocity_violation);
-            }
-            Err(e) => {
-                bar.finish_and_clear();
-                let hint = stiff_damper(&sc.model, method, h)
-                    .map(|w| format!(" ({w})"))
-                    .unwrap_or_default();
-                return Err(sink.failed(format!("{}: at t = {}: {e}{hint}", sc.name, Num(state.t))));
-            }
-        }
-        state.t = t_next;
-        let e = system.energy(&state);
-        max_energy = max_energy.max(((e - e0) / e0.abs().max(f64::MIN_POSITIVE)).abs());
-        max_dp = max_dp.max((system.linear_momentum(&state) - p0).norm());
-        max_dl = max_dl.max((system.angular_momentum(&state) - l0).norm());
+    // The observer's own outcome: a failed write or a signal ends the run through it.
+    let mut stop: Option<Halt> = None;
+    let outcome = sim.integrator.integrate(system, &mut state, t_end, h, |k, state, _| {
         if k % every == 0 || k == n {
-            sink.observe(&mut Maximal {
-                system,
-                state: &state,
-                joints,
-            })?;
+            let observed = sink.observe(&mut Maximal { system, state, joints });
+            if let Err(failure) = observed {
+                stop = Some(Halt::Output(failure));
+                return Err("the output failed".into());
+            }
         }
         bar.inc(1);
-    }
+        match interrupt.requested() {
+            Some(signal) if k < n => {
+                stop = Some(Halt::Signal(signal, k));
+                Err("interrupted".into())
+            }
+            _ => Ok(()),
+        }
+    });
     bar.finish_and_clear();
+    let run = match (outcome, stop) {
+        (Ok(run), _) => run,
+        (Err(_), Some(Halt::Output(failure))) => return Err(failure),
+        (Err(_), Some(Halt::Signal(signal, done))) => return Err(sink.stopped(signal, state.t, done, n)),
+        (Err(e), None) => {
+            let hint = stiff_damper(&sc.model, method, h)
+                .map(|w| format!(" ({w})"))
+                .unwrap_or_default();
+            return Err(sink.failed(format!("{}: at t = {}: {e}{hint}", sc.name, Num(state.t))));
+        }
+    };
     let seconds = started.elapsed().as_secs_f64();
     let written = sink.finish()?;
     let free = sc
@@ -343,6 +333,7 @@ fn run_maximal(
                 .map(|q| json!({"name": sc.model.joints[k].name, "value": q}))
         })
         .collect();
+    let momentum = json!({"linear": run.max_linear_momentum_change, "angular": run.max_angular_momentum_change});
     let summary = json!({
         "model": sc.name,
         "method": method.name(),
@@ -350,10 +341,10 @@ fn run_maximal(
         "t_end": t_end,
         "steps": n,
         "bodies": bodies,
-        "max_relative_energy_error": max_energy,
-        "max_position_constraint_violation": max_pos,
-        "max_velocity_constraint_violation": max_vel,
-        "max_momentum_change": if free { json!({"linear": max_dp, "angular": max_dl}) } else { json!(null) },
+        "max_relative_energy_error": run.max_energy_error,
+        "max_position_constraint_violation": run.max_position_violation,
+        "max_velocity_constraint_violation": run.max_velocity_violation,
+        "max_momentum_change": if free { momentum } else { json!(null) },
         "final": finals,
         "joints": joint_values,
         "ignored": sc.ignored,

@@ -19,7 +19,7 @@ use ode_solvers::{DVector, System};
 use serde_json::json;
 
 use super::scenario::MultibodyScenario;
-use super::sink::{Poses, Sink};
+use super::sink::{Halt, Poses, Sink};
 use crate::shared::command::Failure;
 use crate::shared::interrupt::{progress, Interrupt};
 
@@ -150,42 +150,38 @@ pub(super) fn rk4(
     let mut model = model_of(sc)?;
     let (mut q, mut v) = (model.initial_q().to_vec(), model.initial_v().to_vec());
     let bodies = sc.model.bodies.len();
-    let e0 = model
-        .energy(&q, &v)
-        .map_err(|e| Failure::Input(format!("{}: {e}", sc.name)))?;
     observe(&mut sink, sc, &mut model, 0.0, &q, &v)?;
     let interrupt = Interrupt::install();
     let bar = progress(n, "steps", n >= 200_000);
     let started = Instant::now();
-    let mut max_energy: f64 = 0.0;
-    let mut t = 0.0;
-    for k in 1..=n {
-        if let Some(stop) = interrupt.requested() {
-            bar.finish_and_clear();
-            return Err(sink.stopped(stop, t, k - 1, n));
-        }
-        let t_next = if k == n { t_end } else { k as f64 * h };
-        if let Err(e) = model.rk4_step(&mut q, &mut v, t_next - t) {
-            bar.finish_and_clear();
-            return Err(sink.failed(format!("{}: at t = {}: {e}", sc.name, Num(t))));
-        }
-        t = t_next;
-        if !(q.iter().chain(&v).all(|x| x.is_finite())) {
-            bar.finish_and_clear();
-            return Err(sink.failed(format!(
-                "{}: rk4 produced a non-finite state at t = {} (step too large?)",
-                sc.name,
-                Num(t)
-            )));
-        }
-        let e = model.energy(&q, &v).unwrap_or(f64::NAN);
-        max_energy = max_energy.max(((e - e0) / e0.abs().max(f64::MIN_POSITIVE)).abs());
+    // The stepping model and a second one for the observations (the driver borrows the first).
+    let mut seen = model_of(sc)?;
+    let mut stop: Option<Halt> = None;
+    let outcome = model.integrate_rk4(&mut q, &mut v, (0.0, t_end, h), |k, t, q, v| {
         if k % every == 0 || k == n {
-            observe(&mut sink, sc, &mut model, t, &q, &v)?;
+            if let Err(failure) = observe(&mut sink, sc, &mut seen, t, q, v) {
+                stop = Some(Halt::Output(failure));
+                return Err("the output failed".into());
+            }
         }
         bar.inc(1);
-    }
+        match interrupt.requested() {
+            Some(signal) if k < n => {
+                stop = Some(Halt::Signal(signal, k));
+                Err("interrupted".into())
+            }
+            _ => Ok(()),
+        }
+    });
     bar.finish_and_clear();
+    let max_energy = match (outcome, stop) {
+        (Ok(run), _) => run.max_energy_error,
+        (Err(_), Some(Halt::Output(failure))) => return Err(failure),
+        (Err(liemid::Error::ObserverFailed { t, .. }), Some(Halt::Signal(signal, done))) => {
+            return Err(sink.stopped(signal, t, done, n))
+        }
+        (Err(e), _) => return Err(sink.failed(format!("{}: {e}", sc.name))),
+    };
     let seconds = started.elapsed().as_secs_f64();
     let written = sink.finish()?;
     let base = summary(sc, &mut model, &q, max_energy, written)?;

@@ -156,3 +156,12 @@ impl Sink {
             .map_err(Failure::Run)
     }
 }
+
+/// Why a run's observer ended the run early: the output failed, or a signal asked it to
+/// stop after `steps` steps (the run is then written as far as it went).
+pub(super) enum Halt {
+    /// Writing an observation failed.
+    Output(Failure),
+    /// `SIGINT` or `SIGTERM` (its name and exit code) after `steps` steps.
+    Signal((&'static str, u8), u64),
+}

@@ -22,6 +22,7 @@ multipliers", SIGGRAPH 1996.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, List, Optional, Tuple, Union
@@ -42,7 +43,10 @@ _METHODS = [("liemid", 2), ("liemid4", 4), ("liemid6", 6), ("liemid8", 8), ("rk4
 class MultibodyRun:
     """A sampled run: ``t`` (n,), ``xpos`` (n, bodies, 3) each body frame's origin,
     ``xquat`` (n, bodies, 4) its attitude ``w, x, y, z`` (MuJoCo's names), ``energy`` (n,),
-    ``joints`` (n, k) the hinge angles and slide offsets named by ``joint_names``."""
+    ``joints`` (n, k) the hinge angles and slide offsets named by ``joint_names``;
+    ``notes`` what the run left out or changed (joint armature dropped by the
+    maximal-coordinate methods, limits by the joint-space ones, a start projected onto its
+    loop-closing joints), as the command prints them."""
 
     method: str
     steps: int
@@ -54,6 +58,7 @@ class MultibodyRun:
     joint_names: List[str]
     max_position_constraint_violation: float
     max_velocity_constraint_violation: float
+    notes: List[str] = field(default_factory=list)
     model: Any = field(default=None, repr=False, compare=False)
 
     def view(self, path: Optional[str] = None) -> str:
@@ -128,12 +133,16 @@ class Model:
         ``timestep`` or 1e-3 s; the problem's end time or 1 s), sampling every ``every``
         steps and the last. A failed step raises ``liemid.ConvergenceError``; bad input
         ``ValueError``. Joint armature is not simulated by the maximal-coordinate methods, and
-        joint limits are not enforced by the joint-space ones (``rk4``, ``dop853``)."""
+        joint limits are not enforced by the joint-space ones (``rk4``, ``dop853``): the
+        run's ``notes`` say so, and each is also issued as a ``UserWarning``."""
         h = self._core.default_step if step is None else _number("step", step)
         end = self._core.default_t_end if t_end is None else _number("t_end", t_end)
         if isinstance(every, bool) or not isinstance(every, int) or every < 1:
             raise ValueError(f"every: a whole number of steps, at least 1, found {every!r}")
         out = _liemid.multibody_run(self._core, str(method), h, end, every)
+        notes = [str(n) for n in out["notes"]]
+        for note in notes:
+            warnings.warn(f"{self.name}: {note}", UserWarning, stacklevel=2)
         n, bodies = len(out["t"]), len(self._core.bodies)
         names = list(out["joint_names"])
         return MultibodyRun(
@@ -147,6 +156,7 @@ class Model:
             joint_names=names,
             max_position_constraint_violation=float(out["max_position_constraint_violation"]),
             max_velocity_constraint_violation=float(out["max_velocity_constraint_violation"]),
+            notes=notes,
             model=self._core,
         )
 

@@ -1,12 +1,17 @@
-//! The fixed-step driver of the multibody step: the time loop every front end runs (the
-//! last step lands on `t_end`), the extremes of the run, and an observer per step.
+//! The fixed-step driver of the multibody step, the one under every front end (the
+//! `liemid multibody` command, the Python package, the tests): the model policy of a run
+//! ([`Simulation::prepare`]: what is left out or projected, said as [`ModelNote`]s), the
+//! time loop (the last step lands on `t_end`), the extremes of the run, and an observer
+//! per step; the same loop for the joint-space reference ([`JointSpaceModel::integrate_rk4`]).
 //!
 //! Reference: docs/theory/multibody.md §5; `crate::rigid::driver::integrate` (the same
 //! time stepping).
 
 use crate::error::{Error, Result};
 
-use super::method::StepReport;
+use super::joint_space::JointSpaceModel;
+use super::method::{MultibodyMethod, StepReport};
+use super::model::Model;
 use super::rattle::Rattle;
 use super::state::MultibodyState;
 use super::system::MultibodySystem;
@@ -28,6 +33,78 @@ pub struct MultibodyRun {
     pub total_iterations: u64,
     /// Largest `|E − E₀| / |E₀|` (absolute when `E₀ = 0`).
     pub max_energy_error: f64,
+    /// Largest `|p − p₀|` of the total linear momentum (conserved without gravity and
+    /// without joints to the world).
+    pub max_linear_momentum_change: f64,
+    /// Largest `|L − L₀|` of the total angular momentum about the origin.
+    pub max_angular_momentum_change: f64,
+}
+
+/// What a run of a model leaves out or changes, said once before it runs (the command
+/// prints it, Python returns it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ModelNote {
+    /// Joint armature (a rotor inertia in joint space) has no exact form in maximal
+    /// coordinates; the maximal-coordinate methods run without it.
+    ArmatureDropped,
+    /// The joint-space reference integrates the joints free of their ranges.
+    LimitsIgnored,
+    /// The start violated the loop-closing joints (relative violations before the
+    /// projection) and was projected onto them.
+    StartProjected {
+        /// Relative position violation.
+        position: f64,
+        /// Relative velocity violation.
+        velocity: f64,
+    },
+}
+
+impl ModelNote {
+    /// Whether the note names content of the model that is not simulated (as opposed to a
+    /// change of the start).
+    #[must_use]
+    pub fn is_ignored_content(&self) -> bool {
+        matches!(self, ModelNote::ArmatureDropped | ModelNote::LimitsIgnored)
+    }
+}
+
+impl core::fmt::Display for ModelNote {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            ModelNote::ArmatureDropped => {
+                f.write_str("joint armature (no exact form in maximal coordinates; --method rk4 keeps it)")
+            }
+            ModelNote::LimitsIgnored => {
+                f.write_str("joint limits (the joint-space reference has none; the liemid methods keep them)")
+            }
+            ModelNote::StartProjected { position, velocity } => write!(
+                f,
+                "the start violated the loop-closing joints (relative position {position:.1e}, velocity \
+                 {velocity:.1e}); projected onto them"
+            ),
+        }
+    }
+}
+
+/// A simulation ready to run, its start, and what the model policy changed.
+#[derive(Debug)]
+pub struct Prepared {
+    /// The system and its integrator.
+    pub simulation: Simulation,
+    /// The start (on the loop-closing joints).
+    pub state: MultibodyState,
+    /// What was left out or projected, in that order.
+    pub notes: Vec<ModelNote>,
+}
+
+/// The notes of a run of `model` in joint coordinates ([`JointSpaceModel`]).
+#[must_use]
+pub fn joint_space_notes(model: &Model) -> Vec<ModelNote> {
+    if model.joints.iter().any(|j| j.range.is_some()) {
+        vec![ModelNote::LimitsIgnored]
+    } else {
+        Vec::new()
+    }
 }
 
 impl Rattle {
@@ -53,6 +130,7 @@ impl Rattle {
         let t0 = state.t;
         let n = crate::rigid::driver::step_count(t0, t_end, h)?;
         let e0 = system.energy(state);
+        let (p0, l0) = (system.linear_momentum(state), system.angular_momentum(state));
         let mut run = MultibodyRun::default();
         for k in 1..=n {
             let t_next = if k == n { t_end } else { t0 + k as f64 * h };
@@ -65,6 +143,10 @@ impl Rattle {
             run.total_iterations += u64::from(report.iterations);
             let de = (system.energy(state) - e0).abs();
             run.max_energy_error = run.max_energy_error.max(if e0 != 0.0 { de / e0.abs() } else { de });
+            let dp = (system.linear_momentum(state) - p0).norm();
+            run.max_linear_momentum_change = run.max_linear_momentum_change.max(dp);
+            let dl = (system.angular_momentum(state) - l0).norm();
+            run.max_angular_momentum_change = run.max_angular_momentum_change.max(dl);
             observer(k, state, &report).map_err(|reason| Error::ObserverFailed { t: state.t, reason })?;
         }
         Ok(run)
@@ -86,6 +168,41 @@ pub struct Simulation {
 }
 
 impl Simulation {
+    /// What every front end runs: `model` by `method` under the model policy of the
+    /// maximal-coordinate methods. Joint armature is dropped ([`ModelNote::ArmatureDropped`]:
+    /// a rotor inertia in joint space has no exact form in maximal coordinates yet), and a
+    /// start off the loop-closing joints (a keyframe written for MuJoCo's soft equalities)
+    /// is projected onto them ([`ModelNote::StartProjected`] when the violation exceeded
+    /// `1e-12`).
+    ///
+    /// # Errors
+    /// [`MultibodySystem::new`]'s and [`Rattle::initial_state_on_loops`]'s errors.
+    ///
+    /// Reference: docs/theory/multibody.md §3 (the model), §6 (the projection).
+    pub fn prepare(model: &Model, method: MultibodyMethod) -> Result<Prepared> {
+        let mut notes = Vec::new();
+        let stripped;
+        let model = if model.joints.iter().any(|j| j.armature != 0.0) {
+            let mut m = model.clone();
+            m.joints.iter_mut().for_each(|j| j.armature = 0.0);
+            notes.push(ModelNote::ArmatureDropped);
+            stripped = m;
+            &stripped
+        } else {
+            model
+        };
+        let mut simulation = Simulation::new(model, method)?;
+        let (state, position, velocity) = simulation.initial_state_on_loops(model)?;
+        if position > 1e-12 || velocity > 1e-12 {
+            notes.push(ModelNote::StartProjected { position, velocity });
+        }
+        Ok(Prepared {
+            simulation,
+            state,
+            notes,
+        })
+    }
+
     /// The system of `model` and its integrator by `method`.
     ///
     /// # Errors
@@ -145,5 +262,60 @@ impl Simulation {
     /// [`Rattle::initial_state_on_loops`]'s errors.
     pub fn initial_state_on_loops(&mut self, model: &super::Model) -> Result<(MultibodyState, f64, f64)> {
         self.integrator.initial_state_on_loops(&self.system, model)
+    }
+}
+
+/// What a joint-space run did: steps and the largest energy error.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct JointSpaceRun {
+    /// Steps taken.
+    pub steps: u64,
+    /// Largest `|E − E₀| / |E₀|` (absolute when `E₀ = 0`).
+    pub max_energy_error: f64,
+}
+
+impl JointSpaceModel {
+    /// Integrate `(q, v)` from `t0` to `t_end` by classical RK4 ([`JointSpaceModel::rk4_step`])
+    /// with step `h` (the last step lands on `t_end`), calling `observer(k, t, q, v)` after
+    /// every step; returns the steps and the largest energy error. The reference the
+    /// maximal-coordinate methods are measured against: fourth order, no invariant kept.
+    ///
+    /// # Errors
+    /// [`JointSpaceModel::rk4_step`]'s errors; [`Error::NonFiniteResult`] when a step leaves
+    /// a non-finite coordinate; [`Error::ObserverFailed`] when the observer returns an error.
+    ///
+    /// Reference: `crate::rigid::driver::integrate` (the same time stepping).
+    pub fn integrate_rk4<O>(
+        &mut self,
+        q: &mut [f64],
+        v: &mut [f64],
+        (t0, t_end, h): (f64, f64, f64),
+        mut observer: O,
+    ) -> Result<JointSpaceRun>
+    where
+        O: FnMut(u64, f64, &[f64], &[f64]) -> core::result::Result<(), String>,
+    {
+        let n = crate::rigid::driver::step_count(t0, t_end, h)?;
+        let e0 = self.energy(q, v)?;
+        let mut run = JointSpaceRun::default();
+        let mut t = t0;
+        for k in 1..=n {
+            let t_next = if k == n { t_end } else { t0 + k as f64 * h };
+            self.rk4_step(q, v, t_next - t)?;
+            t = t_next;
+            if !q.iter().chain(v.iter()).all(|x| x.is_finite()) {
+                return Err(Error::NonFiniteResult {
+                    method: "RK4 (joint coordinates)",
+                    t,
+                    h,
+                });
+            }
+            run.steps = k;
+            let de = (self.energy(q, v).unwrap_or(f64::NAN) - e0).abs();
+            let relative = if e0 != 0.0 { de / e0.abs() } else { de };
+            run.max_energy_error = run.max_energy_error.max(relative);
+            observer(k, t, q, v).map_err(|reason| Error::ObserverFailed { t, reason })?;
+        }
+        Ok(run)
     }
 }

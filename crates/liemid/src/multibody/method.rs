@@ -30,6 +30,24 @@ impl MultibodyMethod {
     /// All methods, lowest order first.
     pub const ALL: [MultibodyMethod; 4] = [Self::Liemid, Self::Liemid4, Self::Liemid6, Self::Liemid8];
 
+    /// The key on the command line, in scenario files and in Python (`liemid`,
+    /// `liemid4`, `liemid6`, `liemid8`).
+    #[must_use]
+    pub fn key(&self) -> &'static str {
+        match self {
+            Self::Liemid => "liemid",
+            Self::Liemid4 => "liemid4",
+            Self::Liemid6 => "liemid6",
+            Self::Liemid8 => "liemid8",
+        }
+    }
+
+    /// The method of a key ([`MultibodyMethod::key`]).
+    #[must_use]
+    pub fn from_key(key: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|m| m.key() == key)
+    }
+
     /// The name (`MB-LIEMID`, `MB-LIEMID4`, ...).
     #[must_use]
     pub fn name(&self) -> &'static str {

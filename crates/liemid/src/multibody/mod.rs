@@ -61,7 +61,7 @@ mod workspace;
 mod xml;
 
 pub use constraints::{JointGeometry, JointRows, Row};
-pub use driver::{MultibodyRun, Simulation};
+pub use driver::{joint_space_notes, JointSpaceRun, ModelNote, MultibodyRun, Prepared, Simulation};
 pub use ensemble::MultibodyEnsemble;
 pub use joint_space::JointSpaceModel;
 pub use method::{LimitState, MultibodyMethod, StepReport};
