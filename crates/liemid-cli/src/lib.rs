@@ -29,6 +29,7 @@ macro_rules! out {
 }
 
 pub mod beam;
+pub mod listing;
 pub mod many;
 pub mod multibody;
 pub mod rigid;

@@ -79,7 +79,7 @@ enum Command {
     Beam(beam::command::BeamArgs),
     /// List the integrators: name, order, torque evaluations, what they conserve.
     Methods(rigid::command::MethodsArgs),
-    /// List the built-in problems.
+    /// List the built-in problems of every domain.
     Problems,
 }
 
@@ -109,26 +109,11 @@ fn main() -> ExitCode {
         Command::Spins(args) => spin::command::spins(args),
         Command::Beam(args) => beam::command::beam(args),
         Command::Methods(args) => {
-            if args.spins {
-                spin::command::methods(args.json);
-            } else {
-                rigid::command::methods();
-            }
+            liemid_cli::listing::methods(args.spins, args.json);
             Ok(())
         }
         Command::Problems => {
-            for name in rigid::scenario::PROBLEMS {
-                liemid_cli::outln!("{name:<15} {}", rigid::scenario::describe(name));
-            }
-            liemid_cli::outln!("{:<15} {}", rigid::satellite::PROBLEM, rigid::satellite::DESCRIPTION);
-            liemid_cli::outln!("\nliemid spins --problem NAME:");
-            for name in liemid::spin::problems::NAMES {
-                liemid_cli::outln!("{name:<15} {}", liemid::spin::problems::describe(name).unwrap_or(""));
-            }
-            liemid_cli::outln!("\nliemid multibody --problem NAME:");
-            for name in multibody::scenario::PROBLEMS {
-                liemid_cli::outln!("{name:<15} {}", multibody::scenario::describe(name));
-            }
+            liemid_cli::listing::problems();
             Ok(())
         }
     };

@@ -330,9 +330,35 @@ fn listings_and_help() {
     ] {
         assert!(out.lines().any(|l| l.starts_with(key)), "methods lacks {key}");
     }
+    // Every domain's methods, each under the subcommand that takes them.
+    for (section, key) in [
+        ("liemid many --rotation", "exact"),
+        ("liemid spins --method", "split4"),
+        ("liemid beam --method", "liemid-mts"),
+        ("liemid multibody --method", "liemid8"),
+    ] {
+        let at = out.find(section).unwrap_or_else(|| panic!("methods lacks {section}"));
+        assert!(out[at..].lines().any(|l| l.starts_with(key)), "{section} lacks {key}");
+    }
     let o = liemid().arg("problems").output().unwrap();
     for p in ["fast-top", "slow-top", "free-body"] {
         assert!(stdout(&o).contains(p));
+    }
+    // And every domain's problems.
+    let problems = stdout(&o);
+    for (section, name) in [
+        ("liemid many --model", "dipoles"),
+        ("liemid spins --problem", "skyrmion"),
+        ("liemid beam --problem", "right-angle-cantilever"),
+        ("liemid multibody --problem", "closed-loop"),
+    ] {
+        let at = problems
+            .find(section)
+            .unwrap_or_else(|| panic!("problems lacks {section}"));
+        assert!(
+            problems[at..].lines().any(|l| l.starts_with(name)),
+            "{section} lacks {name}"
+        );
     }
     for sub in [
         &["--help"][..],

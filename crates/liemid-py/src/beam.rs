@@ -35,7 +35,7 @@ fn beam_run<'py>(
     }
     .map_err(PyValueError::new_err)?;
     if let Some(m) = method {
-        sc.method = BeamIntegrator::parse(m).map_err(|e| PyValueError::new_err(format!("method: {e}")))?;
+        sc.method = scenario::integrator(m).map_err(|e| PyValueError::new_err(format!("method: {e}")))?;
     }
     if step.is_some() {
         sc.step = step;

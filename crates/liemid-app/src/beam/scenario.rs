@@ -45,41 +45,15 @@ use liemid::beam::{problems, Frame, History, NodalLoad, Section, Support};
 use liemid::Vec3;
 use serde::Deserialize;
 
-/// The integrators of `liemid beam`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum BeamIntegrator {
-    /// An explicit splitting.
-    Explicit(liemid::beam::BeamMethod),
-    /// Implicit Newmark (average acceleration) with Newton.
-    Newmark,
-}
+/// The integrators of `liemid beam`: the library's ([`liemid::beam::BeamIntegrator`]).
+pub use liemid::beam::BeamIntegrator;
 
-impl BeamIntegrator {
-    /// Every integrator.
-    pub const ALL: [BeamIntegrator; 5] = [
-        BeamIntegrator::Explicit(liemid::beam::BeamMethod::Splitting),
-        BeamIntegrator::Explicit(liemid::beam::BeamMethod::Splitting4),
-        BeamIntegrator::Explicit(liemid::beam::BeamMethod::Impulse),
-        BeamIntegrator::Explicit(liemid::beam::BeamMethod::MassScaled),
-        BeamIntegrator::Newmark,
-    ];
-
-    /// The name.
-    #[must_use]
-    pub fn key(self) -> &'static str {
-        match self {
-            BeamIntegrator::Explicit(m) => m.key(),
-            BeamIntegrator::Newmark => "newmark",
-        }
-    }
-
-    /// By name, or an error listing the names.
-    pub fn parse(key: &str) -> Result<Self, String> {
-        Self::ALL.into_iter().find(|m| m.key() == key).ok_or_else(|| {
-            let known: Vec<&str> = Self::ALL.iter().map(|m| m.key()).collect();
-            format!("unknown beam method `{key}` (known: {})", known.join(", "))
-        })
-    }
+/// The integrator of `key`, or an error listing the keys.
+pub fn integrator(key: &str) -> Result<BeamIntegrator, String> {
+    BeamIntegrator::from_key(key).ok_or_else(|| {
+        let known: Vec<&str> = BeamIntegrator::ALL.iter().map(|m| m.key()).collect();
+        format!("unknown beam method `{key}` (known: {})", known.join(", "))
+    })
 }
 
 /// A beam scenario: the model, the initial deflection of a built-in problem, and the run.
@@ -301,8 +275,8 @@ pub fn parse(text: &str, name: &str, elements: Option<usize>) -> Result<BeamScen
             return Err("[run] gravity is not finite".into());
         }
     }
-    let method = BeamIntegrator::parse(file.run.method.as_deref().unwrap_or("liemid"))
-        .map_err(|e| format!("[run] method: {e}"))?;
+    let method =
+        integrator(file.run.method.as_deref().unwrap_or("liemid")).map_err(|e| format!("[run] method: {e}"))?;
     let t_end = file.run.t_end.ok_or("[run] t_end is missing")?;
     Ok(BeamScenario {
         name: name.to_string(),

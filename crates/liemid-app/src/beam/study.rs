@@ -1,7 +1,7 @@
 //! Runs of a beam scenario (explicit splitting or implicit Newmark) sampled at a fixed
 //! interval, and the work-precision study of the two on the right-angle cantilever.
 
-use liemid::beam::{BeamMethod, BeamSystem, Newmark};
+use liemid::beam::{BeamDriver, BeamMethod, BeamSystem};
 use serde_json::{json, Value};
 
 use crate::beam::scenario::{BeamIntegrator, BeamScenario};
@@ -120,38 +120,15 @@ pub fn run_viewed(
     view: Option<&str>,
 ) -> Result<(BeamRun, Option<ViewPage>), RunFailure> {
     let input = RunFailure::Input;
-    if !(t_end.is_finite() && t_end > 0.0) {
-        return Err(input(format!("t_end must be positive and finite, found {t_end}")));
-    }
-    if !(sample.is_finite() && sample > 0.0) {
-        return Err(input(format!("the sample interval must be positive, found {sample}")));
-    }
-    let mut system: BeamSystem = scenario.problem.system().map_err(|e| input(e.to_string()))?;
-    let stability = system.stability(0);
-    let explicit = match scenario.method {
-        BeamIntegrator::Explicit(m) => Some(m),
-        BeamIntegrator::Newmark => None,
-    };
-    let critical = stability.critical_step(explicit.unwrap_or(BeamMethod::Splitting));
-    let (h, every) = match step {
-        Some(h) => {
-            if !(h.is_finite() && h > 0.0) {
-                return Err(input(format!("the step must be positive and finite, found {h}")));
-            }
-            if let (Some(m), false) = (explicit, force_step) {
-                stability
-                    .check(m, h)
-                    .map_err(|e| input(format!("{e} (or --force-step)")))?;
-            }
-            (h, ((sample / h).round() as u64).max(1))
-        }
-        None => {
-            let default = if explicit.is_some() { 0.9 * critical } else { 0.05 };
-            let k = (sample / default).ceil().max(1.0);
-            (sample / k, k as u64)
-        }
-    };
-    let steps = (t_end / h - 1e-9).ceil() as u64;
+    let system: BeamSystem = scenario.problem.system().map_err(|e| input(e.to_string()))?;
+    let mut driver = BeamDriver::new(system, scenario.method);
+    let plan = driver.plan(t_end, step, sample, force_step).map_err(|e| match e {
+        liemid::Error::UnstableStep { .. } => input(format!("{e} (or --force-step)")),
+        e => input(e.to_string()),
+    })?;
+    let (h, every, steps) = (plan.step, plan.every, plan.steps);
+    let explicit = scenario.method.explicit();
+    let system = driver.system();
     let names: Vec<(String, usize)> = scenario.problem.frame.names.clone();
     let mut out = BeamRun {
         method: scenario.method,
@@ -163,10 +140,10 @@ pub fn run_viewed(
         wall_seconds: 0.0,
         cpu_seconds: 0.0,
         elements: system.elements(),
-        omega_bound: stability.omega_bound_of(explicit.unwrap_or(BeamMethod::Splitting)),
+        omega_bound: plan.omega_bound,
         axial_mass: (explicit == Some(BeamMethod::MassScaled)).then(|| system.axial_mass()),
         stretch_iterations: None,
-        critical_step: critical,
+        critical_step: plan.critical_step,
         newton_iterations: None,
         momenta: None,
     };
@@ -205,9 +182,8 @@ pub fn run_viewed(
             out.energy.push(e);
         }
     };
-    let mut newmark = explicit.is_none().then(|| Newmark::new(&system));
-    let start_totals = system.totals_for(explicit.unwrap_or(BeamMethod::Splitting));
-    record(&mut out, &system, 0.0, explicit.map(|_| start_totals.energy));
+    let start_totals = driver.totals();
+    record(&mut out, driver.system(), 0.0, start_totals.map(|t| t.energy));
     let mut done = 0u64;
     let (mut seconds, mut cpu_seconds) = (0.0, 0.0);
     while done < steps {
@@ -216,44 +192,30 @@ pub fn run_viewed(
         }
         let k = every.min(steps - done);
         let (clock, cpu) = (Instant::now(), thread_seconds());
-        for _ in 0..k {
-            let result = match (&mut newmark, explicit) {
-                (Some(nm), _) => nm.step(h).map(|_| ()),
-                (None, Some(m)) => system.step_with(m, h),
-                (None, None) => unreachable!("Newmark or explicit"),
-            };
-            result.map_err(|e| RunFailure::Numerical(e.to_string()))?;
-        }
+        driver.advance(k, h).map_err(|e| RunFailure::Numerical(e.to_string()))?;
         seconds += clock.elapsed().as_secs_f64();
         cpu_seconds += thread_seconds() - cpu;
         done += k;
         let t = done as f64 * h;
-        match &newmark {
-            Some(nm) => record(&mut out, nm.system(), t, None),
-            None => {
-                let energy = system.totals_for(explicit.unwrap_or(BeamMethod::Splitting)).energy;
-                if !energy.is_finite() {
-                    return Err(RunFailure::Numerical(format!(
-                        "the energy became non-finite by t = {t}: the step {h:e} is unstable for this structure"
-                    )));
-                }
-                record(&mut out, &system, t, Some(energy));
-            }
+        let energy = driver.totals().map(|totals| totals.energy);
+        if energy.is_some_and(|e| !e.is_finite()) {
+            return Err(RunFailure::Numerical(format!(
+                "the energy became non-finite by t = {t}: the step {h:e} is unstable for this structure"
+            )));
         }
+        record(&mut out, driver.system(), t, energy);
     }
     out.wall_seconds = seconds;
     out.cpu_seconds = cpu_seconds;
-    if let Some(nm) = &newmark {
-        out.newton_iterations = Some(nm.iterations);
-    } else {
+    out.newton_iterations = driver.newton_iterations();
+    if let (Some(start), Some(end)) = (start_totals, driver.totals()) {
         if explicit == Some(BeamMethod::MassScaled) {
-            out.stretch_iterations = Some(system.stretch_iterations() as f64 / steps.max(1) as f64);
+            out.stretch_iterations = Some(driver.system().stretch_iterations() as f64 / steps.max(1) as f64);
         }
-        let end = system.totals_for(explicit.unwrap_or(BeamMethod::Splitting));
         out.momenta = Some([
-            start_totals.linear_momentum.to_array(),
+            start.linear_momentum.to_array(),
             end.linear_momentum.to_array(),
-            start_totals.angular_momentum.to_array(),
+            start.angular_momentum.to_array(),
             end.angular_momentum.to_array(),
         ]);
     }

@@ -31,6 +31,29 @@ pub enum Rotation {
 }
 
 impl Rotation {
+    /// Both rotations.
+    pub const ALL: [Rotation; 2] = [Rotation::Midpoint, Rotation::Exact];
+
+    /// The name on the command line and in files.
+    pub fn key(self) -> &'static str {
+        match self {
+            Rotation::Midpoint => "midpoint",
+            Rotation::Exact => "exact",
+        }
+    }
+
+    /// One line on the many-body step with this rotation.
+    pub fn description(self) -> &'static str {
+        match self {
+            Rotation::Midpoint => {
+                "half impulses around the drift and the torque-free midpoint Lie rotation of liemid-ea (order 2)"
+            }
+            Rotation::Exact => {
+                "half impulses around the drift and the exact torque-free flow of liemid-ex (order 2, no Newton solve)"
+            }
+        }
+    }
+
     /// The library's rotation.
     pub fn free_rotation(self) -> FreeRotation {
         match self {
@@ -41,6 +64,18 @@ impl Rotation {
 }
 
 impl Model {
+    /// Every model.
+    pub const ALL: [Model; 3] = [Model::Independent, Model::TorqueFree, Model::Dipoles];
+
+    /// One line on what the model is.
+    pub fn description(self) -> &'static str {
+        match self {
+            Model::Independent => "fast Lagrangian tops in uniform gravity, each about its own pivot",
+            Model::TorqueFree => "torque-free asymmetric rotors",
+            Model::Dipoles => "a dipolar fluid: point dipoles with WCA repulsion in a periodic box",
+        }
+    }
+
     /// The name on the command line and in files.
     pub fn key(self) -> &'static str {
         match self {

@@ -8,7 +8,7 @@ use std::sync::Mutex;
 
 use serde_json::json;
 
-use crate::beam::scenario::{self, BeamIntegrator, BeamScenario};
+use crate::beam::scenario::{self, BeamScenario};
 use crate::beam::study::{self, RunFailure};
 use crate::shared::command::pool;
 use crate::shared::command::{emit_json, CmdResult, Failure};
@@ -109,7 +109,7 @@ fn load(args: &BeamArgs) -> Result<BeamScenario, Failure> {
     }
     .map_err(Failure::Input)?;
     if let Some(m) = &args.method {
-        sc.method = BeamIntegrator::parse(m).map_err(Failure::Input)?;
+        sc.method = scenario::integrator(m).map_err(Failure::Input)?;
     }
     if let Some(h) = args.step {
         sc.step = Some(h);

@@ -515,7 +515,7 @@ fn print_view_line(line: Option<String>, to_stderr: bool) {
 
 #[derive(Args, Debug)]
 pub struct MethodsArgs {
-    /// The spin-dynamics methods of `liemid spins` instead of the rigid-body ones.
+    /// Only the spin-dynamics methods of `liemid spins` (without it: every domain's).
     #[arg(long)]
     pub spins: bool,
     /// As JSON (with `--spins`).

@@ -36,6 +36,7 @@
 //! M. A. Crisfield, *Non-linear Finite Element Analysis of Solids and Structures*, vol. 2,
 //! Wiley (1997), chapter 17.
 
+pub mod driver;
 pub mod element;
 pub mod impulse;
 pub mod mass_scaling;
@@ -45,6 +46,7 @@ pub mod problems;
 pub mod stability;
 pub mod tangent;
 
+pub use driver::{BeamDriver, BeamIntegrator, StepPlan};
 pub use element::{ElementStiffness, EndForces};
 pub use model::{ElementSpec, Frame, History, NodalLoad, Section, Support};
 pub use newmark::{Newmark, Tangent};
@@ -379,6 +381,19 @@ impl BeamMethod {
         match self {
             BeamMethod::Splitting | BeamMethod::Impulse | BeamMethod::MassScaled => 2,
             BeamMethod::Splitting4 => 4,
+        }
+    }
+
+    /// One line on what the method is.
+    #[must_use]
+    pub fn description(self) -> &'static str {
+        match self {
+            BeamMethod::Splitting => "Verlet translations and LIEMID[EA] rotations of the nodes",
+            BeamMethod::Splitting4 => "the splitting composed by Suzuki's 5-stage scheme",
+            BeamMethod::Impulse => {
+                "impulse method: bending, torsion and loads at the step, the axial forces in Verlet substeps"
+            }
+            BeamMethod::MassScaled => "the splitting with selective mass scaling of the axial waves",
         }
     }
 

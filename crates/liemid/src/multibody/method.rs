@@ -48,6 +48,17 @@ impl MultibodyMethod {
         Self::ALL.into_iter().find(|m| m.key() == key)
     }
 
+    /// One line on what the method is.
+    #[must_use]
+    pub fn description(&self) -> &'static str {
+        match self {
+            Self::Liemid => "RATTLE with LIEMID[EA]'s rotation in maximal coordinates (joints, limits, dampers)",
+            Self::Liemid4 => "the RATTLE step composed by Suzuki's 5-stage scheme",
+            Self::Liemid6 => "the RATTLE step composed by Kahan-Li's 9-stage scheme",
+            Self::Liemid8 => "the RATTLE step composed by Kahan-Li's 17-stage scheme",
+        }
+    }
+
     /// The name (`MB-LIEMID`, `MB-LIEMID4`, ...).
     #[must_use]
     pub fn name(&self) -> &'static str {
