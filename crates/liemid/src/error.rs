@@ -230,3 +230,13 @@ impl core::fmt::Display for Num {
 
 /// Result type of the library.
 pub type Result<T, E = Error> = core::result::Result<T, E>;
+
+/// Reject a step size that is zero or not finite.
+#[inline]
+pub(crate) fn check_step(h: f64) -> Result<()> {
+    if h.is_finite() && h != 0.0 {
+        Ok(())
+    } else {
+        Err(Error::InvalidStep { h })
+    }
+}

@@ -18,9 +18,12 @@
 //! - [`vector`]: symplectic Euler, its adjoint, Verlet and explicit Newmark on `ℝⁿ`, with
 //!   test problems in [`vector::problems`].
 //!
-//! Shared foundations at the root: [`linalg`], [`so3`] (hat/vee, `exp`, `log`, Jacobians,
-//! Cayley, quaternions), [`composition`] (symmetric compositions up to eighth order of any
-//! symmetric method), [`random`] and [`error`].
+//! Shared foundations at the root: [`linalg`] (vectors, matrices, the symmetric 3x3 eigen
+//! solver), [`so3`] (hat/vee, `exp`, `log`, Jacobians, Cayley, quaternions, the series
+//! coefficients), [`inertia`] (the validated body tensor), [`midpoint`] (the midpoint solve
+//! every rotating domain's step is built on, and the map of a failed solve to an error),
+//! [`composition`] (symmetric compositions up to eighth order of any symmetric method),
+//! [`random`] and [`error`] (with the step check).
 //!
 //! ```
 //! use liemid::{rigid::problems, LieMidpointAlternating, RotationIntegrator};
@@ -40,8 +43,10 @@
 pub mod beam;
 pub mod composition;
 pub mod error;
+pub mod inertia;
 pub mod linalg;
 pub mod many;
+pub mod midpoint;
 pub use many::interactions;
 pub mod multibody;
 pub mod random;
@@ -53,11 +58,11 @@ pub mod vector;
 
 pub use composition::{Composition, Scheme};
 pub use error::{Error, Result};
+pub use inertia::{Inertia, InertiaOperator, PrincipalInertia};
 pub use linalg::{Mat3, Vec3};
 pub use rigid::adaptive::{AdaptiveRun, AdaptiveStats, ReversibleStepper, RigidAdaptive};
 pub use rigid::driver::{advance, integrate, integrate_to, observed_order, step_count, Run, RunSummary, MAX_STEPS};
 pub use rigid::free_flow::FreeFlow;
-pub use rigid::inertia::{Inertia, InertiaOperator, PrincipalInertia};
 pub use rigid::rotation::{
     AnyRotationIntegrator, AustinKrishnaprasadWang, KryslEndresNewmark, LieMidpointAlternating, LieMidpointE1,
     LieMidpointE2, LieMidpointExact, LieMidpointImplicit, MethodCache, RotationIntegrator, RotationMethod,

@@ -130,14 +130,16 @@ fn series11(t: f64, f: &[f64; 12]) -> f64 {
     p0 + t4 * (p1 + t4 * p2)
 }
 
-/// `1/(2k + n)!` for `k = 0..12`.
-const fn reciprocal_factorials(n: u32) -> [f64; 12] {
-    let mut out = [0.0; 12];
+/// `1/(2k + offset)!` for `k = 0..N`: the Taylor coefficients of `sin θ/θ`, `cos θ`,
+/// `(1 − cos θ)/θ²` and their kin, computed at compile time (each factorial a product in
+/// increasing order, then one division). The one copy for every series in the crate.
+pub(crate) const fn reciprocal_factorials<const N: usize>(offset: u32) -> [f64; N] {
+    let mut out = [0.0; N];
     let mut k = 0;
-    while k < 12 {
+    while k < N {
         let mut f = 1.0;
         let mut j = 2;
-        while j <= 2 * k as u32 + n {
+        while j <= 2 * k as u32 + offset {
             f *= j as f64;
             j += 1;
         }

@@ -46,7 +46,7 @@ use super::{BeamSystem, NodeRef};
 use crate::error::{Error, Result};
 use crate::linalg::Vec3;
 use crate::many::{self, Configuration};
-use crate::rigid::rotation::newton_error;
+use crate::midpoint::newton_error;
 
 /// The forces the impulse method keeps between steps.
 #[derive(Clone, Debug, Default)]

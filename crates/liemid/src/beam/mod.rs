@@ -56,9 +56,9 @@ use std::sync::Mutex;
 
 use crate::composition::Scheme;
 use crate::error::{Error, Result};
+use crate::linalg::symmetric_eigen;
 use crate::linalg::{Mat3, Vec3};
 use crate::many::{Bodies, Configuration, Interaction, Totals, CHUNK};
-use crate::rigid::free_flow::symmetric_eigen;
 use element::from_columns;
 
 /// Where a node's pose lives.

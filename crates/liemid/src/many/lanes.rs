@@ -3,7 +3,7 @@
 //! [`free_rotation_x4`] performs, for four bodies with diagonal inertia, what the many-body
 //! step does body by body: two half steps of `solve (M) → Ψ; R ← R exp(Ψ); Π ← exp(−Ψ) Π`.
 //! Every lane performs exactly the floating-point operations of the scalar path, in the
-//! same order ([`crate::rigid::midpoint::solve_increment`] on its diagonal path, with the
+//! same order ([`crate::midpoint::solve_increment`] on its diagonal path, with the
 //! increment's coefficients from [`crate::so3::Increment::from_half_angle`]), without
 //! contraction into FMA, so the results are the same bit for bit; a lane whose
 //! Newton iteration has converged is no longer updated. Only the common case runs in
@@ -28,7 +28,7 @@ use std::arch::x86_64::{
 use std::ops::{Add, Mul, Neg, Sub};
 
 use crate::linalg::{Mat3, Vec3};
-use crate::rigid::midpoint::{CONVERGED_ULPS, MAX_INCREMENT_ANGLE, STAGNATION_ULPS};
+use crate::midpoint::{CONVERGED_ULPS, MAX_INCREMENT_ANGLE, STAGNATION_ULPS};
 use crate::so3::{short_series, SERIES_ANGLE_SQUARED};
 
 /// Bodies per kernel call.
@@ -785,9 +785,9 @@ fn half_body(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::inertia::PrincipalInertia;
     use crate::many::free_rotation;
     use crate::random::Rng;
-    use crate::rigid::inertia::PrincipalInertia;
 
     /// Lanes and the scalar path agree bit for bit, and the lanes take the common case.
     #[test]

@@ -43,12 +43,12 @@ use std::sync::Mutex;
 
 use crate::composition::Scheme;
 use crate::error::{Error, Result};
+use crate::inertia::Inertia;
+use crate::inertia::PrincipalInertia;
 use crate::linalg::{Mat3, Vec3};
+use crate::midpoint;
+use crate::midpoint::newton_error;
 use crate::rigid::free_flow::FreeFlow;
-use crate::rigid::inertia::Inertia;
-use crate::rigid::inertia::PrincipalInertia;
-use crate::rigid::midpoint;
-use crate::rigid::rotation::newton_error;
 
 /// Bodies per parallel work item (fixed, so that results do not depend on the threads).
 pub const CHUNK: usize = 256;
@@ -349,7 +349,7 @@ fn lanes_available() -> bool {
 fn rotate_group(lanes: bool, inertia: &[PrincipalInertia], r: &mut [Mat3], pi: &mut [Vec3], hh: f64) -> bool {
     #[cfg(all(feature = "simd", target_arch = "x86_64"))]
     {
-        use crate::rigid::inertia::InertiaOperator;
+        use crate::inertia::InertiaOperator;
         let (Ok(group), Ok(r), Ok(pi)) = (
             <&[PrincipalInertia; GROUP]>::try_from(inertia),
             <&mut [Mat3; GROUP]>::try_from(r),

@@ -23,7 +23,7 @@
 use super::{for_each_chunk, free_rotation, keep_first_failure, kick_chunk, Bodies, Interaction};
 use crate::error::{Error, Result};
 use crate::linalg::Vec3;
-use crate::rigid::rotation::newton_error;
+use crate::midpoint::newton_error;
 use std::sync::Mutex;
 
 /// The Langevin thermostat's parameters.

@@ -126,7 +126,7 @@ pub struct Model {
 }
 
 use crate::error::{Error, Result};
-use crate::rigid::inertia::Inertia;
+use crate::inertia::Inertia;
 use crate::so3::{self, Quaternion};
 
 use super::MultibodyState;

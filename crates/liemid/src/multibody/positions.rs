@@ -30,10 +30,10 @@
 //! Numer. Meth. Engng 63 (2005) (LIEMID\[EA\]).
 
 use crate::error::{Error, Result};
+use crate::inertia::Inertia;
 use crate::linalg::{Mat3, Vec3};
-use crate::rigid::inertia::Inertia;
-use crate::rigid::midpoint::{self, NotConverged};
-use crate::rigid::rotation::newton_error;
+use crate::midpoint::newton_error;
+use crate::midpoint::{self, NotConverged};
 use crate::so3;
 
 use super::constraints::{add_impulse, for_each_rate, pose, JointRows};

@@ -162,7 +162,7 @@ impl Rattle {
     /// [`Error::InvalidModel`] when the tree rows become dependent or the state or this
     /// integrator does not fit the system; the state is unchanged on error.
     pub fn step(&mut self, system: &MultibodySystem, state: &mut MultibodyState, h: f64) -> Result<StepReport> {
-        crate::rigid::rotation::check_step(h)?;
+        crate::error::check_step(h)?;
         let w = &mut self.work;
         if state.c.len() != system.mass.len()
             || w.c_new.len() != system.mass.len()

@@ -7,8 +7,8 @@
 //! Reference: docs/theory/multibody.md §1 (state and model), §2 (joints).
 
 use crate::error::{Error, Result};
+use crate::inertia::Inertia;
 use crate::linalg::{Mat3, Vec3};
-use crate::rigid::inertia::Inertia;
 
 use super::constraints::{JointGeometry, JointParams};
 use super::model::{JointKind, Model};

@@ -10,6 +10,7 @@ use roxmltree::{Document, Node, ParsingOptions};
 
 use super::model::{Body, Joint, JointKind, Link, Model};
 use crate::error::{Error, Result};
+use crate::inertia::Inertia;
 use crate::linalg::{Mat3, Vec3};
 use crate::so3::Quaternion;
 
@@ -315,52 +316,18 @@ pub(crate) fn rotation_to_z(z: Vec3) -> Mat3 {
     quat_matrix([1.0 + c, v.x, v.y, v.z]).unwrap_or(Mat3::IDENTITY)
 }
 
-/// Eigenvalues of a symmetric 3x3 matrix, ascending (closed form, trigonometric).
-pub(crate) fn symmetric_eigenvalues(a: &Mat3) -> [f64; 3] {
-    let m = &a.m;
-    let p1 = m[0][1] * m[0][1] + m[0][2] * m[0][2] + m[1][2] * m[1][2];
-    let q = a.trace() / 3.0;
-    let mut e = if p1 == 0.0 {
-        [m[0][0], m[1][1], m[2][2]]
-    } else {
-        let p2 = (m[0][0] - q).powi(2) + (m[1][1] - q).powi(2) + (m[2][2] - q).powi(2) + 2.0 * p1;
-        let p = (p2 / 6.0).sqrt();
-        let b = (*a - Mat3::IDENTITY * q) * (1.0 / p);
-        let r = (b.determinant() / 2.0).clamp(-1.0, 1.0);
-        let phi = r.acos() / 3.0;
-        let e1 = q + 2.0 * p * phi.cos();
-        let e3 = q + 2.0 * p * (phi + 2.0 * std::f64::consts::PI / 3.0).cos();
-        [e1, 3.0 * q - e1 - e3, e3]
-    };
-    e.sort_by(f64::total_cmp);
-    e
-}
-
-/// Checks an inertia tensor about the centre of mass: finite, symmetric, positive
-/// definite, principal moments obeying `a + b ≥ c` to a relative `1e-12`.
+/// Checks an inertia tensor about the centre of mass as every body's tensor is checked
+/// ([`Inertia::from_matrix`]: finite, symmetric, positive definite, principal moments
+/// obeying the triangle inequality), with the reason as a message for the file's error.
 pub(crate) fn check_inertia(i: &Mat3) -> std::result::Result<(), String> {
     if !i.is_finite() {
         return Err("the inertia is not finite".into());
     }
-    let scale = i.max_abs();
-    for (r, c) in [(0, 1), (0, 2), (1, 2)] {
-        if (i.m[r][c] - i.m[c][r]).abs() > 1e-12 * scale {
-            return Err("the inertia tensor is not symmetric".into());
-        }
+    match Inertia::from_matrix(i.m) {
+        Ok(_) => Ok(()),
+        Err(Error::InvalidInertia { reason }) => Err(format!("the inertia tensor: {reason}")),
+        Err(e) => Err(e.to_string()),
     }
-    let [a, b, c] = symmetric_eigenvalues(i);
-    if a.is_nan() || a <= 1e-12 * scale || scale == 0.0 {
-        return Err(format!(
-            "the inertia tensor is not positive definite (principal moments {a:e}, {b:e}, {c:e})"
-        ));
-    }
-    if a + b < c * (1.0 - 1e-12) {
-        return Err(format!(
-            "the principal moments {a:e}, {b:e}, {c:e} break the triangle inequality ({a:e} + {b:e} < {c:e}): no \
-             rigid body has them"
-        ));
-    }
-    Ok(())
 }
 
 /// Mass, centre of mass and inertia about it, in some frame.

@@ -32,8 +32,8 @@
 //! J. Sci. Comput. 26(6) (2005) 1838–1851.
 
 use crate::error::{Error, Result};
+use crate::inertia::Inertia;
 use crate::linalg::Vec3;
-use crate::rigid::inertia::Inertia;
 use crate::rigid::rotation::{AnyRotationIntegrator, MethodCache, RotationIntegrator, RotationMethod};
 use crate::rigid::{RigidBodySystem, RigidState};
 use crate::vector::{MechanicalSystem, PhaseState, VectorIntegrator};

@@ -7,8 +7,8 @@
 //! `π = R Π` obeys `π' = R T`.
 
 use crate::error::{Error, Result};
+use crate::inertia::Inertia;
 use crate::linalg::{Mat3, Vec3};
-use crate::rigid::inertia::Inertia;
 use crate::so3;
 
 /// The state of a rotating rigid body: time, body angular momentum and attitude.

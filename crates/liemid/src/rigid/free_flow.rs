@@ -27,9 +27,10 @@
 //! B. C. Carlson, *Numerical computation of real or complex elliptic integrals*, Numer.
 //! Algorithms 10 (1995); M. Abramowitz, I. Stegun, *Handbook*, 16.4 (the AGM scheme).
 
-use crate::error::{Error, Result};
+use crate::error::Result;
+use crate::inertia::Inertia;
+use crate::linalg::symmetric_eigen;
 use crate::linalg::{Mat3, Vec3};
-use crate::rigid::inertia::Inertia;
 use crate::so3;
 
 /// The exact torque-free flow of one rigid body (its principal axes and moments).
@@ -408,55 +409,6 @@ fn jacobi_agm(u: f64, m: f64) -> (f64, f64, f64, f64) {
     // dn² = 1 − m sn² = cn² + (1 − m) sn²: a sum of positive terms, no cancellation.
     let dn = (co * co + (1.0 - m) * s * s).sqrt();
     (s, co, dn, phi)
-}
-
-/// Eigenvalues and eigenvectors (columns, a rotation) of a symmetric 3x3 matrix by cyclic
-/// Jacobi rotations.
-pub(crate) fn symmetric_eigen(m: &Mat3) -> Result<([f64; 3], Mat3)> {
-    let mut a = m.m;
-    let mut v = Mat3::IDENTITY.m;
-    for _sweep in 0..50 {
-        let off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
-        let scale = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2];
-        if off <= 1e-34 * scale {
-            let mut vectors = Mat3::from_rows(v);
-            let values = [a[0][0], a[1][1], a[2][2]];
-            if vectors.determinant() < 0.0 {
-                for row in &mut vectors.m {
-                    row[2] = -row[2];
-                }
-            }
-            return Ok((values, vectors));
-        }
-        for (p, q) in [(0, 1), (0, 2), (1, 2)] {
-            if a[p][q] == 0.0 {
-                continue;
-            }
-            let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
-            let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
-            let t = if theta == 0.0 { 1.0 } else { t };
-            let c = 1.0 / (t * t + 1.0).sqrt();
-            let s = t * c;
-            for row in &mut a {
-                let (x, y) = (row[p], row[q]);
-                row[p] = c * x - s * y;
-                row[q] = s * x + c * y;
-            }
-            let (row_p, row_q) = (a[p], a[q]);
-            for (k, (x, y)) in row_p.into_iter().zip(row_q).enumerate() {
-                a[p][k] = c * x - s * y;
-                a[q][k] = s * x + c * y;
-            }
-            for row in &mut v {
-                let (x, y) = (row[p], row[q]);
-                row[p] = c * x - s * y;
-                row[q] = s * x + c * y;
-            }
-        }
-    }
-    Err(Error::InvalidInertia {
-        reason: "the eigen decomposition did not converge".into(),
-    })
 }
 
 #[cfg(test)]

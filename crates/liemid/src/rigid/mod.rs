@@ -2,11 +2,11 @@
 //!
 //! **Model** ([`body`], re-exported here): the state `(t, Π, R)` ([`RigidState`]), the
 //! [`RigidBodySystem`] trait (inertia and torque model: [`HeavyTop`], [`FreeBody`],
-//! [`ConstantTorque`], [`TorqueFn`]) and the [`Diagnostics`] of a state; [`inertia`] holds
-//! the validated body tensor. Equations of motion in the body frame:
+//! [`ConstantTorque`], [`TorqueFn`]) and the [`Diagnostics`] of a state; the validated
+//! body tensor is the crate's [`crate::inertia`], shared with every rotating domain. Equations of motion in the body frame:
 //! `Π' = Π × Ω + T(R, t)`, `Ω = I⁻¹ Π`, `R' = R hat(Ω)`.
 //!
-//! **Methods**: [`midpoint`] solves the midpoint equation `(1/h) I Ψ = exp(−Ψ/2) P` that
+//! **Methods**: [`crate::midpoint`] (at the crate's root, shared) solves the midpoint equation `(1/h) I Ψ = exp(−Ψ/2) P` that
 //! every LIEMID step is built on; [`rotation`] holds one type per method (LIEMID\[E1\],
 //! \[E2\], \[EA\], \[I\], AKW, Simo-Wong, NMB, RK4, RKMK4, and LIEMID\[EX\]/\[FS\] on
 //! [`free_flow`], the exact torque-free flow), selected by name through
@@ -29,10 +29,11 @@ pub mod adaptive;
 pub mod body;
 pub mod driver;
 pub mod free_flow;
-pub mod inertia;
-pub mod midpoint;
 pub mod problems;
 pub mod rotation;
 pub mod satellite;
 
+/// The inertia tensor and the midpoint solve, foundations every rotating domain uses, as
+/// this module named them before they moved to the crate's root.
+pub use crate::{inertia, midpoint};
 pub use body::*;

@@ -1,8 +1,8 @@
 //! Named rigid-body problems (a body about a fixed point) with their initial states and
 //! default end times, shared by the tests, the benchmarks and the command-line tool.
 
+use crate::inertia::Inertia;
 use crate::linalg::{Mat3, Vec3};
-use crate::rigid::inertia::Inertia;
 use crate::rigid::{FreeBody, HeavyTop, RigidState};
 use crate::so3;
 

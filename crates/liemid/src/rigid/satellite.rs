@@ -29,13 +29,15 @@
 //! (2005) for the impulses.
 
 use crate::composition::Scheme;
+use crate::error::check_step;
 use crate::error::{Error, Result};
+use crate::inertia::Inertia;
 use crate::linalg::{Mat3, Vec3};
+use crate::midpoint;
+use crate::midpoint::newton_error;
 use crate::rigid::adaptive::ReversibleStepper;
 use crate::rigid::free_flow::FreeFlow;
-use crate::rigid::inertia::Inertia;
-use crate::rigid::midpoint;
-use crate::rigid::rotation::{check_step, newton_error, RotationMethod};
+use crate::rigid::rotation::RotationMethod;
 use crate::so3;
 
 /// The state of a satellite: time, orbit (position, velocity in the inertial frame) and

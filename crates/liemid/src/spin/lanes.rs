@@ -18,6 +18,7 @@
 use std::ops::{Add, Div, Mul, Sub};
 
 use crate::linalg::Vec3;
+use crate::so3::reciprocal_factorials;
 
 /// What a lane value needs: the four operations the flows use, and splatting constants.
 pub(crate) trait Lane: Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + From<f64> {}
@@ -156,27 +157,11 @@ fn sinc_cos_closed(t: f64) -> (f64, f64) {
     (s / theta, c)
 }
 
-/// `1/(2k+1)!` and `1/(2k)!`.
+/// `1/(2k+1)!` and `1/(2k)!` ([`crate::so3::reciprocal_factorials`]).
 const SINC: [f64; 10] = reciprocal_factorials::<10>(1);
 const COS: [f64; 11] = reciprocal_factorials::<11>(0);
 /// `1/(2k+2)!`.
 const VERSIN: [f64; 10] = reciprocal_factorials::<10>(2);
-
-const fn reciprocal_factorials<const N: usize>(offset: u32) -> [f64; N] {
-    let mut out = [0.0; N];
-    let mut k = 0;
-    while k < N {
-        let mut f = 1.0;
-        let mut j = 2;
-        while j <= 2 * k as u32 + offset {
-            f *= j as f64;
-            j += 1;
-        }
-        out[k] = 1.0 / f;
-        k += 1;
-    }
-    out
-}
 
 /// The exact flow of one bond over a time whose `rate · time` is `ch` (`rate = γJ/(μ_s
 /// μ_B)`): both spins turn about `L = S_i + S_j` by `θ = ch |L|`. Written with the half

@@ -66,9 +66,9 @@ mod rk4;
 mod spatial;
 
 use crate::error::{Error, Result};
+use crate::inertia::Inertia;
 use crate::linalg::{Mat3, Vec3};
 use crate::multibody::model::{JointKind, Link, Model};
-use crate::rigid::inertia::Inertia;
 use crate::so3::{hat, Quaternion};
 
 use spatial::{Xform, M6, SV, ZERO6, ZERO66};

@@ -6,7 +6,7 @@
 
 use super::{check_step, commit, newton_error, RotationIntegrator, TorqueCache};
 use crate::error::Result;
-use crate::rigid::midpoint::{NewtonStop, NotConverged, MAX_ITERATIONS};
+use crate::midpoint::{NewtonStop, NotConverged, MAX_ITERATIONS};
 use crate::rigid::{RigidBodySystem, RigidState};
 use crate::so3;
 

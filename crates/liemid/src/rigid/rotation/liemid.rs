@@ -2,7 +2,7 @@
 //! LIEMID\[EA\], and the implicit LIEMID\[I\].
 //!
 //! All four advance the attitude by `R_{n+1} = R_n exp(Ψ)` with `Ψ` from the midpoint
-//! equation `(1/h) I Ψ = exp(−Ψ/2) P` (see [`crate::rigid::midpoint`]); they differ in where the
+//! equation `(1/h) I Ψ = exp(−Ψ/2) P` (see [`crate::midpoint`]); they differ in where the
 //! torque impulse is applied.
 //!
 //! ## Reference
@@ -12,7 +12,7 @@
 use super::{check_step, commit, newton_error, RotationIntegrator, TorqueCache};
 use crate::error::Result;
 use crate::linalg::Vec3;
-use crate::rigid::midpoint;
+use crate::midpoint;
 use crate::rigid::{RigidBodySystem, RigidState};
 use crate::so3;
 
@@ -21,7 +21,7 @@ use crate::so3;
 #[inline(always)]
 fn midpoint_rotation(
     method: &'static str,
-    inertia: &crate::rigid::inertia::Inertia,
+    inertia: &crate::inertia::Inertia,
     p: Vec3,
     h: f64,
     (t, step): (f64, f64),

@@ -19,9 +19,10 @@ pub use rk4::{RungeKutta4Quaternion, RungeKuttaMuntheKaas4};
 pub use simo_wong::SimoWong;
 
 use crate::composition::{Composition, Scheme};
+pub(crate) use crate::error::check_step;
 use crate::error::{Error, Result};
 use crate::linalg::{Mat3, Vec3};
-use crate::rigid::midpoint::NotConverged;
+pub(crate) use crate::midpoint::newton_error;
 use crate::rigid::{RigidBodySystem, RigidState};
 
 /// A one-step method for [`RigidBodySystem`]s.
@@ -40,31 +41,6 @@ pub trait RotationIntegrator {
     /// Caches are keyed on the system, time and attitude, so this is needed only when a
     /// system's torque model is mutated between steps.
     fn reset(&mut self) {}
-}
-
-/// Reject a step size that is zero or not finite.
-#[inline]
-pub(crate) fn check_step(h: f64) -> Result<()> {
-    if h.is_finite() && h != 0.0 {
-        Ok(())
-    } else {
-        Err(Error::InvalidStep { h })
-    }
-}
-
-/// Map a failed Newton solve to the library's error.
-pub(crate) fn newton_error(method: &'static str, equation: &'static str, t: f64, h: f64, e: NotConverged) -> Error {
-    match e {
-        NotConverged::Iterations { residual, iterations } => Error::NewtonDidNotConverge {
-            method,
-            equation,
-            t,
-            h,
-            residual,
-            iterations,
-        },
-        NotConverged::IncrementTooLarge { angle } => Error::StepTooLarge { method, t, h, angle },
-    }
 }
 
 /// Reject a step whose result is not finite, leaving the state unchanged.

@@ -7,7 +7,7 @@
 use super::{check_step, commit, newton_error, RotationIntegrator};
 use crate::error::Result;
 use crate::linalg::{Mat3, Vec3};
-use crate::rigid::midpoint::{NewtonStop, NotConverged, MAX_INCREMENT_ANGLE, MAX_ITERATIONS};
+use crate::midpoint::{NewtonStop, NotConverged, MAX_INCREMENT_ANGLE, MAX_ITERATIONS};
 use crate::rigid::{RigidBodySystem, RigidState};
 use crate::so3;
 

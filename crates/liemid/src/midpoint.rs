@@ -12,8 +12,9 @@
 //! quadratically in 2 to 4 iterations; the iteration stops when the Newton correction is
 //! a few ulps of `|Ψ|`.
 
+use crate::error::Error;
+use crate::inertia::{Inertia, InertiaOperator};
 use crate::linalg::{Mat3, Vec3};
-use crate::rigid::inertia::{Inertia, InertiaOperator};
 use crate::so3;
 
 /// Iteration cap of the Newton solvers.
@@ -368,6 +369,21 @@ fn diagonal_newton_terms(d: Vec3, p: Vec3, h: f64, psi: Vec3) -> (Vec3, Mat3, [f
         ],
     ]);
     (g, j, [t2, a, b, c])
+}
+
+/// Map a failed Newton solve to the library's error.
+pub(crate) fn newton_error(method: &'static str, equation: &'static str, t: f64, h: f64, e: NotConverged) -> Error {
+    match e {
+        NotConverged::Iterations { residual, iterations } => Error::NewtonDidNotConverge {
+            method,
+            equation,
+            t,
+            h,
+            residual,
+            iterations,
+        },
+        NotConverged::IncrementTooLarge { angle } => Error::StepTooLarge { method, t, h, angle },
+    }
 }
 
 #[cfg(test)]

@@ -2,8 +2,7 @@
 
 use liemid::beam::{problems, BeamMethod, BeamSystem};
 
-#[path = "common/beam_runs.rs"]
-mod beam_runs;
+use crate::beam_runs;
 use beam_runs::advance;
 
 /// The right-angle cantilever swinging after its load (t = 2).

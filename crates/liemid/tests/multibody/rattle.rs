@@ -9,12 +9,8 @@ use liemid::multibody::{JointKind, Link, Model, MultibodyMethod, MultibodyState,
 use liemid::random::Rng;
 use liemid::{so3, Error, LieMidpointAlternating, RotationIntegrator};
 
-#[path = "common/thread_counting.rs"]
-mod thread_counting;
+use crate::thread_counting;
 use thread_counting::allocations;
-
-#[global_allocator]
-static GLOBAL: thread_counting::Counting = thread_counting::Counting;
 
 fn system(model: &Model, method: MultibodyMethod) -> (Simulation, MultibodyState) {
     (Simulation::new(model, method).unwrap(), model.initial_state().unwrap())
@@ -512,7 +508,7 @@ fn steps_allocate_nothing() {
 }
 
 // ---------------------------------------------------------------------------------------
-// Measurements (not assertions): cargo test --test multibody measurements -- --ignored --nocapture
+// Measurements (not assertions): cargo test --test multibody rattle::measurements -- --ignored --nocapture
 
 #[test]
 #[ignore = "timing and growth measurements, printed"]

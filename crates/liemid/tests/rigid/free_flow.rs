@@ -1,7 +1,6 @@
 //! The exact torque-free flow: against an eighth-order reference on every branch, its
 //! invariants to round-off, reversibility, and exactness at any step.
 
-mod common;
 
 use liemid::{integrate_to, so3, FreeBody, FreeFlow, Inertia, Mat3, RigidBodySystem, RigidState, RotationMethod, Vec3};
 

@@ -170,7 +170,7 @@ fn torsional_frequency_of_the_cantilever_matches_the_shaft_formula() {
 
 /// The published curves (digitised), `(node, t, u_z)`.
 fn published() -> Vec<(String, f64, f64)> {
-    let data = include_str!("data/simo_vu_quoc_1988_right_angle.csv");
+    let data = include_str!("../data/simo_vu_quoc_1988_right_angle.csv");
     data.lines()
         .filter(|l| !l.starts_with('#') && !l.starts_with("node"))
         .map(|l| {
@@ -300,8 +300,7 @@ fn flying_beam_keeps_momenta_to_round_off_and_energy_without_drift() {
     assert!(last < 2.0 * first && last < 1e-3, "energy {first:e} then {last:e}");
 }
 
-#[path = "common/beam_runs.rs"]
-mod beam_runs;
+use crate::beam_runs;
 use beam_runs::advance;
 
 #[test]

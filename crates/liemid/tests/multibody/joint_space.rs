@@ -9,12 +9,8 @@ use liemid::random::Rng;
 use liemid::{so3, Mat3, Vec3};
 
 /// Counts this thread's allocations (tests run on separate threads).
-#[path = "common/thread_counting.rs"]
-mod thread_counting;
+use crate::thread_counting;
 use thread_counting::allocations;
-
-#[global_allocator]
-static GLOBAL: thread_counting::Counting = thread_counting::Counting;
 
 /// A physical full inertia tensor: principal moments obeying the triangle inequality,
 /// turned by a random rotation.

@@ -3,8 +3,7 @@
 //! name the included file and its line; cycles, files included twice, missing files, deep
 //! chains and a wrong root are refused.
 
-#[path = "common/model_files.rs"]
-mod model_files;
+use crate::model_files;
 use model_files::refused;
 use std::path::{Path, PathBuf};
 

@@ -1,7 +1,7 @@
 //! Observed orders of accuracy from step-halving sequences against tight references, and
 //! the paper's fast-top comparison (docs/theory/rigid.md §8).
 
-mod common;
+use crate::common;
 
 use common::{errors, halvings, observed_order, reference, run, shipped_fast_top_reference};
 use liemid::{rigid::problems, RotationMethod};

@@ -2,8 +2,7 @@
 //! with a `connect` moves as the built-in four-bar closed by a hinge; anchors and relative
 //! poses by hand; the projection of a start that does not close its loop; refusals.
 
-#[path = "common/model_files.rs"]
-mod model_files;
+use crate::model_files;
 use model_files::refused;
 use std::path::PathBuf;
 

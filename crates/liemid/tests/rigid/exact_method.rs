@@ -1,7 +1,7 @@
 //! LIEMID[EX], LIEMID[FS] and their compositions: the paper's numbers on the fast top, invariants,
 //! symmetry, one torque evaluation per step, and exactness torque-free at any step.
 
-mod common;
+use crate::common;
 
 use common::{errors, run, shipped_fast_top_reference};
 use liemid::{

@@ -1,8 +1,7 @@
 //! The MJCF and URDF loaders on the example files (hand-computed masses, inertias, poses,
 //! default classes, degrees, geom-derived masses) and on every refusal.
 
-#[path = "common/model_files.rs"]
-mod model_files;
+use crate::model_files;
 use model_files::refused;
 use std::path::PathBuf;
 use std::time::Instant;

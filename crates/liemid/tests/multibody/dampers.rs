@@ -10,12 +10,8 @@ use liemid::multibody::joint_space::JointSpaceModel;
 use liemid::multibody::{mjcf, problems, Model, MultibodyMethod, Simulation};
 use liemid::Vec3;
 
-#[path = "common/thread_counting.rs"]
-mod thread_counting;
+use crate::thread_counting;
 use thread_counting::allocations;
-
-#[global_allocator]
-static GLOBAL: thread_counting::Counting = thread_counting::Counting;
 
 /// A wheel on a hinge to the world about its principal axis z (I_zz = 0.2 kg m²), centre
 /// of mass on the axis, no gravity, spinning at 3 rad/s, with damping `d`.

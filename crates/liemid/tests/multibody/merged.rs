@@ -4,8 +4,7 @@
 //! universal and of a three-hinge pendulum against the joint-space reference (RK4 at a
 //! small step); constraints at round-off; order 2 of `liemid`; each refusal.
 
-#[path = "common/model_files.rs"]
-mod model_files;
+use crate::model_files;
 use liemid::linalg::{Mat3, Vec3};
 use liemid::multibody::constraints::{JointGeometry, JointRows, Row};
 use liemid::multibody::joint_space::JointSpaceModel;

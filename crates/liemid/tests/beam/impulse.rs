@@ -3,8 +3,7 @@
 use liemid::beam::{element, impulse, problems, tangent, BeamMethod, ElementStiffness, Newmark, Tangent};
 use liemid::{so3, Mat3, Vec3};
 
-#[path = "common/beam_runs.rs"]
-mod beam_runs;
+use crate::beam_runs;
 use beam_runs::advance;
 
 #[test]

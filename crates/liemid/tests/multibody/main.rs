@@ -1,0 +1,19 @@
+//! The multibody domain (one test binary): the RATTLE step (`rattle`), ball springs, dampers,
+//! equality constraints, the model files, `<include>`, the joint-space reference and merged hinges.
+
+#[path = "../common/model_files.rs"]
+mod model_files;
+#[path = "../common/thread_counting.rs"]
+mod thread_counting;
+
+#[global_allocator]
+static GLOBAL: thread_counting::Counting = thread_counting::Counting;
+
+mod ball_spring;
+mod dampers;
+mod equality;
+mod files;
+mod include;
+mod joint_space;
+mod merged;
+mod rattle;

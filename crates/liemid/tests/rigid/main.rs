@@ -1,0 +1,12 @@
+//! The rigid body about a fixed point (one test binary): adaptive steps, convergence orders, the
+//! exact method, the free flow, invariants and structural claims.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod adaptive;
+mod convergence;
+mod exact_method;
+mod free_flow;
+mod invariants;
+mod structure;
