@@ -1,7 +1,6 @@
 //! The exact torque-free flow: against an eighth-order reference on every branch, its
 //! invariants to round-off, reversibility, and exactness at any step.
 
-
 use liemid::{integrate_to, so3, FreeBody, FreeFlow, Inertia, Mat3, RigidBodySystem, RigidState, RotationMethod, Vec3};
 
 /// LIEMID[EA]8 at `h`: error `O(h⁸)`, about 1e-15 here.

@@ -1,7 +1,6 @@
 //! Invariants: what each method keeps to round-off, and the bounded energy error of the
 //! symplectic EA over long runs.
 
-
 use liemid::{integrate, integrate_to, rigid::problems, RotationIntegrator, RotationMethod};
 
 const MIDPOINT_FAMILY: [RotationMethod; 4] = [

@@ -1,7 +1,6 @@
 //! Structural claims: adjointness, time reversibility, E1 = E2 torque-free, one torque
 //! evaluation per step, and clear errors on bad input.
 
-
 use liemid::{
     integrate, integrate_to, rigid::problems, CountingTorque, Error, Inertia, LieMidpointAlternating, LieMidpointE1,
     LieMidpointE2, RigidState, RotationIntegrator, RotationMethod, Vec3,

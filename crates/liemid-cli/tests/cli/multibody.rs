@@ -3,7 +3,7 @@
 //! reference (RK4 and DOP853) against the maximal-coordinate composition, the example
 //! models, the `--view` page, and refusals (exit 2, one line, nothing written).
 
-mod common;
+use crate::common;
 use common::{examples, json, run_in, scratch, stderr, stdout};
 use std::path::Path;
 

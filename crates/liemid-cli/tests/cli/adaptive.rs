@@ -2,7 +2,7 @@
 //! landing on t_end, the eccentric satellite's orbit and attitude, and the refusals (exit 2,
 //! one line).
 
-mod common;
+use crate::common;
 use common::{json, run_in, scratch, stderr, stdout};
 
 #[test]

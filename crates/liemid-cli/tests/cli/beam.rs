@@ -1,7 +1,7 @@
 //! `liemid beam` end to end: the JSON contract, files, the example against the built-in
 //! problem, errors.
 
-mod common;
+use crate::common;
 use common::{examples, json, run_in, scratch, stderr, stdout};
 
 fn write(dir: &std::path::Path, name: &str, text: &str) -> std::path::PathBuf {

@@ -2,7 +2,7 @@
 //! frames, written without changing any other output; a wrong path is refused before the
 //! run (exit 2, one line).
 
-mod common;
+use crate::common;
 #[allow(unused_imports)]
 use common::{examples, run_in, scratch, stderr, stdout};
 use std::path::Path;

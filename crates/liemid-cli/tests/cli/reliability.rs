@@ -2,7 +2,7 @@
 //! checkpoint-and-resume guarantee: a run interrupted by SIGINT at a random step and
 //! resumed ends in the same state, with the same trajectory, bit for bit.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::process::{Command, Stdio};

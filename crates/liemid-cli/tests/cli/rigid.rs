@@ -1,6 +1,6 @@
 //! End-to-end tests of the `liemid` binary.
 
-mod common;
+use crate::common;
 
 use common::*;
 

@@ -1,7 +1,7 @@
 //! `liemid many --cutoff-form`: LAMMPS's shifted-force dipole potential from the command
 //! line and from a scenario, and its input errors.
 
-mod common;
+use crate::common;
 use common::{json, run_in, scratch, stderr, stdout};
 
 #[test]

@@ -4,7 +4,7 @@
 //! the motors are listed as not simulated; and a body whose joints cannot be merged is
 //! refused with exit 2 in one line naming the body and its joints.
 
-mod common;
+use crate::common;
 use common::{examples, json, run_in, scratch, stderr, stdout};
 
 fn xpos(s: &serde_json::Value) -> Vec<f64> {
