@@ -44,7 +44,7 @@ use super::constraints::JointRows;
 
 /// The factor data of one body and its own (tree) joint, contiguous for locality.
 #[derive(Clone, Copy, Debug)]
-struct Link {
+struct BodyFactor {
     /// `D_b` (lower triangle), then its Cholesky factor `L_b` in place, then `L_b⁻¹`.
     l: Blk,
     /// `1 / (L_b)_kk`.
@@ -61,7 +61,7 @@ struct Link {
     s: usize,
 }
 
-const ZERO_LINK: Link = Link {
+const ZERO_FACTOR: BodyFactor = BodyFactor {
     l: [[0.0; 6]; 6],
     il: [0.0; 6],
     yb: [[0.0; 6]; 6],
@@ -78,7 +78,7 @@ const ZERO_LINK: Link = Link {
 #[derive(Clone, Debug)]
 pub(super) struct SymmetricTree {
     parent: Vec<Option<usize>>,
-    links: Vec<Link>,
+    factors: Vec<BodyFactor>,
 }
 
 #[inline(always)]
@@ -184,13 +184,13 @@ impl SymmetricTree {
     pub(super) fn new(parents: &[Option<usize>]) -> Self {
         SymmetricTree {
             parent: parents.to_vec(),
-            links: vec![ZERO_LINK; parents.len()],
+            factors: vec![ZERO_FACTOR; parents.len()],
         }
     }
 
     /// Factor with `rows[b]` the rows of tree joint `b` (its child is body `b`).
     pub(super) fn factor(&mut self, mass: &[f64], inertia: &[Mat3], rows: &[JointRows]) -> Result<(), SingularPivot> {
-        for (b, link) in self.links.iter_mut().enumerate() {
+        for (b, link) in self.factors.iter_mut().enumerate() {
             let l = &mut link.l;
             *l = [[0.0; 6]; 6];
             for k in 0..3 {
@@ -200,11 +200,11 @@ impl SymmetricTree {
                 }
             }
         }
-        for b in (0..self.links.len()).rev() {
+        for b in (0..self.factors.len()).rev() {
             let s = rows[b].n;
             let result = match s {
                 0 => self.body(b).map(|()| {
-                    let link = &mut self.links[b];
+                    let link = &mut self.factors[b];
                     invert_lower::<6>(&mut link.l, &link.il);
                 }),
                 1 => self.link::<1>(b, &rows[b]),
@@ -220,7 +220,7 @@ impl SymmetricTree {
     }
 
     fn body(&mut self, b: usize) -> Result<(), SingularPivot> {
-        let link = &mut self.links[b];
+        let link = &mut self.factors[b];
         link.s = 0;
         cholesky::<6>(&mut link.l, &mut link.il).map_err(|ratio| SingularPivot {
             joint: None,
@@ -233,7 +233,7 @@ impl SymmetricTree {
     fn link<const S: usize>(&mut self, b: usize, rows: &JointRows) -> Result<(), SingularPivot> {
         self.body(b)?;
         let parent = self.parent[b];
-        let link = &mut self.links[b];
+        let link = &mut self.factors[b];
         link.s = S;
         for k in 0..S {
             let mut col = child_part(&rows.grad[k]);
@@ -267,7 +267,7 @@ impl SymmetricTree {
         invert_lower::<6>(&mut link.l, &link.il);
         invert_lower::<S>(&mut link.lj, &link.ilj);
         let yj = link.yj;
-        let d = &mut self.links[p].l;
+        let d = &mut self.factors[p].l;
         for r in 0..6 {
             for c in 0..=r {
                 let mut acc = 0.0;
@@ -284,8 +284,8 @@ impl SymmetricTree {
     /// the joint parts (rows); on return the body parts hold `x` and the joint parts `λ = −ν`
     /// (the sign convention of the general solver's unknowns).
     pub(super) fn solve(&self, z: &mut [V6], body_node: &[usize], joint_node: &[Option<usize>]) {
-        for b in (0..self.links.len()).rev() {
-            let link = &self.links[b];
+        for b in (0..self.factors.len()).rev() {
+            let link = &self.factors[b];
             match link.s {
                 0 => apply_lower::<6>(&link.l, &mut z[body_node[b]]),
                 1 => self.forward_link::<1>(b, z, body_node, joint_node),
@@ -296,8 +296,8 @@ impl SymmetricTree {
                 _ => self.forward_link::<6>(b, z, body_node, joint_node),
             }
         }
-        for b in 0..self.links.len() {
-            let link = &self.links[b];
+        for b in 0..self.factors.len() {
+            let link = &self.factors[b];
             match link.s {
                 0 => apply_lower_t::<6>(&link.l, &mut z[body_node[b]]),
                 1 => self.backward_link::<1>(b, z, body_node, joint_node),
@@ -312,7 +312,7 @@ impl SymmetricTree {
 
     #[inline(always)]
     fn forward_link<const S: usize>(&self, b: usize, z: &mut [V6], body_node: &[usize], joint_node: &[Option<usize>]) {
-        let link = &self.links[b];
+        let link = &self.factors[b];
         let bn = body_node[b];
         let jn = joint_node[b].unwrap_or(bn);
         let mut u = z[bn];
@@ -334,7 +334,7 @@ impl SymmetricTree {
 
     #[inline(always)]
     fn backward_link<const S: usize>(&self, b: usize, z: &mut [V6], body_node: &[usize], joint_node: &[Option<usize>]) {
-        let link = &self.links[b];
+        let link = &self.factors[b];
         let bn = body_node[b];
         let jn = joint_node[b].unwrap_or(bn);
         let mut w = z[jn];
