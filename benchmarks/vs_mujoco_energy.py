@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""chain-10's energy over long runs: liemid (symplectic, RATTLE with EA's rotation) against
+"""chain-10's energy over long runs: liemid (time-reversible RATTLE with EA's rotation) against
 MuJoCo 4.0's RK4 at equal CPU, and the issue's "tenths" criterion.
 
 Model: benchmarks/models/chain_10.xml (written by vs_mujoco.py from liemid's built-in

@@ -6,7 +6,7 @@ handed to both codes. One thread each (OMP_NUM_THREADS=1, liemid --threads 1).
 Two error measures at t_end = 10 ps, both computed here from the final spins of each run,
 in double precision, by the same code for both programs:
 
-- energy error: |E(t_end) - E(0)| / |E(0)| (the conservation a symplectic method is good at);
+- energy error: |E(t_end) - E(0)| / |E(0)| (the conservation a symplectic or reversible method is good at);
 - trajectory error: max over sites i of |S_i(t_end) - S_ref,i(t_end)| (Euclidean norm),
   what magnon spectra, correlation functions and switching times depend on. The reference
   is a fine-step run of the most accurate method of either code (liemid's eighth-order

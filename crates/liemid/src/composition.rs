@@ -2,8 +2,8 @@
 //! `Ψ_h = Φ_{γ_s h} ∘ … ∘ Φ_{γ_1 h}` with palindromic `γ` (`γ_i = γ_{s+1−i}`) summing to 1.
 //!
 //! Composing a symmetric method of order 2 (LIEMID\[EA\], Verlet) raises the order while
-//! keeping what the base method keeps: symplecticity, time reversibility and the momentum
-//! invariants, since each stage keeps them. Each stage of EA reuses the previous stage's end
+//! keeping what the base method keeps (symplecticity where the base has it, time
+//! reversibility, the momentum invariants), since each stage keeps them. Each stage of EA reuses the previous stage's end
 //! torque, so a composition of `s` stages costs `s` torque evaluations per step.
 //!
 //! ## Reference

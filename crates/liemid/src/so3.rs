@@ -277,6 +277,14 @@ impl Increment {
         }
     }
 
+    /// The increment `exp(Ψ)` from its Rodrigues coefficients `a = sin θ/θ`,
+    /// `b = (1 − cos θ)/θ²` computed elsewhere (the variational solve's, moved to its root).
+    #[must_use]
+    #[inline]
+    pub(crate) fn from_coefficients(psi: Vec3, a: f64, b: f64) -> Self {
+        Increment { psi, a, b }
+    }
+
     /// The rotation vector `Ψ`.
     #[must_use]
     #[inline]

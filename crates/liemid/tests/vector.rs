@@ -280,3 +280,65 @@ fn verlet_compositions_reach_their_orders() {
         );
     }
 }
+
+/// The canonical symplecticity defect `max |Jᵀ Ω J − Ω|` of one step of `make()` on the
+/// Kepler problem (phase space `(u, p)` of dimension 4), `J` by central differences
+/// extrapolated once (resolution about 1e-10).
+fn symplecticity_defect<M: VectorIntegrator>(make: impl Fn() -> M, h: f64) -> f64 {
+    let kepler = Kepler::default();
+    let x0 = Kepler::initial(0.5);
+    let flat = |s: &PhaseState| [s.u[0], s.u[1], s.p[0], s.p[1]];
+    let image = |x: [f64; 4]| {
+        let mut s = PhaseState::new(0.0, vec![x[2], x[3]], vec![x[0], x[1]]).unwrap();
+        make().step(&kepler, &mut s, h).unwrap();
+        flat(&s)
+    };
+    let x = flat(&x0);
+    let central = |e: f64, k: usize| {
+        let (mut plus, mut minus) = (x, x);
+        plus[k] += e;
+        minus[k] -= e;
+        let (a, b) = (image(plus), image(minus));
+        [0, 1, 2, 3].map(|r| (a[r] - b[r]) * (0.5 / e))
+    };
+    // Columns of J.
+    let j: Vec<[f64; 4]> = (0..4)
+        .map(|k| {
+            let (coarse, fine) = (central(2e-3, k), central(1e-3, k));
+            [0, 1, 2, 3].map(|r| (4.0 * fine[r] - coarse[r]) / 3.0)
+        })
+        .collect();
+    // ω(a, b) = a_u · b_p − a_p · b_u.
+    let omega = |a: &[f64; 4], b: &[f64; 4]| a[0] * b[2] + a[1] * b[3] - a[2] * b[0] - a[3] * b[1];
+    let mut worst: f64 = 0.0;
+    for a in 0..4 {
+        for b in 0..4 {
+            let unit = |k: usize| [0, 1, 2, 3].map(|r| if r == k { 1.0 } else { 0.0 });
+            worst = worst.max((omega(&j[a], &j[b]) - omega(&unit(a), &unit(b))).abs());
+        }
+    }
+    worst
+}
+
+#[test]
+fn the_impulse_methods_are_symplectic_and_newmark_only_at_gamma_one_half() {
+    for h in [0.1, 0.05] {
+        let d = [
+            ("symplectic Euler", symplecticity_defect(SymplecticEuler::default, h)),
+            ("its adjoint", symplecticity_defect(SymplecticEulerAdjoint::default, h)),
+            ("Verlet", symplecticity_defect(Verlet::default, h)),
+            (
+                "Newmark γ = 1/2",
+                symplecticity_defect(|| ExplicitNewmark::new(0.5).unwrap(), h),
+            ),
+        ];
+        for (name, defect) in d {
+            println!("h = {h}: {name} defect {defect:.2e}");
+            assert!(defect < 1e-9, "{name} at h = {h}: {defect:e}");
+        }
+        // γ ≠ ½ damps (γ > ½) or excites: not symplectic, and the test sees it.
+        let newmark = symplecticity_defect(|| ExplicitNewmark::new(0.6).unwrap(), h);
+        println!("h = {h}: Newmark γ = 0.6 defect {newmark:.2e}");
+        assert!(newmark > 1e-4, "Newmark γ = 0.6 at h = {h}: {newmark:e}");
+    }
+}

@@ -103,6 +103,11 @@ fn look(label: &str) -> Look {
     };
     match family {
         "LIEMID[EA]" => base(BLUE, false),
+        // Dashed blue: the variational drift beside EA's midpoint one.
+        "LIEMID[EAV]" => Look {
+            dashed: true,
+            ..base(BLUE, false)
+        },
         "LIEMID[EX]" => base(RED, false),
         // Dashed: on a symmetric body FS is EX, and the red shows between the dashes.
         "LIEMID[FS]" => Look {

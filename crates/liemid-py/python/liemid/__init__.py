@@ -1,9 +1,10 @@
 """liemid: structure-preserving time integration of rigid-body rotation.
 
 The explicit midpoint Lie family of P. Krysl (LIEMID[E1], LIEMID[E2] and their
-alternating, second-order, symplectic, momentum-conserving composition LIEMID[EA], one
-torque evaluation per step), the paper's comparison line-up (LIEMID[I], AKW, Simo-Wong,
-NMB), RK4 and high-order compositions of EA, with numpy in and out.
+alternating, second-order, time-reversible, momentum-conserving composition LIEMID[EA],
+one torque evaluation per step; LIEMID[EAV], its Lie–Poisson variant on the variational
+torque-free step), the paper's comparison line-up (LIEMID[I], AKW, Simo-Wong, NMB), RK4
+and high-order compositions, with numpy in and out.
 
 >>> import liemid
 >>> top = liemid.problems.fast_top()

@@ -353,7 +353,8 @@ def integrate(
     impulses (Krysl 2005): per step, ``P = Π + (h/2) T``; solve ``(2/h) I Ψ₁ =
     exp(−Ψ₁/2) P`` and set ``R½ = R exp(Ψ₁)``, ``Π½ = exp(−Ψ₁) P``; solve again for
     ``Ψ₂``, ``R⁺ = R½ exp(Ψ₂)``, ``Π⁺ = exp(−Ψ₂) Π½ + (h/2) T(R⁺)``. Second order,
-    symplectic, time-reversible; keeps ``|Π|`` and ``π`` torque-free and ``π·g`` under
+    time-reversible (not symplectic: a Lie–Poisson defect of O(h³) per step; the
+    variational ``liemid-eav`` is Lie–Poisson); keeps ``|Π|`` and ``π`` torque-free and ``π·g`` under
     gravity to round-off; the energy error stays bounded; one torque evaluation per
     step. See ``liemid.methods()`` for the others.
 

@@ -1,7 +1,7 @@
 """Flexible 3-D beams (``liemid beam``): corotational elements whose nodes are rigid bodies.
 
 Translations by Verlet, nodal rotations by the explicit midpoint Lie splitting (``"liemid"``,
-order 2, symplectic, momenta kept for a free structure; ``"liemid4"``, order 4;
+order 2, time-reversible, momenta kept for a free structure; ``"liemid4"``, order 4;
 ``"liemid-mts"``, axial forces in substeps; ``"liemid-sms"``, selective mass scaling of the
 axial waves for a 5.7x larger step on the right-angle cantilever), or the
 implicit Newmark baseline (``"newmark"``), on a built-in benchmark or a structure file

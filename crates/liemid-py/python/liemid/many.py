@@ -5,7 +5,7 @@ the paper's pieces, one force and torque evaluation per step,
     (Π, R) ← torque-free midpoint Lie rotation over h (two half-step solves, as EA);
     F, T ← forces and torques at the new configuration;   p, Π ← same half impulses,
 
-symplectic and time-reversible, keeping total linear and angular momentum of
+time-reversible, keeping total linear and angular momentum of
 translation- and rotation-invariant interactions to round-off; bit-identical for any
 thread count. For one body it is LIEMID[EA].
 """

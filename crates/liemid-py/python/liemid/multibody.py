@@ -3,7 +3,7 @@ universal, hinge, slide, weld and free joints, read from the MJCF and URDF files
 already have (two or three hinges of one MJCF body merged into a universal or ball joint).
 
 The bodies move in maximal coordinates by RATTLE with EA's rotation (``"liemid"``, order 2,
-symplectic, constraints kept to round-off at every step, momenta kept for a free system)
+time-reversible, constraints kept to round-off at every step, momenta kept for a free system)
 or its symmetric compositions (``"liemid4"``, ``"liemid6"``, ``"liemid8"``); ``"rk4"`` is
 classical RK4 in joint coordinates (the articulated-body algorithm), for comparison.
 

@@ -25,8 +25,8 @@
 //! ```
 //!
 //! `T_rot` acts on `(R, Π)` and `T_trans + V_a` on `(x, p)`, so the two inner flows commute
-//! and the inner map is their product. Every piece is a symplectic, symmetric map, so the
-//! step is symplectic and time reversible, of order 2, and keeps the total momenta of a free
+//! and the inner map is their product. Every piece is a symmetric map, so the step is time
+//! reversible, of order 2 (not symplectic: the rotation is EA's midpoint drift, docs/theory/rigid.md §9), and keeps the total momenta of a free
 //! structure (the axial forces are pairwise and central). It costs one bending evaluation
 //! per outer step (the element's corotational kernel without the axial term) and `m` axial
 //! evaluations (one chord length per element). It is stable for

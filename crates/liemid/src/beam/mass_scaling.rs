@@ -42,8 +42,8 @@
 //! is below 1e-13 of the element lengths: three iterations per step on the right-angle
 //! cantilever. (Stopping one iteration earlier by Hairer and Wanner's contraction
 //! estimate, θ/(1 − θ)|δμ| below the tolerance, was tried: a step forward and back then
-//! missed the start by 1e-9 instead of 2e-12.) The step is a symmetric composition of symplectic maps: symplectic, time
-//! reversible (to the solve's tolerance), order 2; `L_d` is invariant under rigid motions,
+//! missed the start by 1e-9 instead of 2e-12.) The step is a symmetric composition: time reversible (to the solve's
+//! tolerance), order 2 (not symplectic: the rotation is EA's midpoint drift, docs/theory/rigid.md §9); `L_d` is invariant under rigid motions,
 //! so a free structure keeps its total linear and angular momentum. The momenta `p` are the
 //! canonical ones, `p = M(x) v`; the kinetic energy is `pᵀ M⁻¹ p/2 = Σ |p_i|²/(2 m_i) −
 //! zᵀ A⁻¹ z/2` with `z = Gᵀ M₀⁻¹ p` (Woodbury; [`super::BeamSystem::totals_for`]).

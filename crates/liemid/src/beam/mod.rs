@@ -18,7 +18,8 @@
 //! p ← p + (h/2) F,  Π ← Π + (h/2) T        half impulse
 //! ```
 //!
-//! It is second order, symplectic and time reversible; the internal forces sum to zero
+//! It is second order and time reversible (not symplectic: the nodes turn by EA's midpoint
+//! drift, whose Lie–Poisson defect is `O(h³)` per step, docs/theory/rigid.md §9); the internal forces sum to zero
 //! force and moment ([`element`]), so a free-flying structure keeps its total linear and
 //! angular momentum (orbital `Σ x × p` plus nodal spins `Σ R Π`) to round-off. Symmetric
 //! compositions ([`BeamSystem::step_composed`]) raise the order to 4 and beyond. The step

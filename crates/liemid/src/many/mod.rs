@@ -22,8 +22,8 @@
 //! is the exact flow ([`FreeFlow`]) instead of the two midpoint half steps: for one body it
 //! is then LIEMID\[EX\], with the same structure and no Newton solve.
 //!
-//! For one body with a torque it is exactly LIEMID\[EA\]; it is symplectic and time
-//! reversible, and keeps the total linear and angular momentum (orbital plus spin) of any
+//! For one body with a torque it is exactly LIEMID\[EA\]; it is time reversible (not
+//! symplectic with the midpoint rotation: EA's midpoint drift has a Lie–Poisson defect of `O(h³)` per step (docs/theory/rigid.md §9)), and keeps the total linear and angular momentum (orbital plus spin) of any
 //! translation- and rotation-invariant interaction to round-off. Work is split into
 //! chunks of [`CHUNK`] bodies; each body's force is gathered from its neighbours in a fixed
 //! order and every reduction runs in index order, so results are bit-for-bit identical for

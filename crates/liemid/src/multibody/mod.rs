@@ -9,8 +9,10 @@
 //! tree joints in body order, loop-closing joints, gravity and MuJoCo-layout joint
 //! coordinates; [`Model::initial_state`] does the forward kinematics.
 //!
-//! **Method.** [`Rattle::step`] is RATTLE (a symmetric, symplectic constrained
-//! Verlet) whose free rotation is LIEMID\[EA\]'s torque-free pair of midpoint half steps:
+//! **Method.** [`Rattle::step`] is RATTLE (a symmetric constrained Verlet, symplectic when
+//! its unconstrained part is) whose free rotation is LIEMID\[EA\]'s torque-free pair of
+//! midpoint half steps, which is not symplectic (a Lie–Poisson defect of `O(h³)` per step,
+//! docs/theory/rigid.md §9), so neither is the step; it is symmetric:
 //!
 //! ```text
 //! p½ = p + (h/2)(F + G_cᵀλ),  P = Π + (h/2)(T + G_θᵀλ)

@@ -14,7 +14,8 @@
 //! when the residual falls by less than 4x), started from `λ` extrapolated from the last
 //! stages and run until the residual is at round-off; μ from one linear solve
 //! (`velocities.rs`). One factorization per step. The end forces are the next
-//! step's start forces. Symmetric and, for conservative forces, symplectic; keeps the total
+//! step's start forces. Symmetric (not symplectic: EA's midpoint drift, docs/theory/rigid.md
+//! §9); keeps the total
 //! linear and angular momentum when the forces and joints do.
 //!
 //! **Dampers** (hinge, slide and ball `damping`) are not conservative and make the step
@@ -29,7 +30,7 @@
 //! active row whose multiplier pulls (λ < 0 at a lower, > 0 at an upper bound) is released
 //! and the step redone. The velocity row of an active limit makes the contact plastic
 //! (zero rebound), so a step with a limit change loses the normal kinetic energy: the
-//! method is symplectic only away from those steps, and first order at the impact instant.
+//! method is symmetric only away from those steps, and first order at the impact instant.
 //!
 //! **Armature** (rotor inertia added in joint space) has no exact counterpart in maximal
 //! coordinates: a model with non-zero armature is refused.

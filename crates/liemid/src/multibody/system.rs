@@ -16,7 +16,7 @@ use super::model::{JointKind, Model};
 /// A force law added to gravity, springs and constant loads: given the time and the
 /// configuration (centres of mass `c`, attitudes `R`), add to each body's force (space,
 /// at the centre of mass) and torque (body frame). Forces that depend on the positions
-/// only keep the step symplectic when they are the gradient of a potential. A hook is part
+/// only keep the step symmetric and the energy bounded when they are the gradient of a potential. A hook is part
 /// of the system, which steps read only: it takes `&self` (keep counters in atomics).
 ///
 /// Reference: docs/theory/multibody.md §3 (`F(q)`, `T(q)`).

@@ -18,7 +18,7 @@
 //! conserved. The coupled splitting ([`SatelliteIntegrator`]) kicks both momenta with `F`
 //! and `T` over `h/2`, drifts the orbit (`r += h v`) while the body turns freely (two
 //! midpoint half steps for LIEMID\[EA\], the exact free flow for LIEMID\[EX\], Fassò's
-//! splitting for \[FS\]), and kicks again: symplectic, symmetric, time-reversible under
+//! splitting for \[FS\]), and kicks again: symmetric, time-reversible under
 //! `(v, Π) → (−v, −Π)`, one force-and-torque evaluation per stage; compositions raise the
 //! order to 4, 6 or 8. The orbit's updates are summed with compensation (Kahan), so the
 //! rounding of `r` and `v` does not accumulate over long runs.

@@ -7,8 +7,10 @@
 //! ```
 //!
 //! which is exactly the implicit midpoint rule `S_{n+1} − S_n = h Ω(S_mid) × S_mid` (the
-//! Cayley map is the midpoint rule of `x' = w × x`). Second order, symmetric, symplectic;
-//! it keeps every `|S_i|`, and, being the midpoint rule, every quadratic and linear first
+//! Cayley map is the midpoint rule of `x' = w × x`). Second order, symmetric; not
+//! symplectic on the product of spheres (the area-form defect of one step is `O(h³)`,
+//! measured by `tests/spin/poisson.rs`; the spherical midpoint method of McLachlan, Modin
+//! and Verdier would be); it keeps every `|S_i|`, and, being the midpoint rule, every quadratic and linear first
 //! integral: undamped, the energy of this quadratic Hamiltonian and `Σ S_z` (with `n` and
 //! `B` along `z`) to the solver's tolerance. With damping, the energy falls at every step:
 //! `E_{n+1} − E_n = −h μ_s μ_B γ α/(1+α²) Σ_i |S_mid,i × B_i(S_mid)|² ≤ 0`. Solved by

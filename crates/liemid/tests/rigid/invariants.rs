@@ -1,5 +1,5 @@
 //! Invariants: what each method keeps to round-off, and the bounded energy error of the
-//! symplectic EA over long runs.
+//! time-reversible EA over long runs.
 
 use liemid::{integrate, integrate_to, rigid::problems, RotationIntegrator, RotationMethod};
 
@@ -83,8 +83,10 @@ fn energy_error_tenths<M: RotationIntegrator>(mut method: M, h: f64, steps: u64)
 fn ea_energy_error_is_bounded_without_drift_and_attitude_stays_orthogonal_over_a_million_steps() {
     let (first, last, defect) = energy_error_tenths(liemid::LieMidpointAlternating::new(), 1e-4, 1_000_000);
     println!("EA, 10⁶ steps: max energy error first tenth {first:.3e}, last tenth {last:.3e}; defect {defect:.2e}");
-    // Symplectic: a modified energy is kept to O(h²) for exponentially long times, so the
-    // error oscillates with the same amplitude at the end as at the start.
+    // Reversible (EA is not symplectic, tests/rigid/lie_poisson.rs): for this integrable,
+    // reversible problem a reversible method keeps the energy error bounded without drift
+    // (Hairer-Lubich-Wanner XI), so it oscillates with the same amplitude at the end as at
+    // the start.
     assert!(last < 1.5 * first, "energy drift: {first:e} -> {last:e}");
     // Bounded at the size of the O(h²) modified-energy difference: halving the step
     // divides the largest error by four.
@@ -98,7 +100,8 @@ fn ea_energy_error_is_bounded_without_drift_and_attitude_stays_orthogonal_over_a
 
 #[test]
 fn the_drift_check_does_see_rk4_drift() {
-    // The same check on a non-symplectic method at a coarse step: its energy drifts.
+    // The same check on a method that is neither symplectic nor reversible, at a coarse
+    // step: its energy drifts.
     let (first, last, _) = energy_error_tenths(liemid::RungeKutta4Quaternion::new(), 5e-4, 100_000);
     println!("RK4: max energy error first tenth {first:.3e}, last tenth {last:.3e}");
     assert!(last > 3.0 * first, "RK4 shows no drift: {first:e} -> {last:e}");

@@ -9,4 +9,5 @@ mod convergence;
 mod exact_method;
 mod free_flow;
 mod invariants;
+mod lie_poisson;
 mod structure;

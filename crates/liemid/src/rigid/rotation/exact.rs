@@ -14,7 +14,8 @@ use crate::rigid::{RigidBodySystem, RigidState};
 /// Π_{n+1} = P' + (h/2) T(R_{n+1}, t_{n+1})
 /// ```
 ///
-/// Strang splitting of kick and free motion: second order, symplectic, symmetric
+/// Strang splitting of kick and free motion: second order, Lie–Poisson (measured by
+/// `tests/rigid/lie_poisson.rs`), symmetric
 /// (`EX_{−h} ∘ EX_h = id`); keeps `|Π|` and `π` torque-free (and is then exact at any step)
 /// and `π · ĝ` for a heavy top, like EA. One torque evaluation per step (the end torque
 /// is the next start torque); no Newton solve. On a spin-dominated body its error is the
@@ -25,7 +26,7 @@ use crate::rigid::{RigidBodySystem, RigidState};
 ///
 /// [`LieMidpointExact::fasso`] is the variant LIEMID\[FS\], which replaces the exact flow by
 /// Fassò's symmetric + asymmetric splitting ([`FreeFlow::split_flow`]): the same structure
-/// (second order, symplectic, symmetric, the same momenta kept), no elliptic functions, and
+/// (second order, Lie–Poisson, symmetric, the same momenta kept), no elliptic functions, and
 /// an error in the free spin that vanishes for a symmetric body.
 #[derive(Clone, Debug, Default)]
 pub struct LieMidpointExact {

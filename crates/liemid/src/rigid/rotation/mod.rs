@@ -10,6 +10,7 @@ mod liemid;
 mod newmark;
 mod rk4;
 mod simo_wong;
+mod variational;
 
 pub use akw::AustinKrishnaprasadWang;
 pub use exact::LieMidpointExact;
@@ -17,6 +18,7 @@ pub use liemid::{LieMidpointAlternating, LieMidpointE1, LieMidpointE2, LieMidpoi
 pub use newmark::KryslEndresNewmark;
 pub use rk4::{RungeKutta4Quaternion, RungeKuttaMuntheKaas4};
 pub use simo_wong::SimoWong;
+pub use variational::LieVariationalAlternating;
 
 use crate::composition::{Composition, Scheme};
 pub(crate) use crate::error::check_step;
@@ -195,12 +197,20 @@ pub enum RotationMethod {
     LieMidpointFasso8,
     /// [`RungeKuttaMuntheKaas4`]: the Lie-group RK4 baseline.
     RungeKuttaMuntheKaas4,
+    /// [`LieVariationalAlternating`]: EA's impulses around the variational torque-free step.
+    LieVariationalAlternating,
+    /// EAV composed by Suzuki's 5-stage scheme: fourth order.
+    LieVariationalAlternating4,
+    /// EAV composed by Kahan and Li's 9-stage scheme: sixth order.
+    LieVariationalAlternating6,
+    /// EAV composed by Kahan and Li's 17-stage scheme: eighth order.
+    LieVariationalAlternating8,
 }
 
 impl RotationMethod {
-    /// Every method: the paper's line-up, the RK4 baseline, the EA compositions and the
-    /// exact-flow family.
-    pub const ALL: [RotationMethod; 21] = [
+    /// Every method: the paper's line-up, the RK4 baseline, the EA compositions, the
+    /// exact-flow family and the variational family.
+    pub const ALL: [RotationMethod; 25] = [
         RotationMethod::LieMidpointE1,
         RotationMethod::LieMidpointE2,
         RotationMethod::LieMidpointAlternating,
@@ -222,6 +232,10 @@ impl RotationMethod {
         RotationMethod::LieMidpointFasso6,
         RotationMethod::LieMidpointFasso8,
         RotationMethod::RungeKuttaMuntheKaas4,
+        RotationMethod::LieVariationalAlternating,
+        RotationMethod::LieVariationalAlternating4,
+        RotationMethod::LieVariationalAlternating6,
+        RotationMethod::LieVariationalAlternating8,
     ];
 
     /// The paper's Figure 1 line-up plus the RK4 baseline.
@@ -261,6 +275,10 @@ impl RotationMethod {
             RotationMethod::LieMidpointFasso6 => "liemid-fs6",
             RotationMethod::LieMidpointFasso8 => "liemid-fs8",
             RotationMethod::RungeKuttaMuntheKaas4 => "rkmk4",
+            RotationMethod::LieVariationalAlternating => "liemid-eav",
+            RotationMethod::LieVariationalAlternating4 => "liemid-eav4",
+            RotationMethod::LieVariationalAlternating6 => "liemid-eav6",
+            RotationMethod::LieVariationalAlternating8 => "liemid-eav8",
         }
     }
 
@@ -303,7 +321,11 @@ impl RotationMethod {
             | M::LieMidpointFasso
             | M::LieMidpointFasso4
             | M::LieMidpointFasso6
-            | M::LieMidpointFasso8 => return Ok(()),
+            | M::LieMidpointFasso8
+            | M::LieVariationalAlternating
+            | M::LieVariationalAlternating4
+            | M::LieVariationalAlternating6
+            | M::LieVariationalAlternating8 => return Ok(()),
             M::LieMidpointE1 | M::LieMidpointE2 => {
                 "it is not symmetric (E1 and E2 are each other's adjoint, first order); use liemid-ea, their symmetric composition"
             }
@@ -329,21 +351,25 @@ impl RotationMethod {
             | RotationMethod::LieMidpointAlternating
             | RotationMethod::KryslEndresNewmark
             | RotationMethod::LieMidpointExact
-            | RotationMethod::LieMidpointFasso => "1",
+            | RotationMethod::LieMidpointFasso
+            | RotationMethod::LieVariationalAlternating => "1",
             RotationMethod::LieMidpointImplicit
             | RotationMethod::AustinKrishnaprasadWang
             | RotationMethod::SimoWong => "1 per Newton iteration",
             RotationMethod::RungeKutta4 | RotationMethod::RungeKuttaMuntheKaas4 => "4",
             RotationMethod::LieMidpointAlternating4
             | RotationMethod::LieMidpointExact4
-            | RotationMethod::LieMidpointFasso4 => "5",
+            | RotationMethod::LieMidpointFasso4
+            | RotationMethod::LieVariationalAlternating4 => "5",
             RotationMethod::LieMidpointAlternating4Yoshida => "3",
             RotationMethod::LieMidpointAlternating6
             | RotationMethod::LieMidpointExact6
-            | RotationMethod::LieMidpointFasso6 => "9",
+            | RotationMethod::LieMidpointFasso6
+            | RotationMethod::LieVariationalAlternating6 => "9",
             RotationMethod::LieMidpointAlternating8
             | RotationMethod::LieMidpointExact8
-            | RotationMethod::LieMidpointFasso8 => "17",
+            | RotationMethod::LieMidpointFasso8
+            | RotationMethod::LieVariationalAlternating8 => "17",
         }
     }
 
@@ -352,13 +378,13 @@ impl RotationMethod {
     pub fn description(self) -> &'static str {
         match self {
             RotationMethod::LieMidpointE1 => {
-                "explicit midpoint Lie, impulse at end; symplectic; keeps |Pi| and pi torque-free, pi.g with gravity"
+                "explicit midpoint Lie, impulse at end; adjoint of E2; keeps |Pi| and pi torque-free, pi.g with gravity"
             }
             RotationMethod::LieMidpointE2 => {
-                "explicit midpoint Lie, impulse at start; symplectic; keeps |Pi| and pi torque-free, pi.g with gravity"
+                "explicit midpoint Lie, impulse at start; keeps |Pi| and pi torque-free, pi.g with gravity"
             }
             RotationMethod::LieMidpointAlternating => {
-                "E1(h/2) o E2(h/2); symplectic, time-reversible; keeps |Pi| and pi torque-free, pi.g with gravity; energy bounded"
+                "E1(h/2) o E2(h/2); time-reversible, Lie-Poisson defect O(h^3) per step (not symplectic); keeps |Pi| and pi torque-free, pi.g with gravity; energy bounded"
             }
             RotationMethod::LieMidpointImplicit => {
                 "implicit midpoint Lie, torque at the midpoint; symmetric; keeps |Pi| and pi torque-free, pi.g with gravity"
@@ -378,13 +404,13 @@ impl RotationMethod {
             RotationMethod::LieMidpointAlternating6 => "EA composed by Kahan-Li's 9-stage scheme; keeps what EA keeps",
             RotationMethod::LieMidpointAlternating8 => "EA composed by Kahan-Li's 17-stage scheme; keeps what EA keeps",
             RotationMethod::LieMidpointExact => {
-                "half impulses around the exact torque-free flow; symplectic, symmetric; keeps what EA keeps; exact torque-free"
+                "half impulses around the exact torque-free flow; Lie-Poisson, symmetric; keeps what EA keeps; exact torque-free"
             }
             RotationMethod::LieMidpointExact4 => "EX composed by Suzuki's 5-stage scheme; keeps what EX keeps",
             RotationMethod::LieMidpointExact6 => "EX composed by Kahan-Li's 9-stage scheme; keeps what EX keeps",
             RotationMethod::LieMidpointExact8 => "EX composed by Kahan-Li's 17-stage scheme; keeps what EX keeps",
             RotationMethod::LieMidpointFasso => {
-                "half impulses around Fasso's symmetric + asymmetric split of the free motion; symplectic, symmetric; keeps what EA keeps"
+                "half impulses around Fasso's symmetric + asymmetric split of the free motion; Lie-Poisson, symmetric; keeps what EA keeps"
             }
             RotationMethod::LieMidpointFasso4 => "FS composed by Suzuki's 5-stage scheme; keeps what FS keeps",
             RotationMethod::LieMidpointFasso6 => "FS composed by Kahan-Li's 9-stage scheme; keeps what FS keeps",
@@ -392,6 +418,12 @@ impl RotationMethod {
             RotationMethod::RungeKuttaMuntheKaas4 => {
                 "Runge-Kutta-Munthe-Kaas 4: RK4 in exponential coordinates on SO(3); conserves nothing exactly"
             }
+            RotationMethod::LieVariationalAlternating => {
+                "EA's half impulses around the variational torque-free step (V); Lie-Poisson, symmetric; keeps what EA keeps"
+            }
+            RotationMethod::LieVariationalAlternating4 => "EAV composed by Suzuki's 5-stage scheme; keeps what EAV keeps",
+            RotationMethod::LieVariationalAlternating6 => "EAV composed by Kahan-Li's 9-stage scheme; keeps what EAV keeps",
+            RotationMethod::LieVariationalAlternating8 => "EAV composed by Kahan-Li's 17-stage scheme; keeps what EAV keeps",
         }
     }
 
@@ -420,12 +452,20 @@ impl RotationMethod {
             RotationMethod::LieMidpointFasso6 => fs_composition(Scheme::KAHAN_LI6, "LIEMID[FS]6"),
             RotationMethod::LieMidpointFasso8 => fs_composition(Scheme::KAHAN_LI8, "LIEMID[FS]8"),
             RotationMethod::RungeKuttaMuntheKaas4 => AnyRotationIntegrator::Rkmk4(RungeKuttaMuntheKaas4::new()),
+            RotationMethod::LieVariationalAlternating => AnyRotationIntegrator::Eav(LieVariationalAlternating::new()),
+            RotationMethod::LieVariationalAlternating4 => eav_composition(Scheme::SUZUKI4, "LIEMID[EAV]4"),
+            RotationMethod::LieVariationalAlternating6 => eav_composition(Scheme::KAHAN_LI6, "LIEMID[EAV]6"),
+            RotationMethod::LieVariationalAlternating8 => eav_composition(Scheme::KAHAN_LI8, "LIEMID[EAV]8"),
         }
     }
 }
 
 fn ea_composition(scheme: Scheme, name: &'static str) -> AnyRotationIntegrator {
     AnyRotationIntegrator::Composed(Composition::new(LieMidpointAlternating::new(), scheme, name))
+}
+
+fn eav_composition(scheme: Scheme, name: &'static str) -> AnyRotationIntegrator {
+    AnyRotationIntegrator::ComposedV(Composition::new(LieVariationalAlternating::new(), scheme, name))
 }
 
 fn ex_composition(scheme: Scheme, name: &'static str) -> AnyRotationIntegrator {
@@ -463,6 +503,10 @@ pub enum AnyRotationIntegrator {
     ComposedEx(Composition<LieMidpointExact>),
     /// RKMK4.
     Rkmk4(RungeKuttaMuntheKaas4),
+    /// LIEMID\[EAV\].
+    Eav(LieVariationalAlternating),
+    /// A symmetric composition of EAV.
+    ComposedV(Composition<LieVariationalAlternating>),
 }
 
 macro_rules! dispatch {
@@ -480,6 +524,8 @@ macro_rules! dispatch {
             AnyRotationIntegrator::Ex($m) => $e,
             AnyRotationIntegrator::ComposedEx($m) => $e,
             AnyRotationIntegrator::Rkmk4($m) => $e,
+            AnyRotationIntegrator::Eav($m) => $e,
+            AnyRotationIntegrator::ComposedV($m) => $e,
         }
     };
 }
@@ -511,6 +557,8 @@ impl AnyRotationIntegrator {
             AnyRotationIntegrator::Composed(m) => MethodCache::from_torque(m.base().cache.snapshot()),
             AnyRotationIntegrator::Ex(m) => MethodCache::from_torque(m.cache.snapshot()),
             AnyRotationIntegrator::ComposedEx(m) => MethodCache::from_torque(m.base().cache.snapshot()),
+            AnyRotationIntegrator::Eav(m) => MethodCache::from_torque(m.cache.snapshot()),
+            AnyRotationIntegrator::ComposedV(m) => MethodCache::from_torque(m.base().cache.snapshot()),
             AnyRotationIntegrator::Rk4(m) => {
                 m.last
                     .map_or(MethodCache::Empty, |(rotation, quaternion)| MethodCache::Quaternion {
@@ -556,6 +604,8 @@ impl AnyRotationIntegrator {
             AnyRotationIntegrator::Composed(m) => Some(&mut m.base_mut().cache),
             AnyRotationIntegrator::Ex(m) => Some(&mut m.cache),
             AnyRotationIntegrator::ComposedEx(m) => Some(&mut m.base_mut().cache),
+            AnyRotationIntegrator::Eav(m) => Some(&mut m.cache),
+            AnyRotationIntegrator::ComposedV(m) => Some(&mut m.base_mut().cache),
             _ => None,
         };
         match (torque_cache, cache) {
