@@ -1,6 +1,9 @@
 //! The multibody domain (one test binary): the RATTLE step (`rattle`), ball springs, dampers,
-//! equality constraints, the model files, `<include>`, the joint-space reference and merged hinges.
+//! equality constraints, the model files, `<include>`, the joint-space reference, merged
+//! hinges, and the step's symplecticity (`symplectic`).
 
+#[path = "../common/cotangent.rs"]
+mod cotangent;
 #[path = "../common/model_files.rs"]
 mod model_files;
 #[path = "../common/thread_counting.rs"]
@@ -17,3 +20,4 @@ mod include;
 mod joint_space;
 mod merged;
 mod rattle;
+mod symplectic;

@@ -3,6 +3,8 @@
 
 #[path = "../common/mod.rs"]
 mod common;
+#[path = "../common/cotangent.rs"]
+mod cotangent;
 
 mod adaptive;
 mod convergence;
@@ -11,3 +13,4 @@ mod free_flow;
 mod invariants;
 mod lie_poisson;
 mod structure;
+mod symplectic;
