@@ -5,7 +5,7 @@
 //! `python/liemid/multibody.py` shapes them.
 
 use liemid::multibody::{
-    joint_space_notes, JointKind, JointSpaceModel, MultibodyState, MultibodySystem, Prepared, Simulation,
+    joint_space_notes, Drift, JointKind, JointSpaceModel, MultibodyState, MultibodySystem, Prepared, Simulation,
 };
 use liemid::so3::Quaternion;
 use liemid_app::multibody::scenario::{self, Method, MultibodyScenario};
@@ -154,7 +154,7 @@ impl Samples {
 /// Run `model` with `method` at step `step` to `t_end`, sampling every `every` steps (and
 /// the last); returns a dict of flat arrays and the run's maxima.
 #[pyfunction]
-#[pyo3(signature = (model, method, step, t_end, every))]
+#[pyo3(signature = (model, method, step, t_end, every, drift = "midpoint"))]
 fn multibody_run<'py>(
     py: Python<'py>,
     model: &MultibodyModel,
@@ -162,8 +162,19 @@ fn multibody_run<'py>(
     step: f64,
     t_end: f64,
     every: u64,
+    drift: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let method = Method::from_key(method).map_err(|e| PyValueError::new_err(format!("method: {e}")))?;
+    let drift = Drift::from_key(drift).ok_or_else(|| {
+        PyValueError::new_err(format!(
+            "drift: unknown drift \"{drift}\" (known: midpoint, variational)"
+        ))
+    })?;
+    if drift != Drift::Midpoint && !matches!(method, Method::Liemid(_)) {
+        return Err(PyValueError::new_err(
+            "drift: chooses the liemid methods' rotation; rk4 runs in joint coordinates",
+        ));
+    }
     if !(step.is_finite() && step > 0.0) {
         return Err(PyValueError::new_err(format!(
             "step: must be a positive number, found {step}"
@@ -191,6 +202,7 @@ fn multibody_run<'py>(
                 mut state,
                 notes: said,
             } = Simulation::prepare(&sc.model, m).map_err(|e| py_error(py, &e, &sc.name))?;
+            sim.integrator.set_drift(drift);
             notes = said;
             let joints = sc.model.joints.len();
             let system = &sim.system;

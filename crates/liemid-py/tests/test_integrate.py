@@ -236,7 +236,7 @@ def test_the_gil_is_released_during_a_run() -> None:
 def test_methods_and_problems() -> None:
     ms = liemid.methods()
     keys = [m["key"] for m in ms]
-    assert keys[:3] == ["liemid-e1", "liemid-e2", "liemid-ea"] and "rk4" in keys and "liemid-ex" in keys and "liemid-fs" in keys and len(ms) == 21
+    assert keys[:3] == ["liemid-e1", "liemid-e2", "liemid-ea"] and "rk4" in keys and "liemid-ex" in keys and "liemid-fs" in keys and "liemid-eav" in keys and len(ms) == 25
     ea = ms[2]
     assert ea["name"] == "LIEMID[EA]" and ea["order"] == 2 and ea["torque_evaluations"] == "1"
     for name in liemid.problems.NAMES:

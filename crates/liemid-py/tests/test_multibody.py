@@ -113,3 +113,16 @@ def test_the_run_says_what_the_model_policy_left_out_as_the_cli_does(tmp_path: P
         joint_space = model.run("rk4", step=1e-3, t_end=0.01)
     assert len(joint_space.notes) == 1 and "joint limits" in joint_space.notes[0]
     assert multibody.problem("double-pendulum").run(step=1e-3, t_end=0.01).notes == []
+
+
+def test_the_variational_drift_is_a_choice_of_the_liemid_methods() -> None:
+    model = multibody.problem("chain-10")
+    midpoint = model.run(step=1e-3, t_end=0.1, every=100)
+    variational = model.run(step=1e-3, t_end=0.1, every=100, drift="variational")
+    difference = float(np.max(np.abs(midpoint.xpos[-1] - variational.xpos[-1])))
+    assert 1e-12 < difference < 1e-4
+    assert variational.max_position_constraint_violation < 1e-12
+    with pytest.raises(ValueError, match="drift"):
+        model.run(t_end=0.01, drift="cayley")
+    with pytest.raises(ValueError, match="drift"):
+        model.run("rk4", t_end=0.01, drift="variational")

@@ -111,7 +111,22 @@ pub fn solve_increment<I: InertiaOperator + ?Sized>(
 ) -> Result<(so3::Increment, u32), NotConverged> {
     // `P` in three registers, as (M)'s solver takes it: passed in memory just after the
     // caller's stores, the solver's wide load of it would wait on store forwarding.
-    solve_from_scalars(inertia, p.x, p.y, p.z, h)
+    solve_from_scalars(inertia, p.x, p.y, p.z, h, None)
+}
+
+/// [`solve_increment`] from `guess` instead of the predictor (an outer iteration that
+/// solves (V) again with a slightly changed `P`, as the multibody position solve does).
+///
+/// # Errors
+/// As [`solve_increment`].
+#[inline(always)]
+pub fn solve_increment_from<I: InertiaOperator + ?Sized>(
+    inertia: &I,
+    p: Vec3,
+    h: f64,
+    guess: Vec3,
+) -> Result<(so3::Increment, u32), NotConverged> {
+    solve_from_scalars(inertia, p.x, p.y, p.z, h, Some(guess))
 }
 
 /// [`solve_increment`] with `P` as three scalars.
@@ -122,10 +137,13 @@ fn solve_from_scalars<I: InertiaOperator + ?Sized>(
     py: f64,
     pz: f64,
     h: f64,
+    guess: Option<Vec3>,
 ) -> Result<(so3::Increment, u32), NotConverged> {
     let p = Vec3::new(px, py, pz);
-    let psi0 = inertia.apply_inverse(p) * h;
-    let mut psi = inertia.apply_inverse(p + p.cross(psi0) * 0.5) * h;
+    let mut psi = guess.unwrap_or_else(|| {
+        let psi0 = inertia.apply_inverse(p) * h;
+        inertia.apply_inverse(p + p.cross(psi0) * 0.5) * h
+    });
     let quadratic2 = p.norm_squared() * (h * inertia.inverse_norm_bound()).powi(2);
     let mut stop = NewtonStop::new();
     let mut g = Vec3::ZERO;

@@ -34,6 +34,11 @@ pub struct MultibodyArgs {
     /// [default: liemid].
     #[arg(long)]
     pub method: Option<String>,
+    /// The torque-free rotation in the liemid methods' drift: midpoint (EA's pair of
+    /// midpoint half steps) or variational (LIEMID[EAV]'s pair, a Lie-Poisson drift: the
+    /// step is then symplectic on a free body) [default: midpoint].
+    #[arg(long)]
+    pub drift: Option<String>,
     /// Step (s) [default: the file's `timestep`, else 1e-3].
     #[arg(long, allow_negative_numbers = true)]
     pub step: Option<f64>,
@@ -70,6 +75,14 @@ pub fn multibody(args: &MultibodyArgs) -> CmdResult {
     let mut sc = match (&args.model, &args.problem) {
         (Some(path), _) => scenario::load(path).map_err(input)?,
         (None, p) => scenario::builtin(p.as_deref().unwrap_or("double-pendulum")).map_err(input)?,
+    };
+    let drift = match &args.drift {
+        None => liemid::multibody::Drift::Midpoint,
+        Some(key) => liemid::multibody::Drift::from_key(key).ok_or_else(|| {
+            input(format!(
+                "--drift: unknown drift \"{key}\" (known: midpoint, variational)"
+            ))
+        })?,
     };
     let method = match &args.method {
         Some(m) => Method::from_key(m).map_err(|e| input(format!("--method: {e}")))?,
@@ -111,10 +124,18 @@ pub fn multibody(args: &MultibodyArgs) -> CmdResult {
     }
     // The model policy of the run (the library's, as Python's): what is left out, and the
     // start projected onto loop-closing joints.
+    if args.drift.is_some() && !matches!(method, Method::Liemid(_)) {
+        return Err(input(
+            "--drift chooses the liemid methods' rotation; rk4 and dop853 run in joint coordinates".into(),
+        ));
+    }
     let prepared = match method {
-        Method::Liemid(m) => Some(
-            Simulation::prepare(&sc.model, m).map_err(|e| Failure::Input(format!("{}: the start: {e}", sc.name)))?,
-        ),
+        Method::Liemid(m) => {
+            let mut prepared = Simulation::prepare(&sc.model, m)
+                .map_err(|e| Failure::Input(format!("{}: the start: {e}", sc.name)))?;
+            prepared.simulation.integrator.set_drift(drift);
+            Some(prepared)
+        }
         Method::Rk4 | Method::Dop853 => None,
     };
     let notes = match &prepared {
@@ -337,6 +358,7 @@ fn run_maximal(
     let summary = json!({
         "model": sc.name,
         "method": method.name(),
+        "drift": sim.integrator.drift().key(),
         "step": h,
         "t_end": t_end,
         "steps": n,

@@ -280,3 +280,31 @@ fn the_joint_space_methods_say_they_drop_joint_limits() {
         assert_eq!(stderr(&o).contains("joint limits"), said, "{method}: {}", stderr(&o));
     }
 }
+
+#[test]
+fn the_variational_drift_is_a_choice_of_the_liemid_methods() {
+    let dir = scratch("mb-drift");
+    let midpoint = summary(&dir, &["--problem", "chain-10", "--t-end", "0.1"]);
+    let variational = summary(
+        &dir,
+        &["--problem", "chain-10", "--t-end", "0.1", "--drift", "variational"],
+    );
+    assert_eq!(midpoint["drift"], "midpoint");
+    assert_eq!(variational["drift"], "variational");
+    // Both second order: at h = 1e-3 the two runs agree to the size of their errors, not to
+    // round-off, and both keep the constraints.
+    let d = max_diff(&xpos(&midpoint), &xpos(&variational));
+    assert!(d > 1e-12 && d < 1e-4, "the drifts differ by {d:e}");
+    assert!(variational["max_position_constraint_violation"].as_f64().unwrap() < 1e-12);
+    for (args, said) in [
+        (&["multibody", "--drift", "cayley"][..], "--drift: unknown drift"),
+        (
+            &["multibody", "--method", "rk4", "--drift", "variational"][..],
+            "--drift chooses",
+        ),
+    ] {
+        let o = run_in(&dir, args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        assert!(stderr(&o).contains(said), "{args:?}: {}", stderr(&o));
+    }
+}

@@ -128,18 +128,21 @@ class Model:
         step: Optional[float] = None,
         t_end: Optional[float] = None,
         every: int = 1,
+        drift: str = "midpoint",
     ) -> MultibodyRun:
         """Integrate from the model's start to ``t_end`` at ``step`` (defaults: the file's
         ``timestep`` or 1e-3 s; the problem's end time or 1 s), sampling every ``every``
         steps and the last. A failed step raises ``liemid.ConvergenceError``; bad input
         ``ValueError``. Joint armature is not simulated by the maximal-coordinate methods, and
         joint limits are not enforced by the joint-space ones (``rk4``, ``dop853``): the
-        run's ``notes`` say so, and each is also issued as a ``UserWarning``."""
+        run's ``notes`` say so, and each is also issued as a ``UserWarning``. ``drift`` is the
+        liemid methods' torque-free rotation: ``"midpoint"`` (EA's) or ``"variational"``
+        (LIEMID[EAV]'s, a Lie–Poisson drift)."""
         h = self._core.default_step if step is None else _number("step", step)
         end = self._core.default_t_end if t_end is None else _number("t_end", t_end)
         if isinstance(every, bool) or not isinstance(every, int) or every < 1:
             raise ValueError(f"every: a whole number of steps, at least 1, found {every!r}")
-        out = _liemid.multibody_run(self._core, str(method), h, end, every)
+        out = _liemid.multibody_run(self._core, str(method), h, end, every, str(drift))
         notes = [str(n) for n in out["notes"]]
         for note in notes:
             warnings.warn(f"{self.name}: {note}", UserWarning, stacklevel=2)

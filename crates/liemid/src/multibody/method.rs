@@ -26,6 +26,37 @@ pub enum MultibodyMethod {
     Liemid8,
 }
 
+/// The torque-free rotation inside the drift of the multibody step (both second order,
+/// symmetric; docs/theory/rigid.md §9).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Drift {
+    /// LIEMID\[EA\]'s pair of midpoint half steps (M): the default.
+    #[default]
+    Midpoint,
+    /// The pair of variational half steps (V) of LIEMID\[EAV\]: a Lie–Poisson drift.
+    Variational,
+}
+
+impl Drift {
+    /// Both drifts.
+    pub const ALL: [Drift; 2] = [Drift::Midpoint, Drift::Variational];
+
+    /// The key (`midpoint`, `variational`).
+    #[must_use]
+    pub fn key(self) -> &'static str {
+        match self {
+            Drift::Midpoint => "midpoint",
+            Drift::Variational => "variational",
+        }
+    }
+
+    /// The drift of a key ([`Drift::key`]).
+    #[must_use]
+    pub fn from_key(key: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|d| d.key() == key)
+    }
+}
+
 impl MultibodyMethod {
     /// All methods, lowest order first.
     pub const ALL: [MultibodyMethod; 4] = [Self::Liemid, Self::Liemid4, Self::Liemid6, Self::Liemid8];

@@ -66,7 +66,7 @@ pub use constraints::{JointGeometry, JointRows, Row};
 pub use driver::{joint_space_notes, JointSpaceRun, ModelNote, MultibodyRun, Prepared, Simulation};
 pub use ensemble::MultibodyEnsemble;
 pub use joint_space::JointSpaceModel;
-pub use method::{LimitState, MultibodyMethod, StepReport};
+pub use method::{Drift, LimitState, MultibodyMethod, StepReport};
 pub use model::{Body, Joint, JointKind, Link, Model};
 pub use rattle::Rattle;
 pub use state::MultibodyState;

@@ -35,36 +35,40 @@ use crate::linalg::{Mat3, Vec3};
 use crate::midpoint::newton_error;
 use crate::midpoint::{self, NotConverged};
 use crate::so3;
+use crate::variational;
 
 use super::constraints::{add_impulse, for_each_rate, pose, JointRows};
-use super::method::{LimitState, StepReport, MAX_ITERATIONS};
+use super::method::{Drift, LimitState, StepReport, MAX_ITERATIONS};
 use super::state::MultibodyState;
 use super::system::MultibodySystem;
 use super::workspace::{Matrix, Workspace};
 
-/// EA's torque-free rotation of one body over `2 hh`: `Ψ₁` from (M) with `(P, hh)`,
-/// `Π_a = exp(−Ψ₁) P`, `Ψ₂` from (M) with `(Π_a, hh)`; returns `exp(Ψ₁)`, `Π_a`, `exp(Ψ₂)`.
-/// With `guess`, Newton starts from the last drift's `(Ψ₁, Ψ₂)` instead of the predictor.
-/// Inlined into the drift's loop with the solver's own small error (the step's error is
-/// built only on failure).
+/// The torque-free rotation of one body over `2 hh`: `Ψ₁` from (M) (EA's, [`Drift::Midpoint`])
+/// or (V) (EAV's, [`Drift::Variational`]) with `(P, hh)`, `Π_a = exp(−Ψ₁) P`, `Ψ₂` from the
+/// same equation with `(Π_a, hh)`; returns `exp(Ψ₁)`, `Π_a`, `exp(Ψ₂)`. With `guess`,
+/// Newton starts from the last drift's `(Ψ₁, Ψ₂)` instead of the predictor. Inlined into the
+/// drift's loop with the solver's own small error (the step's error is built only on
+/// failure).
 ///
-/// Reference: P. Krysl, Int. J. Numer. Meth. Engng 63 (2005) (LIEMID\[EA\]).
+/// Reference: P. Krysl, Int. J. Numer. Meth. Engng 63 (2005) (LIEMID\[EA\]);
+/// docs/theory/rigid.md §9 (the variational drift).
 #[inline(always)]
-fn midpoint_pair(
+fn drift_pair(
+    drift: Drift,
     inertia: &Inertia,
     p: Vec3,
     hh: f64,
     guess: Option<(Vec3, Vec3)>,
 ) -> core::result::Result<(so3::Increment, Vec3, so3::Increment), NotConverged> {
-    let (inc1, _) = match guess {
-        Some((g, _)) => midpoint::solve_increment_from(inertia, p, hh, g)?,
-        None => midpoint::solve_increment(inertia, p, hh)?,
+    let solve = |p: Vec3, guess: Option<Vec3>| match (drift, guess) {
+        (Drift::Midpoint, Some(g)) => midpoint::solve_increment_from(inertia, p, hh, g),
+        (Drift::Midpoint, None) => midpoint::solve_increment(inertia, p, hh),
+        (Drift::Variational, Some(g)) => variational::solve_increment_from(inertia, p, hh, g),
+        (Drift::Variational, None) => variational::solve_increment(inertia, p, hh),
     };
+    let (inc1, _) = solve(p, guess.map(|g| g.0))?;
     let pa = inc1.inverse_apply(p);
-    let (inc2, _) = match guess {
-        Some((_, g)) => midpoint::solve_increment_from(inertia, pa, hh, g)?,
-        None => midpoint::solve_increment(inertia, pa, hh)?,
-    };
+    let (inc2, _) = solve(pa, guess.map(|g| g.1))?;
     Ok((inc1, pa, inc2))
 }
 
@@ -123,9 +127,15 @@ impl Workspace {
         for i in 0..sys.mass.len() {
             self.c_new[i] = state.c[i] + self.p_half[i] * (h / sys.mass[i]);
             let guess = warm.then_some((self.psi1[i], self.psi2[i]));
-            let (inc1, pa, inc2) = match midpoint_pair(&sys.inertia[i], self.big_p[i], hh, guess) {
+            let (inc1, pa, inc2) = match drift_pair(self.drift, &sys.inertia[i], self.big_p[i], hh, guess) {
                 Ok(v) => v,
-                Err(e) => return Err(newton_error(self.method_name, "midpoint equation (M)", state.t, h, e)),
+                Err(e) => {
+                    let equation = match self.drift {
+                        Drift::Midpoint => "midpoint equation (M)",
+                        Drift::Variational => "variational equation (V)",
+                    };
+                    return Err(newton_error(self.method_name, equation, state.t, h, e));
+                }
             };
             self.psi1[i] = inc1.psi();
             self.psi2[i] = inc2.psi();
@@ -149,26 +159,40 @@ impl Workspace {
     }
 
     /// The exact Jacobian `D = ∂θ⁺/∂P` of the drift's rotation (body-frame increment of
-    /// `R⁺` per start impulse `δP`), from the last drift: with `J_k` the midpoint Jacobians,
-    /// `A₁ = J₁⁻¹ exp(−Ψ₁/2) h/2`, `B = exp(−Ψ₁)(1 + hat(P) Jr(−Ψ₁) A₁)`,
-    /// `A₂ = J₂⁻¹ exp(−Ψ₂/2) (h/2) B`, `D = exp(−Ψ₂) Jr(Ψ₁) A₁ + Jr(Ψ₂) A₂`; stored as
-    /// the effective inertia `h D⁻¹` (`= I` to leading order in `h`).
+    /// `R⁺` per start impulse `δP`), from the last drift: with `J_k` the Jacobians of the
+    /// drift's equation and `K(Ψ)` the derivative of its right-hand side in `P`
+    /// (`exp(−Ψ/2)` for (M), `Jr(Ψ)` for (V)), `A₁ = J₁⁻¹ K(Ψ₁) h/2`,
+    /// `B = exp(−Ψ₁)(1 + hat(P) Jr(−Ψ₁) A₁)`, `A₂ = J₂⁻¹ K(Ψ₂) (h/2) B`,
+    /// `D = exp(−Ψ₂) Jr(Ψ₁) A₁ + Jr(Ψ₂) A₂`; stored as the effective inertia `h D⁻¹`
+    /// (`= I` to leading order in `h`).
     pub(super) fn drift_jacobian(&mut self, sys: &MultibodySystem, h: f64) {
         let hh = 0.5 * h;
         for i in 0..sys.mass.len() {
             let (psi1, psi2) = (self.psi1[i], self.psi2[i]);
             let inertia = &sys.inertia[i];
-            let j1 = midpoint::jacobian(inertia, self.big_p[i], hh, psi1);
-            let j2 = midpoint::jacobian(inertia, self.pi_a[i], hh, psi2);
+            let (j1, j2, k1, k2) = match self.drift {
+                Drift::Midpoint => (
+                    midpoint::jacobian(inertia, self.big_p[i], hh, psi1),
+                    midpoint::jacobian(inertia, self.pi_a[i], hh, psi2),
+                    so3::exp(-psi1 * 0.5),
+                    so3::exp(-psi2 * 0.5),
+                ),
+                Drift::Variational => (
+                    variational::jacobian(inertia, self.big_p[i], hh, psi1),
+                    variational::jacobian(inertia, self.pi_a[i], hh, psi2),
+                    so3::right_jacobian(psi1),
+                    so3::right_jacobian(psi2),
+                ),
+            };
             let (Some(j1i), Some(j2i)) = (j1.inverse(), j2.inverse()) else {
                 self.effective[i] = sys.inertia_matrix[i];
                 self.drift_rate[i] = sys.inertia_matrix[i].inverse().unwrap_or(Mat3::IDENTITY);
                 continue;
             };
-            let a1 = j1i * so3::exp(-psi1 * 0.5) * hh;
+            let a1 = j1i * k1 * hh;
             let e1 = so3::exp(-psi1);
             let b = e1 + e1 * so3::hat(self.big_p[i]) * so3::right_jacobian(-psi1) * a1;
-            let a2 = j2i * so3::exp(-psi2 * 0.5) * b * hh;
+            let a2 = j2i * k2 * b * hh;
             let d = so3::exp(-psi2) * so3::right_jacobian(psi1) * a1 + so3::right_jacobian(psi2) * a2;
             if let Some(d_inverse) = d.inverse() {
                 self.effective[i] = d_inverse * h;

@@ -42,7 +42,7 @@
 use crate::error::{Error, Result};
 use crate::linalg::Vec3;
 
-use super::method::{LimitState, MultibodyMethod, StepReport, MAX_LIMIT_PASSES};
+use super::method::{Drift, LimitState, MultibodyMethod, StepReport, MAX_LIMIT_PASSES};
 use super::predictor::{extrapolate, push_front};
 use super::state::MultibodyState;
 use super::system::MultibodySystem;
@@ -78,6 +78,19 @@ impl Rattle {
             method,
             work: Workspace::new(system, method.name(), stages),
         }
+    }
+
+    /// The torque-free rotation of the drift ([`Drift::Midpoint`] by default).
+    #[must_use]
+    pub fn drift(&self) -> Drift {
+        self.work.drift
+    }
+
+    /// Choose the torque-free rotation of the drift: EA's midpoint pair (the default) or the
+    /// variational pair of LIEMID\[EAV\], a Lie–Poisson drift (docs/theory/rigid.md §9).
+    /// The λ predictor's history is kept (both drifts agree to second order).
+    pub fn set_drift(&mut self, drift: Drift) {
+        self.work.drift = drift;
     }
 
     /// The method.

@@ -71,6 +71,8 @@ impl DamperScratch {
 pub(super) struct Workspace {
     /// The method's name, for errors.
     pub(super) method_name: &'static str,
+    /// The torque-free rotation of the drift.
+    pub(super) drift: super::method::Drift,
     /// Cached start-of-step quantities, valid for (cache_t, cache_c, cache_r) and the
     /// system's revision `cache_revision`.
     pub(super) cache_valid: bool,
@@ -166,6 +168,7 @@ impl Workspace {
         let z3 = vec![Vec3::ZERO; nb];
         Workspace {
             method_name,
+            drift: super::method::Drift::Midpoint,
             cache_valid: false,
             cache_t: 0.0,
             cache_revision: 0,

@@ -5,7 +5,7 @@
 use liemid::linalg::{Mat3, Vec3};
 use liemid::multibody::constraints::{JointGeometry, JointRows, Row};
 use liemid::multibody::problems;
-use liemid::multibody::{JointKind, Link, Model, MultibodyMethod, MultibodyState, Simulation};
+use liemid::multibody::{Drift, JointKind, Link, Model, MultibodyMethod, MultibodyState, Simulation};
 use liemid::random::Rng;
 use liemid::{so3, Error, LieMidpointAlternating, RotationIntegrator};
 
@@ -192,11 +192,18 @@ fn validation_names_the_culprit() {
 // ---------------------------------------------------------------------------------------
 // Order of accuracy
 
-fn errors(model: &Model, method: MultibodyMethod, t_end: f64, steps: &[f64], reference: &MultibodyState) -> Vec<f64> {
+fn errors(
+    model: &Model,
+    (method, drift): (MultibodyMethod, Drift),
+    t_end: f64,
+    steps: &[f64],
+    reference: &MultibodyState,
+) -> Vec<f64> {
     steps
         .iter()
         .map(|&h| {
             let (mut sys, mut s) = system(model, method);
+            sys.integrator.set_drift(drift);
             run(&mut sys, &mut s, h, (t_end / h).round() as usize);
             position_error(&sys, &s, reference)
         })
@@ -214,13 +221,19 @@ fn check_orders(model: &Model, t_end: f64, h2: &[f64], h4: &[f64], h_ref: f64) {
         (2.0 * t_end / h_ref).round() as usize,
     );
     let reference_error = position_error(&sys, &reference, &finer);
-    for (method, steps, order) in [(MultibodyMethod::Liemid, h2, 2.0), (MultibodyMethod::Liemid4, h4, 4.0)] {
-        let e = errors(model, method, t_end, steps, &reference);
+    // Both drifts: EA's midpoint pair and the variational pair (docs/theory/rigid.md §9).
+    let cases = [(MultibodyMethod::Liemid, h2, 2.0), (MultibodyMethod::Liemid4, h4, 4.0)];
+    for ((method, steps, order), drift) in cases
+        .into_iter()
+        .flat_map(|c| Drift::ALL.into_iter().map(move |d| (c, d)))
+    {
+        let e = errors(model, (method, drift), t_end, steps, &reference);
         let observed = liemid::observed_order(steps, &e).unwrap();
         println!(
-            "{} {}: h {steps:?} errors {e:?} order {observed:.3} (reference error {reference_error:.1e})",
+            "{} {} ({} drift): h {steps:?} errors {e:?} order {observed:.3} (reference error {reference_error:.1e})",
             model.name,
-            method.name()
+            method.name(),
+            drift.key()
         );
         assert!(reference_error < 1e-3 * e.iter().cloned().fold(f64::INFINITY, f64::min));
         assert!(
