@@ -30,7 +30,8 @@ use roxmltree::Node;
 
 use super::model::Model;
 use super::xml::{
-    build, check_inertia, parse_document, read_bounded, rpy, Ctx, Ignored, MassProps, Merge, RawBody, RawKind, Sources,
+    build, check_inertia, line_starts, parse_document, read_bounded, rpy, Ctx, Ignored, MassProps, Merge, RawBody,
+    RawKind, Sources,
 };
 use crate::error::Result;
 use crate::linalg::{Mat3, Vec3};
@@ -46,11 +47,8 @@ pub fn load(path: &Path) -> Result<Loaded> {
 /// Parses URDF text; `name_for_errors` names the file in error messages.
 pub fn parse(text: &str, name_for_errors: &str) -> Result<Loaded> {
     let doc = parse_document(text, name_for_errors, Sources::NONE)?;
-    let cx = Ctx {
-        file: name_for_errors,
-        doc: &doc,
-        sources: Sources::NONE,
-    };
+    let lines = line_starts(text);
+    let cx = Ctx::new(name_for_errors, Sources::NONE, &lines);
     let robot = doc.root_element();
     if robot.tag_name().name() != "robot" {
         return Err(cx.err(robot, "a URDF file's root element must be <robot>"));

@@ -20,7 +20,7 @@ use std::path::{Path, PathBuf};
 
 use roxmltree::Node;
 
-use super::super::xml::{file_error, line_of, parse_document, read_bounded, Ctx, Sources, MAX_FILE_BYTES};
+use super::super::xml::{file_error, line_of, line_starts, parse_document, read_bounded, Ctx, Sources, MAX_FILE_BYTES};
 use crate::error::Result;
 
 /// Deepest chain of includes accepted (the main file is depth 0).
@@ -66,11 +66,8 @@ impl Assembler {
     /// with its includes expanded; `dir` is the file's own directory.
     fn splice(&mut self, text: &str, name: &str, dir: &Path, main: bool) -> Result<()> {
         let doc = parse_document(text, name, Sources::NONE)?;
-        let cx = Ctx {
-            file: name,
-            doc: &doc,
-            sources: Sources::NONE,
-        };
+        let lines = line_starts(text);
+        let cx = Ctx::new(name, Sources::NONE, &lines);
         let root = doc.root_element();
         let range = if main {
             0..text.len()

@@ -57,8 +57,8 @@ use roxmltree::Node;
 
 use super::model::Model;
 use super::xml::{
-    axis_angle, build, check_inertia, coordinate_rotation, parse_document, quat_matrix, rotation_to_z, Ctx, Ignored,
-    MassProps, Merge, RawBody, RawKind, Sources,
+    axis_angle, build, check_inertia, coordinate_rotation, line_starts, parse_document, quat_matrix, rotation_to_z,
+    Ctx, Ignored, MassProps, Merge, RawBody, RawKind, Sources,
 };
 use crate::error::Result;
 use crate::linalg::{Mat3, Vec3};
@@ -87,11 +87,8 @@ pub fn parse(text: &str, name_for_errors: &str) -> Result<Loaded> {
 
 fn parse_assembled(text: &str, name_for_errors: &str, sources: &Sources) -> Result<Loaded> {
     let doc = parse_document(text, name_for_errors, sources)?;
-    let cx = Ctx {
-        file: name_for_errors,
-        doc: &doc,
-        sources,
-    };
+    let lines = line_starts(text);
+    let cx = Ctx::new(name_for_errors, sources, &lines);
     let root = doc.root_element();
     if root.tag_name().name() != "mujoco" {
         return Err(cx.err(root, "an MJCF file's root element must be <mujoco>"));
