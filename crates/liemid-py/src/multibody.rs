@@ -320,7 +320,7 @@ fn multibody_view(
         page.push_frame(times[k], &frame);
         page.energy_error(times[k], energy[k]);
     }
-    crate::view::finish(&page, total_steps, path)
+    crate::view::finish_reading(&page, total_steps, path, &sc.inputs)
 }
 
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

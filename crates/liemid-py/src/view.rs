@@ -48,9 +48,21 @@ fn view_page(
 
 /// Write `page` to `path` (checked like every output; returns the path), or return its HTML.
 pub(crate) fn finish(page: &ViewPage, total_steps: u64, path: Option<String>) -> PyResult<String> {
+    finish_reading(page, total_steps, path, &[])
+}
+
+/// [`finish`] for a run that read `inputs` (a model file and the files it includes), which
+/// the page may not replace.
+pub(crate) fn finish_reading(
+    page: &ViewPage,
+    total_steps: u64,
+    path: Option<String>,
+    inputs: &[std::path::PathBuf],
+) -> PyResult<String> {
     match path {
         Some(p) => {
-            let mut plan = liemid_app::shared::output::OutputPlan::new(&[]);
+            let inputs: Vec<&std::path::Path> = inputs.iter().map(std::path::PathBuf::as_path).collect();
+            let mut plan = liemid_app::shared::output::OutputPlan::new(&inputs);
             plan.add("view", std::path::Path::new(&p))
                 .map_err(PyValueError::new_err)?;
             page.write(std::path::Path::new(&p), total_steps)

@@ -126,3 +126,16 @@ def test_the_variational_drift_is_a_choice_of_the_liemid_methods() -> None:
         model.run(t_end=0.01, drift="cayley")
     with pytest.raises(ValueError, match="drift"):
         model.run("rk4", t_end=0.01, drift="variational")
+
+
+def test_the_view_page_never_replaces_a_file_the_model_was_read_from(tmp_path: Path) -> None:
+    # The scene includes arm.xml: a page written over it (or over the scene) is refused.
+    for name in ["arm_scene.xml", "arm.xml"]:
+        (tmp_path / name).write_bytes((ROOT / "examples" / "multibody" / name).read_bytes())
+    with pytest.warns(UserWarning, match="armature"):
+        run = multibody.load(tmp_path / "arm_scene.xml").run(step=1e-3, t_end=0.01, every=5)
+    for target in ["arm.xml", "arm_scene.xml"]:
+        before = (tmp_path / target).read_bytes()
+        with pytest.raises(ValueError, match="input"):
+            run.view(str(tmp_path / target))
+        assert (tmp_path / target).read_bytes() == before

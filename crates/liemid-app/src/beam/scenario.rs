@@ -295,7 +295,7 @@ pub fn parse(text: &str, name: &str, elements: Option<usize>) -> Result<BeamScen
 
 /// Load a structure file.
 pub fn load(path: &Path, elements: Option<usize>) -> Result<BeamScenario, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let text = crate::shared::input::read_text(path, crate::shared::input::MAX_SCENARIO_BYTES)?;
     let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("file");
     parse(&text, name, elements).map_err(|e| format!("{}: {e}", path.display()))
 }

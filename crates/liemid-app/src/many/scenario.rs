@@ -149,7 +149,7 @@ pub fn parse_cutoff_form(key: &str) -> Result<liemid::interactions::CutoffForm, 
 pub fn read(path: &Path) -> Result<Settings, String> {
     let mut s = Settings::default();
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{file}: cannot read: {e}"))?;
+    let text = crate::shared::input::read_text(path, crate::shared::input::MAX_SCENARIO_BYTES)?;
     let mut parse = || -> Result<(), String> {
         let root = parse_table(&text)?;
         for key in root.keys() {

@@ -151,13 +151,17 @@ pub fn load(path: &Path) -> Result<MultibodyScenario, String> {
         .unwrap_or("")
         .to_ascii_lowercase();
     let mut sc = match ext.as_str() {
-        "xml" | "mjcf" => {
-            let loaded = multibody::mjcf::load(path).map_err(|e| e.to_string())?;
-            MultibodyScenario::of(path.display().to_string(), loaded.model, loaded.ignored)
-        }
-        "urdf" => {
-            let loaded = multibody::urdf::load(path).map_err(|e| e.to_string())?;
-            MultibodyScenario::of(path.display().to_string(), loaded.model, loaded.ignored)
+        "xml" | "mjcf" | "urdf" => {
+            let loaded = if ext == "urdf" {
+                multibody::urdf::load(path)
+            } else {
+                multibody::mjcf::load(path)
+            }
+            .map_err(|e| e.to_string())?;
+            let mut sc = MultibodyScenario::of(path.display().to_string(), loaded.model, loaded.ignored);
+            // Every file read (the included ones too) is an input no output may replace.
+            sc.inputs.extend(loaded.files);
+            sc
         }
         "toml" => return read_toml(path),
         _ => {
@@ -173,7 +177,7 @@ pub fn load(path: &Path) -> Result<MultibodyScenario, String> {
 
 fn read_toml(path: &Path) -> Result<MultibodyScenario, String> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{file}: cannot read: {e}"))?;
+    let text = crate::shared::input::read_text(path, crate::shared::input::MAX_SCENARIO_BYTES)?;
     let parse = || -> Result<MultibodyScenario, String> {
         let root = parse_table(&text)?;
         for key in root.keys() {

@@ -189,7 +189,7 @@ pub fn load(path: &Path) -> Result<Scenario, String> {
 /// [`load`], also returning the text that was parsed.
 pub fn load_with_text(path: &Path) -> Result<(Scenario, String), String> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{file}: cannot read: {e}"))?;
+    let text = crate::shared::input::read_text(path, crate::shared::input::MAX_SCENARIO_BYTES)?;
     let scenario = parse(&text, &file).map_err(|e| format!("{file}: {e}"))?;
     Ok((scenario, text))
 }

@@ -265,7 +265,7 @@ impl Checkpoint {
     /// Read and check a checkpoint file.
     pub fn read(path: &Path) -> Result<Self, String> {
         let shown = path.display();
-        let text = std::fs::read_to_string(path).map_err(|e| format!("{shown}: cannot read: {e}"))?;
+        let text = crate::shared::input::read_text(path, crate::shared::input::MAX_CHECKPOINT_BYTES)?;
         let c: Checkpoint =
             serde_json::from_str(&text).map_err(|e| format!("{shown}: not a liemid checkpoint ({e})"))?;
         if c.format != FORMAT {

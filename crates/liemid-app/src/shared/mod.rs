@@ -1,4 +1,4 @@
-//! Machinery every domain uses: output paths and trajectory files (`output`), checkpoints,
+//! Machinery every domain uses: how an input file is read (`input`), output paths and trajectory files (`output`), checkpoints,
 //! `.npy` and extended XYZ files, the TOML tables of scenario files (`toml_table`), what a
 //! plot shows (`figure`), a study's progress (`progress`), the 3-D page of a run (`view`),
 //! CPU time for studies (`cpu_time`) and the DOP853 baseline's settings (`dop853`).
@@ -7,6 +7,7 @@ pub mod checkpoint;
 pub mod cpu_time;
 pub mod dop853;
 pub mod figure;
+pub mod input;
 pub mod npy;
 pub mod output;
 pub mod progress;

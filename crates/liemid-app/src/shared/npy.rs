@@ -23,7 +23,7 @@ pub fn matrix_bytes(rows: usize, columns: usize, data: &[f64]) -> Vec<u8> {
 /// cut short; the message names the file.
 pub fn read_matrix(path: &Path, columns: usize) -> Result<Vec<Vec<f64>>, String> {
     let file = path.display();
-    let bytes = std::fs::read(path).map_err(|e| format!("{file}: cannot read: {e}"))?;
+    let bytes = crate::shared::input::read_bytes(path, crate::shared::input::MAX_START_BYTES)?;
     if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
         return Err(format!("{file}: not a .npy file"));
     }

@@ -85,7 +85,7 @@ pub fn builtin(name: &str) -> Result<SpinScenario, String> {
 /// Read and parse a scenario file; errors are one line naming the file, section and key.
 pub fn load(path: &Path) -> Result<SpinScenario, String> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{file}: cannot read: {e}"))?;
+    let text = crate::shared::input::read_text(path, crate::shared::input::MAX_SCENARIO_BYTES)?;
     let dir = path.parent().unwrap_or(Path::new("."));
     let name = path
         .file_stem()

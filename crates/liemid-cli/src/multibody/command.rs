@@ -64,6 +64,9 @@ pub struct MultibodyArgs {
     /// and the energy error; frames every `--every` steps, subsampled to a byte budget.
     #[arg(long)]
     pub view: Option<PathBuf>,
+    /// Refuse runs of more than N steps (exit 2) before the first step [default: 10⁹].
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    pub max_steps: Option<u64>,
     /// dop853's relative tolerance (absolute: rtol / 1000) [default: 1e-12].
     #[arg(long)]
     pub rtol: Option<f64>,
@@ -155,6 +158,9 @@ pub fn multibody(args: &MultibodyArgs) -> CmdResult {
         eprintln!("liemid: note: {}: {note}", sc.name);
     }
     let n = liemid::rigid::driver::step_count(0.0, t_end, step).map_err(|e| input(e.to_string()))?;
+    if method != Method::Dop853 {
+        crate::shared::command::check_steps(n, args.max_steps)?;
+    }
     let sink = Sink::new(&sc, out.as_deref(), args.view.is_some())?;
     let (summary, sink) = match (method, prepared) {
         (Method::Liemid(m), Some(prepared)) => run_maximal(&sc, m, prepared, (step, t_end, n), every, sink)?,

@@ -72,7 +72,7 @@ pub struct RunArgs {
     /// Write trajectories larger than 4 GiB (refused by default, with an --every that fits).
     #[arg(long)]
     allow_large_output: bool,
-    /// Refuse runs of more than N steps (exit 2) before the first step.
+    /// Refuse runs of more than N steps (exit 2) before the first step [default: 10⁹].
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     max_steps: Option<u64>,
     /// Write a checkpoint to FILE every --checkpoint-every steps and on SIGINT/SIGTERM.
@@ -287,13 +287,7 @@ pub fn run(args: RunArgs) -> CmdResult {
             Num(settings.t_end)
         ))
     })?;
-    if let Some(max) = args.max_steps {
-        if steps > max {
-            return Err(Failure::Input(format!(
-                "the run would take {steps} steps, more than --max-steps {max}"
-            )));
-        }
-    }
+    crate::shared::command::check_steps(steps, args.max_steps)?;
     let format = match settings.output.as_ref().map(|(_, f)| f.as_str()) {
         Some("npy") => Format::Npy,
         _ => Format::Csv,

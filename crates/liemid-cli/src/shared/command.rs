@@ -24,6 +24,27 @@ pub fn check_positive(name: &str, v: f64) -> Result<f64, Failure> {
     }
 }
 
+/// The most steps a run takes unless `--max-steps` allows more: 10⁹ (a rigid body's run of
+/// that length takes a few minutes, a robot's hours), so that a mistyped `--t-end` is
+/// refused before the first step instead of running for days.
+pub const DEFAULT_MAX_STEPS: u64 = 1_000_000_000;
+
+/// Refuse (exit 2), before the first step, a run of `steps` steps beyond `--max-steps`
+/// (`max_steps`, [`DEFAULT_MAX_STEPS`] when not given).
+pub fn check_steps(steps: u64, max_steps: Option<u64>) -> Result<(), Failure> {
+    let max = max_steps.unwrap_or(DEFAULT_MAX_STEPS);
+    if steps <= max {
+        return Ok(());
+    }
+    let bound = match max_steps {
+        Some(m) => format!("--max-steps {m}"),
+        None => format!("the default bound of {DEFAULT_MAX_STEPS} (--max-steps N to allow more)"),
+    };
+    Err(Failure::Input(format!(
+        "the run would take {steps} steps, more than {bound}"
+    )))
+}
+
 /// A thread pool of `threads` (at most four per core), or of all cores.
 pub fn pool(threads: Option<u64>) -> Result<rayon::ThreadPool, Failure> {
     let mut b = rayon::ThreadPoolBuilder::new();

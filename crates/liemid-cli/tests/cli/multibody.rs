@@ -308,3 +308,53 @@ fn the_variational_drift_is_a_choice_of_the_liemid_methods() {
         assert!(stderr(&o).contains(said), "{args:?}: {}", stderr(&o));
     }
 }
+
+#[test]
+fn no_output_replaces_a_file_the_model_includes() {
+    // `arm_scene.xml` includes `arm.xml`: --out or --view onto either is refused, and both
+    // files are left as they were.
+    let dir = scratch("mb-include-out");
+    for name in ["arm_scene.xml", "arm.xml"] {
+        std::fs::copy(examples().join("multibody").join(name), dir.join(name)).unwrap();
+    }
+    for flag in ["--out", "--view"] {
+        for target in ["arm.xml", "arm_scene.xml"] {
+            let before = std::fs::read(dir.join(target)).unwrap();
+            let o = run_in(&dir, &["multibody", "arm_scene.xml", "--t-end", "0.01", flag, target]);
+            assert_eq!(o.status.code(), Some(2), "{flag} {target}: {}", stderr(&o));
+            assert!(stderr(&o).contains("is the input"), "{flag} {target}: {}", stderr(&o));
+            assert_eq!(
+                std::fs::read(dir.join(target)).unwrap(),
+                before,
+                "{flag} {target} changed"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_start_of_infinite_energy_is_refused_and_a_run_beyond_the_step_bound_too() {
+    let dir = scratch("mb-bounds");
+    let fast = r#"<mujoco model="fast"><option gravity="0 0 0"/><worldbody>
+<body name="b"><freejoint/><inertial pos="0 0 0" mass="1" diaginertia="1 2 2.5"/></body>
+</worldbody><keyframe><key qpos="0 0 0 1 0 0 0" qvel="1e308 0 0 0 0 0"/></keyframe></mujoco>"#;
+    std::fs::write(dir.join("fast.xml"), fast).unwrap();
+    let o = run_in(&dir, &["multibody", "fast.xml", "--t-end", "0.01", "--out", "fast.npy"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("energy is inf"), "{}", stderr(&o));
+    assert!(!dir.join("fast.npy").exists() && !dir.join("fast.npy.partial").exists());
+    // --t-end 1e9 at the default step: 1e12 steps, refused before the first.
+    let o = run_in(&dir, &["multibody", "--t-end", "1e9", "--out", "long.npy"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("more than the default bound"), "{}", stderr(&o));
+    assert!(!dir.join("long.npy.partial").exists());
+    // A zero keyframe quaternion is refused before any output file exists.
+    let zero = fast.replace(
+        r#"qpos="0 0 0 1 0 0 0" qvel="1e308 0 0 0 0 0""#,
+        r#"qpos="0 0 0 0 0 0 0""#,
+    );
+    std::fs::write(dir.join("zero.xml"), zero).unwrap();
+    let o = run_in(&dir, &["multibody", "zero.xml", "--out", "zero.npy"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(!dir.join("zero.npy").exists() && !dir.join("zero.npy.partial").exists());
+}

@@ -174,10 +174,16 @@ fn item_3_body_counts_beyond_memory_are_refused_and_threads_capped() {
     let threads = json(&stdout(&o))["threads"].as_u64().unwrap();
     let cores = std::thread::available_parallelism().unwrap().get() as u64;
     assert!(threads <= 4 * cores, "{threads} threads on {cores} cores");
-    // A trajectory larger than the limit is refused before the first step, with an --every.
-    let o = run_in(&dir, &["run", "--t-end", "1e5", "--step", "1e-5"]);
+    // A trajectory larger than the limit is refused before the first step, with an --every
+    // (1e10 steps: beyond the default step bound too, which --max-steps lifts).
+    let o = run_in(
+        &dir,
+        &["run", "--t-end", "1e5", "--step", "1e-5", "--max-steps", "20000000000"],
+    );
     assert_input_error(&o, "more than the 4 GiB limit");
     assert!(stderr(&o).contains("--every"));
+    let o = run_in(&dir, &["run", "--t-end", "1e5", "--step", "1e-5"]);
+    assert_input_error(&o, "more than the default bound");
     assert!(files_in(&dir).is_empty());
 }
 
@@ -650,5 +656,65 @@ fn a_closed_standard_output_is_not_a_panic_and_the_files_are_written() {
         if !file.is_empty() {
             assert!(dir.join(file).is_file(), "{args}: {file} not written");
         }
+    }
+}
+
+/// A FIFO given as a model, an included file, a scenario, a checkpoint or a spins start file
+/// is refused with exit 2 at once (it used to block forever in `open`, with no writer).
+#[cfg(unix)]
+#[test]
+fn a_fifo_as_any_input_is_refused_without_blocking() {
+    let dir = scratch("fifo-inputs");
+    let fifo = |name: &str| {
+        let path = dir.join(name);
+        let _ = std::fs::remove_file(&path);
+        let c = std::ffi::CString::new(path.to_str().unwrap()).unwrap();
+        assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0, "mkfifo {name}");
+    };
+    fifo("model.xml");
+    fifo("scenario.toml");
+    fifo("included.xml");
+    fifo("check.json");
+    fifo("start.npy");
+    std::fs::write(
+        dir.join("scene.xml"),
+        r#"<mujoco model="scene"><include file="included.xml"/></mujoco>"#,
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("spins.toml"),
+        "[lattice]\nkind = \"chain\"\nsize = [8]\nperiodic = true\n[hamiltonian]\nexchange = 1.0\n[dynamics]\nstep = 0.01\nt_end = 0.1\n[initial]\nfile = \"start.npy\"\n",
+    )
+    .unwrap();
+    for args in [
+        &["multibody", "model.xml"][..],
+        &["multibody", "scene.xml"],
+        &["run", "scenario.toml"],
+        &["run", "--resume", "check.json"],
+        &["spins", "spins.toml"],
+    ] {
+        let started = std::time::Instant::now();
+        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_liemid"))
+            .args(args)
+            .current_dir(&dir)
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        // A hang would leave the child running: give it a generous minute, then kill it.
+        let status = loop {
+            if let Some(status) = child.try_wait().unwrap() {
+                break Some(status);
+            }
+            if started.elapsed().as_secs() > 60 {
+                let _ = child.kill();
+                break None;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        };
+        let mut err = String::new();
+        std::io::Read::read_to_string(child.stderr.as_mut().unwrap(), &mut err).unwrap();
+        assert_eq!(status.and_then(|s| s.code()), Some(2), "{args:?} hung or failed: {err}");
+        assert!(err.contains("not a regular file"), "{args:?}: {err}");
     }
 }

@@ -112,7 +112,8 @@ impl Rattle {
     /// calling `observer(k, state, report)` after every step; returns the extremes.
     ///
     /// # Errors
-    /// The step's errors, [`crate::rigid::driver::step_count`]'s, and
+    /// The step's errors, [`crate::rigid::driver::step_count`]'s,
+    /// [`Error::NonFiniteResult`] when a step leaves a non-finite energy, and
     /// [`Error::ObserverFailed`] when the observer returns an error.
     ///
     /// Reference: `crate::rigid::driver::integrate` (the same time stepping).
@@ -141,7 +142,15 @@ impl Rattle {
             run.max_velocity_violation = run.max_velocity_violation.max(report.velocity_violation);
             run.max_iterations = run.max_iterations.max(report.iterations);
             run.total_iterations += u64::from(report.iterations);
-            let de = (system.energy(state) - e0).abs();
+            let energy = system.energy(state);
+            if !energy.is_finite() {
+                return Err(Error::NonFiniteResult {
+                    method: self.work.method_name,
+                    t: state.t,
+                    h,
+                });
+            }
+            let de = (energy - e0).abs();
             run.max_energy_error = run.max_energy_error.max(if e0 != 0.0 { de / e0.abs() } else { de });
             let dp = (system.linear_momentum(state) - p0).norm();
             run.max_linear_momentum_change = run.max_linear_momentum_change.max(dp);
@@ -176,7 +185,8 @@ impl Simulation {
     /// `1e-12`).
     ///
     /// # Errors
-    /// [`MultibodySystem::new`]'s and [`Rattle::initial_state_on_loops`]'s errors.
+    /// [`MultibodySystem::new`]'s and [`Rattle::initial_state_on_loops`]'s errors;
+    /// [`Error::InvalidModel`] when the start's energy is not finite.
     ///
     /// Reference: docs/theory/multibody.md §3 (the model), §6 (the projection).
     pub fn prepare(model: &Model, method: MultibodyMethod) -> Result<Prepared> {
@@ -193,6 +203,14 @@ impl Simulation {
         };
         let mut simulation = Simulation::new(model, method)?;
         let (state, position, velocity) = simulation.initial_state_on_loops(model)?;
+        let energy = simulation.system.energy(&state);
+        if !energy.is_finite() {
+            return Err(Error::InvalidModel {
+                reason: format!(
+                    "the start's energy is {energy} (a velocity or position too large for f64; rescale the units)"
+                ),
+            });
+        }
         if position > 1e-12 || velocity > 1e-12 {
             notes.push(ModelNote::StartProjected { position, velocity });
         }

@@ -41,7 +41,9 @@ pub use super::xml::Loaded;
 /// Loads a URDF file (at most 64 MiB).
 pub fn load(path: &Path) -> Result<Loaded> {
     let text = read_bounded(path)?;
-    parse(&text, &path.display().to_string())
+    let mut loaded = parse(&text, &path.display().to_string())?;
+    loaded.files = vec![path.to_path_buf()];
+    Ok(loaded)
 }
 
 /// Parses URDF text; `name_for_errors` names the file in error messages.
@@ -179,6 +181,7 @@ pub fn parse(text: &str, name_for_errors: &str) -> Result<Loaded> {
     }
     let built = build(raw)?;
     Ok(Loaded {
+        files: Vec::new(),
         model: Model {
             name: robot.attribute("name").unwrap_or_default().to_string(),
             bodies: built.bodies,

@@ -27,6 +27,10 @@ pub const MAX_NODES: u32 = 2_000_000;
 pub struct Loaded {
     /// The model.
     pub model: Model,
+    /// Every file read for the model: the main file and each file it `<include>`s, in the
+    /// order read (empty for text parsed from memory). Front ends treat them all as inputs
+    /// that no output may replace.
+    pub files: Vec<std::path::PathBuf>,
     /// Each kind of content that was read but not used (`"actuator"`, `"tendon"`,
     /// `"geom contacts"`, `"joint armature"`, …), once each, in the order first met.
     pub ignored: Vec<String>,
@@ -57,10 +61,22 @@ impl Ignored {
     }
 }
 
-/// Reads a model file, refusing files over [`MAX_FILE_BYTES`] before reading them whole.
+/// Reads a model file, refusing what is not a regular file (a FIFO would block `open`
+/// forever, a device would never end) and files over [`MAX_FILE_BYTES`] before reading
+/// them whole.
 pub(crate) fn read_bounded(path: &Path) -> Result<String> {
     let name = path.display().to_string();
     let io = |e: std::io::Error| file_error(&name, format!("cannot read the file: {e}"));
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if !meta.is_file() {
+        return Err(file_error(
+            &name,
+            "not a regular file (a directory, FIFO or device is not read as a model)".into(),
+        ));
+    }
+    if meta.len() > MAX_FILE_BYTES {
+        return Err(too_large(&name));
+    }
     let file = std::fs::File::open(path).map_err(io)?;
     let mut bytes = Vec::new();
     file.take(MAX_FILE_BYTES + 1).read_to_end(&mut bytes).map_err(io)?;

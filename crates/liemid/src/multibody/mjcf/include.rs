@@ -27,8 +27,9 @@ use crate::error::Result;
 pub const MAX_INCLUDE_DEPTH: usize = 16;
 
 /// The text of the model file `path` with every `<include>` replaced by the included
-/// file's content, and where each piece of it came from.
-pub(super) fn expand(path: &Path) -> Result<(String, Sources)> {
+/// file's content, where each piece of it came from, and every file read (the main file
+/// first).
+pub(super) fn expand(path: &Path) -> Result<(String, Sources, Vec<PathBuf>)> {
     let text = read_bounded(path)?;
     let mut assembler = Assembler {
         base: path.parent().map(Path::to_path_buf).unwrap_or_default(),
@@ -41,7 +42,7 @@ pub(super) fn expand(path: &Path) -> Result<(String, Sources)> {
     let name = assembler.main.clone();
     let dir = assembler.base.clone();
     assembler.splice(&text, &name, &dir, true)?;
-    Ok((assembler.out, assembler.sources))
+    Ok((assembler.out, assembler.sources, assembler.seen))
 }
 
 struct Assembler {

@@ -75,8 +75,10 @@ pub use super::xml::Loaded;
 /// Loads an MJCF file (at most 64 MiB with its includes expanded), reading the files it
 /// `<include>`s (see [`mod@include`]); no mesh or other asset file is read.
 pub fn load(path: &Path) -> Result<Loaded> {
-    let (text, sources) = include::expand(path)?;
-    parse_assembled(&text, &path.display().to_string(), &sources)
+    let (text, sources, files) = include::expand(path)?;
+    let mut loaded = parse_assembled(&text, &path.display().to_string(), &sources)?;
+    loaded.files = files;
+    Ok(loaded)
 }
 
 /// Parses MJCF text; `name_for_errors` names the file in error messages. An `<include>`
@@ -162,6 +164,7 @@ fn parse_assembled(text: &str, name_for_errors: &str, sources: &Sources) -> Resu
     let loops = equality::loop_joints(&cx, &equalities, &model, &built.merged, &mut st.ignored)?;
     model.joints.extend(loops);
     Ok(Loaded {
+        files: Vec::new(),
         model,
         ignored: st.ignored.into_vec(),
         merged: built.merged,
