@@ -281,6 +281,31 @@ impl Checkpoint {
                 r.steps, r.total_steps
             ));
         }
+        // A hand-edited checkpoint is checked like any input: its grid, its interval, its time
+        // and its attitude (the run resumes from them).
+        if c.settings.checkpoint.as_ref().is_some_and(|(_, every)| *every == 0) {
+            return Err(format!(
+                "{shown}: inconsistent checkpoint (a checkpoint interval of 0 steps)"
+            ));
+        }
+        let grid = liemid::step_count(r.t0, r.t_end, r.h).ok();
+        let t = r.state.t;
+        if grid != Some(r.total_steps) || !(t.is_finite() && t >= r.t0 && t <= r.t_end) {
+            return Err(format!(
+                "{shown}: inconsistent checkpoint (t = {t} on the grid from {} to {} by {}: {} steps recorded)",
+                r.t0, r.t_end, r.h, r.total_steps
+            ));
+        }
+        let rotation = liemid::Mat3::from_row_major(r.state.rotation);
+        if !(rotation.is_finite()
+            && liemid::so3::orthogonality_defect(&rotation) < 1e-6
+            && rotation.determinant() > 0.0)
+            || !r.state.pi.iter().all(|x| x.is_finite())
+        {
+            return Err(format!(
+                "{shown}: inconsistent checkpoint (its attitude is not a rotation or its state not finite)"
+            ));
+        }
         Ok(c)
     }
 }

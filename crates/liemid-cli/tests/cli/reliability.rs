@@ -718,3 +718,46 @@ fn a_fifo_as_any_input_is_refused_without_blocking() {
         assert!(err.contains("not a regular file"), "{args:?}: {err}");
     }
 }
+
+/// A hand-edited checkpoint is checked like any input before a step is taken: a checkpoint
+/// interval of 0 (it used to divide by zero, exit 101), a time beyond the run's end, a
+/// recorded step count off the run's grid, and an attitude that is not a rotation (each
+/// used to resume with exit 0) are refused with exit 2, one line, nothing written.
+#[test]
+fn an_edited_checkpoint_is_refused_before_the_first_step() {
+    let dir = scratch("edited-checkpoint");
+    let o = run_in(
+        &dir,
+        &[
+            "run",
+            "--t-end",
+            "3",
+            "--out",
+            "cut.csv",
+            "--checkpoint",
+            "c.json",
+            "--checkpoint-every",
+            "7000",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    std::fs::rename(dir.join("cut.csv"), dir.join("cut.csv.partial")).unwrap();
+    let good = json(&std::fs::read_to_string(dir.join("c.json")).unwrap());
+    assert_eq!(good["run"]["steps"], 28000);
+    let edits: [(&str, fn(&mut serde_json::Value)); 4] = [
+        ("a checkpoint interval of 0", |c| {
+            c["settings"]["checkpoint"][1] = 0.into()
+        }),
+        ("on the grid", |c| c["run"]["state"]["t"] = 7.5.into()),
+        ("on the grid", |c| c["run"]["total_steps"] = 1_000_000_000_000u64.into()),
+        ("not a rotation", |c| c["run"]["state"]["rotation"][0] = 2.0.into()),
+    ];
+    for (said, edit) in edits {
+        let mut c = good.clone();
+        edit(&mut c);
+        std::fs::write(dir.join("e.json"), c.to_string()).unwrap();
+        let o = run_in(&dir, &["run", "--resume", "e.json"]);
+        assert_input_error(&o, said);
+        assert!(!dir.join("cut.csv").exists(), "{said}: the trajectory was finished");
+    }
+}
