@@ -297,11 +297,11 @@ impl Checkpoint {
             ));
         }
         let rotation = liemid::Mat3::from_row_major(r.state.rotation);
-        if !(rotation.is_finite()
+        let valid = rotation.is_finite()
             && liemid::so3::orthogonality_defect(&rotation) < 1e-6
-            && rotation.determinant() > 0.0)
-            || !r.state.pi.iter().all(|x| x.is_finite())
-        {
+            && rotation.determinant() > 0.0
+            && r.state.pi.iter().all(|x| x.is_finite());
+        if !valid {
             return Err(format!(
                 "{shown}: inconsistent checkpoint (its attitude is not a rotation or its state not finite)"
             ));

@@ -744,7 +744,8 @@ fn an_edited_checkpoint_is_refused_before_the_first_step() {
     std::fs::rename(dir.join("cut.csv"), dir.join("cut.csv.partial")).unwrap();
     let good = json(&std::fs::read_to_string(dir.join("c.json")).unwrap());
     assert_eq!(good["run"]["steps"], 28000);
-    let edits: [(&str, fn(&mut serde_json::Value)); 4] = [
+    type Edit = fn(&mut serde_json::Value);
+    let edits: [(&str, Edit); 4] = [
         ("a checkpoint interval of 0", |c| {
             c["settings"]["checkpoint"][1] = 0.into()
         }),
