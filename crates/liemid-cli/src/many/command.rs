@@ -29,7 +29,7 @@ const THREADS_PER_CORE: usize = 4;
 const WORKING_BYTES_PER_BODY: usize = 2 * liemid::many::BYTES_PER_BODY;
 
 /// Columns of the totals file.
-const TOTALS_COLUMNS: [&str; 8] = ["t", "energy", "px", "py", "pz", "lx", "ly", "lz"];
+pub(crate) const TOTALS_COLUMNS: [&str; 8] = ["t", "energy", "px", "py", "pz", "lx", "ly", "lz"];
 
 /// Available memory from `/proc/meminfo` (bytes), if it can be read.
 fn available_memory() -> Option<u64> {
