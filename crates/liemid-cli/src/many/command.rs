@@ -640,7 +640,9 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
         match &resumed {
             Some(r) => {
                 if r.box_length.is_some() {
-                    return Err(input("the state file --resume is of a periodic system, not of this model".into()));
+                    return Err(input(
+                        "the state file --resume is of a periodic system, not of this model".into(),
+                    ));
                 }
                 Ok(r.bodies.clone())
             }
@@ -650,11 +652,27 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
     let outcome = pool.install(|| match args.model {
         Model::Independent => {
             let (b, m) = problems::top_ensemble(n, args.seed);
-            run_model(args, from_state(b)?, &m, run, &interrupt, observers(None, axis, 1.0), &plain)
+            run_model(
+                args,
+                from_state(b)?,
+                &m,
+                run,
+                &interrupt,
+                observers(None, axis, 1.0),
+                &plain,
+            )
         }
         Model::TorqueFree => {
             let (b, m) = problems::torque_free_ensemble(n, args.seed);
-            run_model(args, from_state(b)?, &m, run, &interrupt, observers(None, axis, 1.0), &plain)
+            run_model(
+                args,
+                from_state(b)?,
+                &m,
+                run,
+                &interrupt,
+                observers(None, axis, 1.0),
+                &plain,
+            )
         }
         Model::Dipoles => {
             // A bad density, cutoff or switch is bad input (exit 2), not a failed run.
@@ -707,7 +725,16 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
                 last: cli.state.as_deref(),
                 reference: &listed,
             };
-            run_model(args, b, &m, run, &interrupt, observers(m.box_length, axis, 0.9), &dipole_states).map_err(|f| match f {
+            run_model(
+                args,
+                b,
+                &m,
+                run,
+                &interrupt,
+                observers(m.box_length, axis, 0.9),
+                &dipole_states,
+            )
+            .map_err(|f| match f {
                 Failure::Run(m) => Failure::Run(format!("{m} (density {}, step {})", Num(args.density), Num(h))),
                 other => other,
             })

@@ -74,7 +74,11 @@ fn agree(world: &SimpleCommunicator, local: Result<(), Failure>) -> Result<(), F
         Err(e) => Err(e),
         Ok(()) => {
             let line = format!("stopped: rank {} failed (its line says why)", size - all[1]);
-            Err(if all[0] == 2 { Failure::Input(line) } else { Failure::Run(line) })
+            Err(if all[0] == 2 {
+                Failure::Input(line)
+            } else {
+                Failure::Run(line)
+            })
         }
     }
 }
@@ -115,7 +119,9 @@ fn run(cli: &ManyArgs, world: &SimpleCommunicator) -> CmdResult {
     let (mut all, mut model) = seeded.map_err(|e| Failure::Input(e.to_string()))?;
     if let Some(r_s) = args.switch_start {
         if model.cutoff.is_some() {
-            model = model.with_switch_start(r_s).map_err(|e| Failure::Input(e.to_string()))?;
+            model = model
+                .with_switch_start(r_s)
+                .map_err(|e| Failure::Input(e.to_string()))?;
         }
     }
     model.cutoff_form = args.cutoff_form;
@@ -147,7 +153,8 @@ fn run(cli: &ManyArgs, world: &SimpleCommunicator) -> CmdResult {
         pool = pool.num_threads(usize::try_from(k).unwrap_or(1));
     }
     // The process's global pool (the communicator cannot move into another pool's threads).
-    pool.build_global().map_err(|e| Failure::Run(format!("thread pool: {e}")))?;
+    pool.build_global()
+        .map_err(|e| Failure::Run(format!("thread pool: {e}")))?;
     let threads = rayon::current_num_threads();
     let domain_error = |e: DomainError| match e {
         DomainError::Input(m) => Failure::Input(m),
@@ -235,7 +242,11 @@ fn run(cli: &ManyArgs, world: &SimpleCommunicator) -> CmdResult {
         observe(&domain, &mut out, j + 1, last)?;
     }
     let wall = started.elapsed().as_secs_f64();
-    let finished = if rank == 0 { out.map_or(Ok(()), |w| w.finish().map(|_| ()).map_err(Failure::Run)) } else { Ok(()) };
+    let finished = if rank == 0 {
+        out.map_or(Ok(()), |w| w.finish().map(|_| ()).map_err(Failure::Run))
+    } else {
+        Ok(())
+    };
     agree(world, finished)?;
     // The communication counted on every rank, summed.
     let s = domain.stats;
@@ -277,8 +288,10 @@ fn run(cli: &ManyArgs, world: &SimpleCommunicator) -> CmdResult {
         });
         match cli.json.as_deref() {
             Some("-") => crate::outln!("{summary}"),
-            Some(path) => crate::shared::output::write_atomically(Path::new(path), (summary.to_string() + "\n").as_bytes())
-                .map_err(|e| Failure::Run(format!("{path}: cannot write: {e}")))?,
+            Some(path) => {
+                crate::shared::output::write_atomically(Path::new(path), (summary.to_string() + "\n").as_bytes())
+                    .map_err(|e| Failure::Run(format!("{path}: cannot write: {e}")))?
+            }
             None => {}
         }
         if cli.json.as_deref() != Some("-") {

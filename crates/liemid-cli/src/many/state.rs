@@ -94,7 +94,10 @@ fn decode(bytes: &[u8]) -> Result<State, String> {
     let u64_at = |k: usize| u64::from_le_bytes(bytes[k..k + 8].try_into().expect("8 bytes"));
     let f64_at = |k: usize| f64::from_bits(u64_at(k));
     if u32_at(18) != VERSION {
-        return Err(format!("state file version {}, this liemid reads {VERSION}", u32_at(18)));
+        return Err(format!(
+            "state file version {}, this liemid reads {VERSION}",
+            u32_at(18)
+        ));
     }
     let n = u64_at(22);
     let expected = (n as u128) * (RECORD as u128 * 8) + HEADER as u128;

@@ -231,11 +231,11 @@ impl<'a> DomainRun<'a> {
         bodies.langevin_steps = all.langevin_steps;
         let mut ids = Vec::new();
         let mut own_reference = Vec::new();
-        for i in 0..n {
-            if slabs.owner(reference[i].x) == rank {
+        for (i, x0) in reference.iter().enumerate() {
+            if slabs.owner(x0.x) == rank {
                 push_body(&mut bodies, all, i).map_err(DomainError::Input)?;
                 ids.push(i as u64);
-                own_reference.push(reference[i]);
+                own_reference.push(*x0);
             }
         }
         let mut run = DomainRun {
@@ -300,7 +300,8 @@ impl<'a> DomainRun<'a> {
     fn all_to_all(&mut self, counts_known: bool) {
         self.send_displs = displacements(&self.send_counts);
         if !counts_known {
-            self.comm.all_to_all_into(&self.send_counts[..], &mut self.recv_counts[..]);
+            self.comm
+                .all_to_all_into(&self.send_counts[..], &mut self.recv_counts[..]);
             self.recv_displs = displacements(&self.recv_counts);
         }
         let total: usize = self.recv_counts.iter().map(|&c| c as usize).sum();
@@ -485,9 +486,13 @@ impl<'a> DomainRun<'a> {
             .zip(&self.reference)
             .all(|(x, x0)| (*x - *x0).norm_squared() <= limit);
         let ranks = self.slabs.ranks as i64;
-        let local = [i64::from(stale), if failed.is_some() { ranks - self.rank as i64 } else { 0 }];
+        let local = [
+            i64::from(stale),
+            if failed.is_some() { ranks - self.rank as i64 } else { 0 },
+        ];
         let mut global = [0i64; 2];
-        self.comm.all_reduce_into(&local[..], &mut global[..], SystemOperation::max());
+        self.comm
+            .all_reduce_into(&local[..], &mut global[..], SystemOperation::max());
         if global[1] > 0 {
             let first = (ranks - global[1]) as usize;
             return Err(DomainError::Run(match failed {
@@ -582,7 +587,13 @@ impl<'a> DomainRun<'a> {
 
 /// Append body `q`'s [`MIGRATE_RECORD`] numbers (identity bits first).
 fn pack_body(b: &Bodies, q: usize, id: u64, reference: Vec3, out: &mut Vec<f64>) {
-    let (x, p, r, pi, g) = (b.position[q], b.momentum[q], &b.rotation[q], b.pi[q], b.inertia[q].moments);
+    let (x, p, r, pi, g) = (
+        b.position[q],
+        b.momentum[q],
+        &b.rotation[q],
+        b.pi[q],
+        b.inertia[q].moments,
+    );
     out.push(f64::from_bits(id));
     out.extend_from_slice(&[b.mass[q], g.x, g.y, g.z, f64::from(u8::from(b.free[q]))]);
     out.extend_from_slice(&[x.x, x.y, x.z, p.x, p.y, p.z]);

@@ -192,7 +192,12 @@ impl Dipoles {
     }
 
     /// A cell list whose stencil reaches every body within `cutoff`.
-    pub(super) fn build_cells_of<'a>(&self, c: &Configuration<'_>, s: &'a mut Scratch, cutoff: f64) -> Option<Cells<'a>> {
+    pub(super) fn build_cells_of<'a>(
+        &self,
+        c: &Configuration<'_>,
+        s: &'a mut Scratch,
+        cutoff: f64,
+    ) -> Option<Cells<'a>> {
         let n_bodies = c.position.len();
         let (origin, extent, periodic) = match self.box_length {
             Some(l) => (Vec3::ZERO, Vec3::new(l, l, l), true),
@@ -298,7 +303,14 @@ impl Dipoles {
     /// box shorter than twice the reach). A domain's list ([`super::domain`]) is built with
     /// it over the bodies it holds, indexed in the order of their identities, so that each
     /// of its bodies gets the same neighbours in the same order as in the whole system.
-    pub(super) fn for_listed(&self, i: usize, c: &Configuration<'_>, cells: &Cells<'_>, reach: f64, mut f: impl FnMut(usize)) {
+    pub(super) fn for_listed(
+        &self,
+        i: usize,
+        c: &Configuration<'_>,
+        cells: &Cells<'_>,
+        reach: f64,
+        mut f: impl FnMut(usize),
+    ) {
         let reach2 = reach * reach;
         let constants = self.constants();
         let images = (!cells.periodic || cells.span >= 2.0 * reach).then_some((cells.wrapped, cells.cell_rank));
