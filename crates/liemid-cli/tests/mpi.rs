@@ -144,10 +144,10 @@ fn bad_use_is_refused_on_every_rank() {
     let n = |b: &'static str| ["--model", "dipoles", "--bodies", b, "--t-end", "0.01"];
     // 2000 bodies at density 0.3: a box of 18.8, 5 slabs of the reach 3.3 at most.
     refused(6, &mpirun(6, &n("2000")), "more than the 5 slabs");
-    // 300 bodies: a box of 10 (twice the cutoff 3, less than 3 reaches).
-    refused(2, &mpirun(2, &n("300")), "too small for the decomposition");
-    // 100 bodies: a box of 6.9, shorter than twice the cutoff: not periodic.
-    refused(2, &mpirun(2, &n("100")), "not periodic");
+    // 200 bodies: a box of 8.7 (more than twice the cutoff 3, less than 3 reaches).
+    refused(2, &mpirun(2, &n("200")), "too small for the decomposition");
+    // 50 bodies: a box of 5.5, shorter than twice the cutoff: not periodic.
+    refused(2, &mpirun(2, &n("50")), "not periodic");
     refused(
         2,
         &mpirun(2, &["--model", "torque-free"]),

@@ -90,8 +90,24 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
     };
     let world = universe.world();
     let result = run(cli, &world);
+    // Every failure from `run` is reached by every rank alike: each prints its line and all
+    // meet before any exits (the launcher stops the others once one exits non-zero).
+    let code = match &result {
+        Ok(()) => return Ok(()),
+        Err(Failure::Input(m)) => {
+            eprintln!("liemid: error: {m}");
+            2
+        }
+        Err(Failure::Run(m) | Failure::Signal(_, m)) => {
+            eprintln!("liemid: error: {m}");
+            1
+        }
+    };
+    use std::io::Write as _;
+    let _ = std::io::stderr().flush();
+    world.barrier();
     drop(universe);
-    result
+    std::process::exit(code)
 }
 
 fn run(cli: &ManyArgs, world: &SimpleCommunicator) -> CmdResult {
