@@ -194,7 +194,10 @@ fn run(cli: &ManyArgs, world: &SimpleCommunicator) -> CmdResult {
     agree(world, opened)?;
     let mut first = None;
     let mut observe = |d: &DomainRun<'_>, out: &mut Option<TrajectoryWriter>, k: u64, last: bool| -> CmdResult {
-        let wanted = k % args.every == 0 || last || k == start || cli.checkpoint_at == Some(k);
+        // Gathered only where something is written (the totals file every `every` steps,
+        // the checkpoint, the first and last totals): the gather and rank 0's totals hold
+        // the other ranks at their next reduction.
+        let wanted = (args.out.is_some() && k % args.every == 0) || last || k == start || cli.checkpoint_at == Some(k);
         if !wanted {
             return Ok(());
         }
