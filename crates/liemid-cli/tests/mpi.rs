@@ -123,6 +123,23 @@ fn same_bytes_on_1_2_3_ranks_as_one_process_and_checkpoints_cross_resume() {
     ] {
         assert!(bytes(f) == reference, "resumed {name}: the final state differs");
     }
+    // The totals file and the XYZ trajectory, written by rank 0 from the gathered bodies.
+    let (sc, sx, mc, mx) = (path("s.csv"), path("s.xyz"), path("m.csv"), path("m.xyz"));
+    let files = |c: &Path, x: &Path| ["--out".to_owned(), s(c), "--trajectory".to_owned(), s(x)];
+    ok(&serial(
+        &[
+            &FLUID[..],
+            &["--pair-list", "full"],
+            &files(&sc, &sx).each_ref().map(String::as_str),
+        ]
+        .concat(),
+    ));
+    ok(&mpirun(
+        2,
+        &[&FLUID[..], &files(&mc, &mx).each_ref().map(String::as_str)].concat(),
+    ));
+    assert!(bytes(&sc) == bytes(&mc), "the totals files differ");
+    assert!(bytes(&sx) == bytes(&mx), "the trajectories differ");
     let _ = std::fs::remove_dir_all(&d);
 }
 

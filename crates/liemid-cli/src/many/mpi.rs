@@ -192,12 +192,23 @@ fn run(cli: &ManyArgs, world: &SimpleCommunicator) -> CmdResult {
         Ok(())
     };
     agree(world, opened)?;
+    let traj_every = cli.trajectory_every.unwrap_or(args.every);
+    let mut frames = None;
+    let opened = match (&cli.trajectory, rank) {
+        (Some(p), 0) => crate::shared::xyz::FrameWriter::create(p)
+            .map(|w| frames = Some(w))
+            .map_err(Failure::Run),
+        _ => Ok(()),
+    };
+    agree(world, opened)?;
     let mut first = None;
     let mut observe = |d: &DomainRun<'_>, out: &mut Option<TrajectoryWriter>, k: u64, last: bool| -> CmdResult {
         // Gathered only where something is written (the totals file every `every` steps,
         // the checkpoint, the first and last totals): the gather and rank 0's totals hold
         // the other ranks at their next reduction.
-        let wanted = (args.out.is_some() && k % args.every == 0) || last || k == start || cli.checkpoint_at == Some(k);
+        let frame = cli.trajectory.is_some() && (k % traj_every == 0 || last);
+        let wanted =
+            (args.out.is_some() && k % args.every == 0) || frame || last || k == start || cli.checkpoint_at == Some(k);
         if !wanted {
             return Ok(());
         }
@@ -213,6 +224,9 @@ fn run(cli: &ManyArgs, world: &SimpleCommunicator) -> CmdResult {
                     let (p, l) = (tot.linear_momentum, tot.angular_momentum);
                     w.write_row(&[b.t, tot.energy, p.x, p.y, p.z, l.x, l.y, l.z])
                         .map_err(Failure::Run)?;
+                }
+                if let Some(w) = frames.as_mut().filter(|_| frame) {
+                    w.write_frame(&b, box_length).map_err(Failure::Run)?;
                 }
                 let write_state = |path: &Path| {
                     let s = State {
@@ -261,8 +275,10 @@ fn run(cli: &ManyArgs, world: &SimpleCommunicator) -> CmdResult {
         observe(&domain, &mut out, j + 1, last)?;
     }
     let wall = started.elapsed().as_secs_f64();
+    drop(observe);
     let finished = if rank == 0 {
         out.map_or(Ok(()), |w| w.finish().map(|_| ()).map_err(Failure::Run))
+            .and_then(|()| frames.map_or(Ok(()), |w| w.finish().map(|_| ()).map_err(Failure::Run)))
     } else {
         Ok(())
     };
@@ -346,7 +362,6 @@ fn prepare(cli: &ManyArgs, ranks: usize) -> Result<Prepared, Failure> {
         (args.thermostat.is_some(), "--temperature"),
         (cli.rdf.is_some(), "--rdf"),
         (cli.view.is_some(), "--view"),
-        (cli.trajectory.is_some(), "--trajectory"),
         (cli.pair_list.as_deref() == Some("half"), "--pair-list half"),
     ] {
         if given {
@@ -391,6 +406,7 @@ fn prepare(cli: &ManyArgs, ranks: usize) -> Result<Prepared, Failure> {
         ("--out", args.out.as_deref()),
         ("--state", cli.state.as_deref()),
         ("--checkpoint", cli.checkpoint.as_deref()),
+        ("--trajectory", cli.trajectory.as_deref()),
         ("--json", cli.json.as_deref().filter(|j| *j != "-").map(Path::new)),
     ] {
         if let Some(p) = path {

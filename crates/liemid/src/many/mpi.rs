@@ -155,14 +155,18 @@ pub struct DomainRun<'a> {
 }
 
 fn displacements(counts: &[Count]) -> Vec<Count> {
-    counts
-        .iter()
-        .scan(0, |acc, &c| {
-            let d = *acc;
-            *acc += c;
-            Some(d)
-        })
-        .collect()
+    let mut d = vec![0; counts.len()];
+    displace(counts, &mut d);
+    d
+}
+
+/// The displacements of `counts` (their running sums from 0) into `d`, without allocating.
+fn displace(counts: &[Count], d: &mut [Count]) {
+    let mut acc = 0;
+    for (c, d) in counts.iter().zip(d) {
+        *d = acc;
+        acc += c;
+    }
 }
 
 fn count(n: usize) -> Count {
@@ -298,11 +302,11 @@ impl<'a> DomainRun<'a> {
     /// `MPI_Alltoallv` of `send_buffer` by `send_counts` into `recv_buffer` (counts in
     /// numbers): first the counts, unless `counts_known`.
     fn all_to_all(&mut self, counts_known: bool) {
-        self.send_displs = displacements(&self.send_counts);
+        displace(&self.send_counts, &mut self.send_displs);
         if !counts_known {
             self.comm
                 .all_to_all_into(&self.send_counts[..], &mut self.recv_counts[..]);
-            self.recv_displs = displacements(&self.recv_counts);
+            displace(&self.recv_counts, &mut self.recv_displs);
         }
         let total: usize = self.recv_counts.iter().map(|&c| c as usize).sum();
         self.recv_buffer.resize(total, 0.0);
@@ -400,7 +404,7 @@ impl<'a> DomainRun<'a> {
         for c in &mut self.recv_counts {
             *c = *c / count(GHOST_SETUP_RECORD) * count(GHOST_RECORD);
         }
-        self.recv_displs = displacements(&self.recv_counts);
+        displace(&self.recv_counts, &mut self.recv_displs);
         self.stats.builds += 1;
         self.stats.ghosts = ghosts;
         self.stats.owned = self.ids.len();
