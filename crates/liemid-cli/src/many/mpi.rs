@@ -275,7 +275,6 @@ fn run(cli: &ManyArgs, world: &SimpleCommunicator) -> CmdResult {
         observe(&domain, &mut out, j + 1, last)?;
     }
     let wall = started.elapsed().as_secs_f64();
-    drop(observe);
     let finished = if rank == 0 {
         out.map_or(Ok(()), |w| w.finish().map(|_| ()).map_err(Failure::Run))
             .and_then(|()| frames.map_or(Ok(()), |w| w.finish().map(|_| ()).map_err(Failure::Run)))
