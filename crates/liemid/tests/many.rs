@@ -857,3 +857,69 @@ fn the_exact_rotation_is_lie_poisson_and_the_midpoint_rotation_is_not() {
         assert!(midpoint > 1e-7, "midpoint at h = {h}: {midpoint:e}");
     }
 }
+
+/// A slab of a periodic dipolar fluid (`DomainForces`: its own bodies and the ghosts within
+/// the reach, indexed by identity) gets the forces and torques of the whole system's full
+/// list bit for bit, for 1 to 4 slabs: what makes `mpirun -n R liemid many` give the same
+/// bits on any R (the MPI exchange only moves these numbers).
+#[test]
+fn a_slab_with_its_ghosts_gets_the_whole_systems_full_list_forces_bit_for_bit() {
+    use liemid::interactions::DomainForces;
+    use liemid::many::problems::dipolar_fluid_with_cutoff;
+    let (mut b, mut model) = dipolar_fluid_with_cutoff(3000, 0.3, 7, 3.0).unwrap();
+    model.half_list_max_bodies = 0;
+    // Off the lattice, some bodies across the box's faces (positions are never wrapped).
+    for _ in 0..40 {
+        b.step(&model, 2e-3).unwrap();
+    }
+    let (l, reach) = (model.box_length.unwrap(), model.reach().unwrap());
+    let fresh = {
+        let mut m = dipolar_fluid_with_cutoff(3000, 0.3, 7, 3.0).unwrap().1;
+        m.half_list_max_bodies = 0;
+        m
+    };
+    let mut force = vec![Vec3::ZERO; b.len()];
+    let mut torque = vec![Vec3::ZERO; b.len()];
+    fresh.compute(b.configuration(), &mut force, &mut torque);
+    let wrap = |x: f64| x - (x / l).floor() * l;
+    let dipole: Vec<Vec3> = b.rotation.iter().map(|r| *r * model.moment).collect();
+    for ranks in 1..=4usize {
+        let width = l / ranks as f64;
+        for r in 0..ranks {
+            let (lo, hi) = (r as f64 * width, (r + 1) as f64 * width);
+            let owner = |x: f64| ((wrap(x) / width) as usize).min(ranks - 1);
+            let near = |x: f64| {
+                let x = wrap(x);
+                let m = |v: f64| v - (v / l).floor() * l;
+                m(lo - x) <= reach * 1.000_001 || m(x - hi) <= reach * 1.000_001
+            };
+            // Held bodies in identity order, owned or ghost.
+            let held: Vec<usize> = (0..b.len())
+                .filter(|&i| owner(b.position[i].x) == r || near(b.position[i].x))
+                .collect();
+            let owned: Vec<u32> = (0..held.len())
+                .filter(|&k| owner(b.position[held[k]].x) == r)
+                .map(|k| k as u32)
+                .collect();
+            let position: Vec<Vec3> = held.iter().map(|&i| b.position[i]).collect();
+            let dipoles: Vec<Vec3> = held.iter().map(|&i| dipole[i]).collect();
+            let rotation: Vec<Mat3> = owned.iter().map(|&k| b.rotation[held[k as usize]]).collect();
+            let mut domain = DomainForces::new();
+            assert!(domain.build(&model, &position, &owned));
+            let (mut f, mut t) = (vec![Vec3::ZERO; owned.len()], vec![Vec3::ZERO; owned.len()]);
+            domain.forces(&model, &position, &dipoles, &owned, &rotation, &mut f, &mut t);
+            for (q, &k) in owned.iter().enumerate() {
+                let i = held[k as usize];
+                assert!(
+                    f[q].to_array().map(f64::to_bits) == force[i].to_array().map(f64::to_bits)
+                        && t[q].to_array().map(f64::to_bits) == torque[i].to_array().map(f64::to_bits),
+                    "{ranks} slabs, slab {r}, body {i}: {:?} {:?} against {:?} {:?}",
+                    f[q],
+                    t[q],
+                    force[i],
+                    torque[i]
+                );
+            }
+        }
+    }
+}

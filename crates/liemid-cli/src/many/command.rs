@@ -29,7 +29,7 @@ const THREADS_PER_CORE: usize = 4;
 const WORKING_BYTES_PER_BODY: usize = 2 * liemid::many::BYTES_PER_BODY;
 
 /// Columns of the totals file.
-const TOTALS_COLUMNS: [&str; 8] = ["t", "energy", "px", "py", "pz", "lx", "ly", "lz"];
+pub(crate) const TOTALS_COLUMNS: [&str; 8] = ["t", "energy", "px", "py", "pz", "lx", "ly", "lz"];
 
 /// Available memory from `/proc/meminfo` (bytes), if it can be read.
 fn available_memory() -> Option<u64> {
@@ -119,20 +119,65 @@ pub struct ManyArgs {
     /// `--every` steps (frames subsampled to the page's byte budget).
     #[arg(long)]
     pub view: Option<PathBuf>,
+    /// The dipolar fluid's pair list: `half` (each pair once, Newton's third law; the
+    /// default in one process) or `full` (each body sums its own neighbours, in the order
+    /// MPI runs sum them: the same bits on any number of ranks).
+    #[arg(long, value_parser = ["half", "full"])]
+    pub pair_list: Option<String>,
+    /// Write the final state (every body in body order, and the positions of the last
+    /// neighbour-list build) to this binary file; `--resume` reads it.
+    #[arg(long)]
+    pub state: Option<PathBuf>,
+    /// Write the state after `--checkpoint-at` steps to this file (and go on).
+    #[arg(long, requires = "checkpoint_at")]
+    pub checkpoint: Option<PathBuf>,
+    /// The step after which `--checkpoint` is written.
+    #[arg(long, requires = "checkpoint", value_parser = clap::value_parser!(u64).range(1..))]
+    pub checkpoint_at: Option<u64>,
+    /// Start from a state file (`--state` or `--checkpoint`, written in one process or on
+    /// any number of MPI ranks) and run on to `--t-end` with the same step: the bits of an
+    /// uninterrupted run.
+    #[arg(long)]
+    pub resume: Option<PathBuf>,
 }
 
 /// Bodies above which `--rdf` is refused (its pair count grows as N²).
 const MAX_RDF_BODIES: usize = 20_000;
 
 /// What a run observes besides the totals.
-struct Observers {
+pub(crate) struct Observers {
     trajectory: Option<(PathBuf, u64)>,
     rdf: Option<liemid::many::observables::PairHistogram>,
     box_length: Option<f64>,
     view: Option<ViewPage>,
 }
 
-fn settings(args: &ManyArgs) -> Result<Settings, String> {
+/// Where a run starts and which states it writes.
+pub(crate) struct Checkpoints<'a> {
+    /// Steps already done (from `--resume`).
+    pub start: u64,
+    /// `--checkpoint-at` and `--checkpoint`.
+    pub at: Option<(u64, &'a Path)>,
+    /// `--state`.
+    pub last: Option<&'a Path>,
+    /// The positions of the last neighbour-list build (the positions without a list).
+    pub reference: &'a (dyn Fn(&Bodies) -> Vec<liemid::Vec3> + Sync),
+}
+
+impl Checkpoints<'_> {
+    fn write(&self, path: &Path, b: &Bodies, steps: u64, h: f64, box_length: Option<f64>) -> Result<(), String> {
+        let s = super::state::State {
+            bodies: b.clone(),
+            reference: (self.reference)(b),
+            steps,
+            h,
+            box_length,
+        };
+        super::state::write(path, &s)
+    }
+}
+
+pub(crate) fn settings(args: &ManyArgs) -> Result<Settings, String> {
     let mut s = match &args.scenario {
         Some(path) => scenario::read(path)?,
         None => Settings::default(),
@@ -210,6 +255,7 @@ fn run_model<I: Interaction>(
     (h, t_end, steps): (f64, f64, u64),
     interrupt: &Interrupt,
     mut observers: Observers,
+    states: &Checkpoints<'_>,
 ) -> Result<Outcome, Failure> {
     let thermostat = match args.thermostat {
         Some((kt, friction)) => Some(
@@ -222,6 +268,13 @@ fn run_model<I: Interaction>(
         Some((p, _)) => Some(crate::shared::xyz::FrameWriter::create(p).map_err(Failure::Run)?),
         None => None,
     };
+    if states.start > 0 && bodies.free_rotation() != args.rotation {
+        return Err(Failure::Input(format!(
+            "the state file --resume was written with the {} rotation, this run asks for {}",
+            bodies.free_rotation().key(),
+            args.rotation.key()
+        )));
+    }
     bodies
         .set_free_rotation(args.rotation)
         .map_err(|e| Failure::Run(e.to_string()))?;
@@ -280,7 +333,8 @@ fn run_model<I: Interaction>(
     }
     let bar = progress(steps, "steps", steps as f64 * bodies.len() as f64 >= 2e7);
     let mut stepping = 0.0;
-    let t0 = bodies.t;
+    // Times are t0 + k h from the run's start at t = 0, resumed or not.
+    let t0 = 0.0;
     // Steps are taken in blocks that end where something is observed (the totals, the
     // trajectory, the last step) and hold at most about 5·10⁵ body-steps, so that a stop
     // request is seen within a fraction of a second. A block of NVE steps is one
@@ -288,7 +342,8 @@ fn run_model<I: Interaction>(
     // steps); the last step lands on t_end.
     let block_cap = (500_000 / bodies.len().max(1) as u64).max(1);
     let next_multiple = |k: u64, m: u64| if m == u64::MAX { u64::MAX } else { (k / m + 1) * m };
-    let mut k = 0;
+    let mut k = states.start;
+    let at = states.at.map_or(u64::MAX, |(k, _)| k);
     while k < steps {
         if let Some((signal, code)) = interrupt.requested() {
             bar.finish_and_clear();
@@ -304,7 +359,8 @@ fn run_model<I: Interaction>(
         let end = next_multiple(k, args.every)
             .min(next_multiple(k, traj_every))
             .min(steps)
-            .min(k + block_cap);
+            .min(k + block_cap)
+            .min(if k < at { at } else { u64::MAX });
         let start = Instant::now();
         let result = match &thermostat {
             Some(th) => (k..end).try_for_each(|j| {
@@ -339,7 +395,17 @@ fn run_model<I: Interaction>(
         if let Err(e) = observe(&bodies, &mut frames, k) {
             return Err(Failure::Run(format!("{e}{}", keep(out, frames))));
         }
+        if k == at {
+            if let Some((_, path)) = states.at {
+                states
+                    .write(path, &bodies, k, h, box_length)
+                    .map_err(|e| Failure::Run(format!("{e}{}", keep(out.take(), frames.take()))))?;
+            }
+        }
         bar.set_position(k);
+    }
+    if let Some(path) = states.last {
+        states.write(path, &bodies, k, h, box_length).map_err(Failure::Run)?;
     }
     bar.finish_and_clear();
     if let Some(w) = out {
@@ -376,10 +442,54 @@ fn kinetic_temperatures(b: &Bodies) -> [f64; 2] {
     [tr / (3 * free.max(1)) as f64, rot / (3 * b.len().max(1)) as f64]
 }
 
+/// The steps a resumed run has done (0 without `--resume`), checked against this run: the
+/// same step (bit for bit), the state's time `k h`, no more steps than the run's.
+pub(crate) fn resume_start(resumed: Option<&super::state::State>, h: f64, steps: u64) -> Result<u64, String> {
+    let Some(r) = resumed else {
+        return Ok(0);
+    };
+    if r.h.to_bits() != h.to_bits() {
+        return Err(format!(
+            "the state file --resume was written with the step {}, this run's is {} (a resumed run keeps its step)",
+            Num(r.h),
+            Num(h)
+        ));
+    }
+    if r.steps > steps {
+        return Err(format!(
+            "the state file --resume is at step {}, past this run's last step {steps} (--t-end)",
+            r.steps
+        ));
+    }
+    Ok(r.steps)
+}
+
 /// Run `liemid many`.
 pub fn many(cli: &ManyArgs) -> CmdResult {
+    #[cfg(feature = "mpi")]
+    if super::mpi::launched() {
+        return super::mpi::many(cli);
+    }
     let input = Failure::Input;
-    let args = &settings(cli).map_err(input)?;
+    let mut args = settings(cli).map_err(input)?;
+    let resumed = match &cli.resume {
+        Some(path) => Some(super::state::read(path).map_err(input)?),
+        None => None,
+    };
+    if let Some(r) = &resumed {
+        if cli.bodies.is_some_and(|n| n != r.bodies.len() as u64) {
+            return Err(input(format!(
+                "--bodies {} but the state file --resume holds {} bodies",
+                cli.bodies.unwrap_or(0),
+                r.bodies.len()
+            )));
+        }
+        args.bodies = r.bodies.len();
+    }
+    if cli.pair_list.is_some() && args.model != Model::Dipoles {
+        return Err(input("--pair-list applies to the dipoles model only".into()));
+    }
+    let args = &args;
     let n = args.bodies;
     let (h_default, t_default) = match args.model {
         Model::Independent => (1e-4, 0.01),
@@ -396,6 +506,12 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
     }
     let steps = liemid::step_count(0.0, t_end, h)
         .map_err(|e| input(format!("--step {} and --t-end {}: {e}", Num(h), Num(t_end))))?;
+    let start = resume_start(resumed.as_ref(), h, steps).map_err(input)?;
+    if let Some(k) = cli.checkpoint_at.filter(|&k| k <= start || k >= steps) {
+        return Err(input(format!(
+            "--checkpoint-at {k} must lie after the start (step {start}) and before the last step ({steps})"
+        )));
+    }
     if let Some(max) = cli.max_body_steps {
         let work = steps as f64 * n as f64;
         if work > max as f64 {
@@ -455,6 +571,12 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
     if let Some(p) = &cli.view {
         plan.add("--view", p).map_err(input)?;
     }
+    if let Some(p) = &cli.state {
+        plan.add("--state", p).map_err(input)?;
+    }
+    if let Some(p) = &cli.checkpoint {
+        plan.add("--checkpoint", p).map_err(input)?;
+    }
     let rdf_paths = cli.rdf.as_ref().map(|base| {
         let with = |ext: &str| {
             let mut s = base.as_os_str().to_owned();
@@ -508,14 +630,49 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
     let threads = pool.current_num_threads();
     let interrupt = Interrupt::install();
     let run = (h, t_end, steps);
+    let plain = Checkpoints {
+        start,
+        at: cli.checkpoint_at.zip(cli.checkpoint.as_deref()),
+        last: cli.state.as_deref(),
+        reference: &|b: &Bodies| b.position.clone(),
+    };
+    let from_state = |b: Bodies| -> Result<Bodies, Failure> {
+        match &resumed {
+            Some(r) => {
+                if r.box_length.is_some() {
+                    return Err(input(
+                        "the state file --resume is of a periodic system, not of this model".into(),
+                    ));
+                }
+                Ok(r.bodies.clone())
+            }
+            None => Ok(b),
+        }
+    };
     let outcome = pool.install(|| match args.model {
         Model::Independent => {
             let (b, m) = problems::top_ensemble(n, args.seed);
-            run_model(args, b, &m, run, &interrupt, observers(None, axis, 1.0))
+            run_model(
+                args,
+                from_state(b)?,
+                &m,
+                run,
+                &interrupt,
+                observers(None, axis, 1.0),
+                &plain,
+            )
         }
         Model::TorqueFree => {
             let (b, m) = problems::torque_free_ensemble(n, args.seed);
-            run_model(args, b, &m, run, &interrupt, observers(None, axis, 1.0))
+            run_model(
+                args,
+                from_state(b)?,
+                &m,
+                run,
+                &interrupt,
+                observers(None, axis, 1.0),
+                &plain,
+            )
         }
         Model::Dipoles => {
             // A bad density, cutoff or switch is bad input (exit 2), not a failed run.
@@ -533,8 +690,51 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
                 m = m.with_switch_start(r_s).map_err(|e| input(e.to_string()))?;
             }
             m.cutoff_form = args.cutoff_form;
+            if cli.pair_list.as_deref() == Some("full") {
+                m.half_list_max_bodies = 0;
+            }
             axis = m.moment;
-            run_model(args, b, &m, run, &interrupt, observers(m.box_length, axis, 0.9)).map_err(|f| match f {
+            let b = match &resumed {
+                Some(r) => {
+                    if r.box_length.map(f64::to_bits) != m.box_length.map(f64::to_bits) {
+                        return Err(input(format!(
+                            "the state file --resume has the box {:?}, this run {:?} (--density and --bodies must \
+                             be those of the run that wrote it)",
+                            r.box_length, m.box_length
+                        )));
+                    }
+                    // The neighbour list of the interrupted run: built at its reference positions.
+                    let mut at_build = r.bodies.clone();
+                    at_build.position.clone_from(&r.reference);
+                    at_build.evaluate(&m);
+                    r.bodies.clone()
+                }
+                None => b,
+            };
+            let listed = |bodies: &Bodies| {
+                let r = m.list_reference();
+                if r.len() == bodies.len() {
+                    r
+                } else {
+                    bodies.position.clone()
+                }
+            };
+            let dipole_states = Checkpoints {
+                start,
+                at: cli.checkpoint_at.zip(cli.checkpoint.as_deref()),
+                last: cli.state.as_deref(),
+                reference: &listed,
+            };
+            run_model(
+                args,
+                b,
+                &m,
+                run,
+                &interrupt,
+                observers(m.box_length, axis, 0.9),
+                &dipole_states,
+            )
+            .map_err(|f| match f {
                 Failure::Run(m) => Failure::Run(format!("{m} (density {}, step {})", Num(args.density), Num(h))),
                 other => other,
             })

@@ -2,5 +2,8 @@
 //! (`scenario`) is the application crate's.
 
 pub mod command;
+#[cfg(feature = "mpi")]
+pub mod mpi;
+pub mod state;
 
 pub use liemid_app::many::scenario;

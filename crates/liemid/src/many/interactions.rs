@@ -4,7 +4,9 @@
 use crate::linalg::{Mat3, Vec3};
 use crate::many::{Configuration, Interaction};
 
-pub use super::dipoles::{CutoffForm, Dipoles, DEFAULT_SKIN, DEFAULT_SWITCH_FRACTION, HALF_LIST_MAX_BODIES};
+pub use super::dipoles::{
+    CutoffForm, Dipoles, DomainForces, DEFAULT_SKIN, DEFAULT_SWITCH_FRACTION, HALF_LIST_MAX_BODIES,
+};
 
 /// Each body on its own: a free body feels `F = m g`; a rotor (fixed point) feels the
 /// gravity torque about its pivot `T = X × (Rᵀ m g)`, with `X` the centre of mass in the

@@ -35,6 +35,8 @@ mod half_list;
 pub mod interactions;
 #[cfg(all(feature = "simd", target_arch = "x86_64"))]
 mod lanes;
+#[cfg(feature = "mpi")]
+pub mod mpi;
 pub mod observables;
 pub mod problems;
 pub mod thermostat;

@@ -2,8 +2,11 @@
 //! (here), the cell and Verlet lists (`neighbours`), the half list's evaluation in phases
 //! and by a team of threads (`team`); each pair once through `half_list`.
 
+mod domain;
 mod neighbours;
 mod team;
+
+pub use domain::DomainForces;
 
 use std::sync::Mutex;
 
@@ -440,6 +443,21 @@ impl Dipoles {
     pub fn spatially_sorted(&self) -> bool {
         let s = self.scratch.lock().expect("not poisoned");
         !s.order.is_empty() && s.order.len() == s.reference.len()
+    }
+
+    /// The reach of the Verlet list, `r_c + skin` (none without a cutoff).
+    #[must_use]
+    pub fn reach(&self) -> Option<f64> {
+        self.cutoff.map(|c| c + self.skin)
+    }
+
+    /// The positions at the last build of the Verlet list, in body order (empty without
+    /// one): with them a run can be resumed on the same list (an evaluation at these
+    /// positions builds it again, bit for bit), so that the resumed run gives the bits of an
+    /// uninterrupted one.
+    #[must_use]
+    pub fn list_reference(&self) -> Vec<Vec3> {
+        self.scratch.lock().expect("not poisoned").reference.clone()
     }
 
     /// Verlet-list builds so far (the list is rebuilt when a body has moved more than half

@@ -192,7 +192,12 @@ impl Dipoles {
     }
 
     /// A cell list whose stencil reaches every body within `cutoff`.
-    fn build_cells_of<'a>(&self, c: &Configuration<'_>, s: &'a mut Scratch, cutoff: f64) -> Option<Cells<'a>> {
+    pub(super) fn build_cells_of<'a>(
+        &self,
+        c: &Configuration<'_>,
+        s: &'a mut Scratch,
+        cutoff: f64,
+    ) -> Option<Cells<'a>> {
         let n_bodies = c.position.len();
         let (origin, extent, periodic) = match self.box_length {
             Some(l) => (Vec3::ZERO, Vec3::new(l, l, l), true),
@@ -289,6 +294,44 @@ impl Dipoles {
             start: &s.cell_start,
             sorted: &s.sorted,
         })
+    }
+
+    /// The neighbours `j ≠ i` of body `i` within `reach` by the test and in the order of
+    /// the full Verlet list's build ([`Dipoles::update_list`] with `half = false`): the
+    /// stencil's cells in (z, y, x) order of their offsets, the bodies of a cell in index
+    /// order, each candidate against its image in the stencil cell (or by minimum image in a
+    /// box shorter than twice the reach). A domain's list ([`super::domain`]) is built with
+    /// it over the bodies it holds, indexed in the order of their identities, so that each
+    /// of its bodies gets the same neighbours in the same order as in the whole system.
+    pub(super) fn for_listed(
+        &self,
+        i: usize,
+        c: &Configuration<'_>,
+        cells: &Cells<'_>,
+        reach: f64,
+        mut f: impl FnMut(usize),
+    ) {
+        let reach2 = reach * reach;
+        let constants = self.constants();
+        let images = (!cells.periodic || cells.span >= 2.0 * reach).then_some((cells.wrapped, cells.cell_rank));
+        let xi = c.position[i];
+        let xi_wrapped = images.map_or(Vec3::ZERO, |(w, cell_rank)| w[cell_rank[i] as usize]);
+        self.for_neighbour_runs(i, c, Some(cells), false, |run, first, offset| match images {
+            Some((w, _)) => {
+                for (&j, wj) in run.iter().zip(&w[first..first + run.len()]) {
+                    if (xi_wrapped - (*wj + offset)).norm_squared() <= reach2 && j != i {
+                        f(j);
+                    }
+                }
+            }
+            None => {
+                for &j in run {
+                    if Self::separation(&constants, xi, c.position[j]).norm_squared() <= reach2 && j != i {
+                        f(j);
+                    }
+                }
+            }
+        });
     }
 
     /// Visit the neighbours `j ≠ i` of `i` in a fixed order.
