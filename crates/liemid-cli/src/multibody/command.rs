@@ -35,7 +35,7 @@ pub struct MultibodyArgs {
     #[arg(long)]
     pub method: Option<String>,
     /// The torque-free rotation in the liemid methods' drift: midpoint (EA's pair of
-    /// midpoint half steps) or variational (LIEMID[EAV]'s pair, a Lie-Poisson drift: the
+    /// midpoint half steps) or variational (the pair of liemid-eav, a Lie-Poisson drift: the
     /// step is then symplectic on a free body) [default: midpoint].
     #[arg(long)]
     pub drift: Option<String>,
