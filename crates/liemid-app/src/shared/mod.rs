@@ -8,6 +8,7 @@ pub mod cpu_time;
 pub mod dop853;
 pub mod figure;
 pub mod input;
+pub mod memory;
 pub mod npy;
 pub mod output;
 pub mod progress;
