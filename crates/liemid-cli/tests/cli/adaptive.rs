@@ -88,3 +88,30 @@ fn refusals() {
     }
     assert!(!dir.join("sat.csv").exists());
 }
+
+/// An adaptive run that would take more steps than the bound (a tiny eps, a huge t_end) is
+/// refused before the first step with the estimate at the start's pace; it used to run
+/// without end.
+#[test]
+fn an_adaptive_run_beyond_the_step_bound_is_refused_before_the_first_step() {
+    let dir = scratch("adaptive-bound");
+    for args in [
+        &["run", "--adaptive", "1e-300"][..],
+        &["run", "--adaptive", "1e-3", "--t-end", "1e300"],
+        &["run", "--adaptive", "1e-3", "--max-steps", "10"],
+    ] {
+        let o = run_in(&dir, args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains("steps at the start's step"),
+            "{args:?}: {}",
+            stderr(&o)
+        );
+    }
+    // Within the bound the run goes on as before.
+    let o = run_in(
+        &dir,
+        &["run", "--adaptive", "1e-3", "--t-end", "0.01", "--max-steps", "1000000"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+}

@@ -64,6 +64,24 @@ pub(super) fn run_adaptive<D: RigidDensity>(
         .map_err(|e| Failure::Input(format!("{}: {e}", sc.name)))?;
     let mut run = AdaptiveRun::new(stepper, sc.initial, settings.t_end, eps)
         .map_err(|e| Failure::Input(format!("{}: {e}", sc.name)))?;
+    // Pre-flight: the steps at the start's pace, `(t_end − t0) z / ε`, against the step
+    // bound (a tiny ε or a huge t_end used to run without end).
+    let (t0, t_end) = run.span();
+    let estimate = (t_end - t0) * run.control() / eps;
+    let bound = args.max_steps.unwrap_or(crate::shared::command::DEFAULT_MAX_STEPS);
+    if !(estimate <= bound as f64) {
+        let limit = match args.max_steps {
+            Some(m) => format!("--max-steps {m}"),
+            None => format!(
+                "the default bound of {} (--max-steps N to allow more)",
+                crate::shared::command::DEFAULT_MAX_STEPS
+            ),
+        };
+        return Err(Failure::Input(format!(
+            "--adaptive {eps:e} to t = {t_end:e}: about {estimate:.1e} steps at the start's step {:.1e}, more than {limit}",
+            eps / run.control()
+        )));
+    }
     let first = liemid::Diagnostics::of(system, &sc.initial);
     let mut progress = RunSummary {
         state: sc.initial,
@@ -94,10 +112,10 @@ pub(super) fn run_adaptive<D: RigidDensity>(
         if run.is_done() {
             break None;
         }
-        if let Some(max) = args.max_steps {
-            if run.stats().steps >= max {
-                break Some(format!("the adaptive run reached --max-steps {max} before t_end"));
-            }
+        if run.stats().steps >= bound {
+            break Some(format!(
+                "the adaptive run reached {bound} steps (--max-steps) before t_end"
+            ));
         }
         if let Err(e) = run.step() {
             break Some(format!("{}: {e}", sc.name));
