@@ -69,7 +69,7 @@ pub(super) fn run_adaptive<D: RigidDensity>(
     let (t0, t_end) = run.span();
     let estimate = (t_end - t0) * run.control() / eps;
     let bound = args.max_steps.unwrap_or(crate::shared::command::DEFAULT_MAX_STEPS);
-    if !(estimate <= bound as f64) {
+    if estimate.is_nan() || estimate > bound as f64 {
         let limit = match args.max_steps {
             Some(m) => format!("--max-steps {m}"),
             None => format!(
