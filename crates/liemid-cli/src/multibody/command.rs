@@ -387,12 +387,22 @@ fn print_summary(s: &serde_json::Value) {
     let num = |k: &str| s[k].as_f64().unwrap_or(f64::NAN);
     crate::outln!("model                          {}", s["model"].as_str().unwrap_or(""));
     crate::outln!("method                         {}", s["method"].as_str().unwrap_or(""));
-    crate::outln!(
-        "steps                          {} of h = {} to t = {}",
-        s["steps"],
-        Num(num("step")),
-        Num(num("t_end"))
-    );
+    match s["rtol"].as_f64() {
+        // DOP853 chooses its steps: its summary has a tolerance, not a step.
+        Some(rtol) => crate::outln!(
+            "steps                          {} accepted ({} rejected) at rtol {} to t = {}",
+            s["steps"],
+            s["rejected_steps"],
+            Num(rtol),
+            Num(num("t_end"))
+        ),
+        None => crate::outln!(
+            "steps                          {} of h = {} to t = {}",
+            s["steps"],
+            Num(num("step")),
+            Num(num("t_end"))
+        ),
+    }
     crate::outln!("bodies                         {}", s["bodies"]);
     crate::outln!(
         "max relative energy error      {:.3e}",

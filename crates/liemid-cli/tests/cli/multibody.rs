@@ -358,3 +358,14 @@ fn a_start_of_infinite_energy_is_refused_and_a_run_beyond_the_step_bound_too() {
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(!dir.join("zero.npy").exists() && !dir.join("zero.npy.partial").exists());
 }
+
+#[test]
+fn the_dop853_summary_gives_its_tolerance_not_a_step() {
+    // It used to print "of h = NaN": DOP853 has no fixed step.
+    let dir = scratch("mb-dop853-summary");
+    let o = run_in(&dir, &["multibody", "--method", "dop853", "--t-end", "0.1"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(!out.contains("NaN"), "{out}");
+    assert!(out.contains("accepted") && out.contains("at rtol 1e-12"), "{out}");
+}
