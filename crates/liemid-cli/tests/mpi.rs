@@ -140,6 +140,14 @@ fn same_bytes_on_1_2_3_ranks_as_one_process_and_checkpoints_cross_resume() {
     ));
     assert!(bytes(&sc) == bytes(&mc), "the totals files differ");
     assert!(bytes(&sx) == bytes(&mx), "the trajectories differ");
+    // The Langevin thermostat: noise keyed on (seed, body, step), whatever the rank.
+    let (ls, lm) = (path("ls.bin"), path("lm.bin"));
+    let thermostat = ["--temperature", "1", "--friction", "1"];
+    ok(&serial(
+        &[&FLUID[..], &thermostat, &["--pair-list", "full", "--state", &s(&ls)]].concat(),
+    ));
+    ok(&mpirun(3, &[&FLUID[..], &thermostat, &["--state", &s(&lm)]].concat()));
+    assert!(bytes(&ls) == bytes(&lm), "Langevin: the final states differ");
     let _ = std::fs::remove_dir_all(&d);
 }
 

@@ -92,19 +92,18 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
     let result = run(cli, &world);
     // Every failure from `run` is reached by every rank alike: each prints its line and all
     // meet before any exits (the launcher stops the others once one exits non-zero).
-    let code = match &result {
+    let (code, m) = match &result {
         Ok(()) => return Ok(()),
-        Err(Failure::Input(m)) => {
-            eprintln!("liemid: error: {m}");
-            2
-        }
-        Err(Failure::Run(m) | Failure::Signal(_, m)) => {
-            eprintln!("liemid: error: {m}");
-            1
-        }
+        Err(Failure::Input(m)) => (2, m),
+        Err(Failure::Run(m) | Failure::Signal(_, m)) => (1, m),
     };
+    // One write per line, so that the ranks' lines do not interleave on the launcher's
+    // standard error.
     use std::io::Write as _;
-    let _ = std::io::stderr().flush();
+    let mut err = std::io::stderr().lock();
+    let _ = err.write_all(format!("liemid: error: {m}\n").as_bytes());
+    let _ = err.flush();
+    drop(err);
     world.barrier();
     drop(universe);
     std::process::exit(code)
@@ -179,6 +178,13 @@ fn run(cli: &ManyArgs, world: &SimpleCommunicator) -> CmdResult {
     let mut domain = DomainRun::new(world, &model, &all, reference.as_deref()).map_err(domain_error)?;
     drop(all);
     let box_length = model.box_length;
+    let thermostat = match args.thermostat {
+        Some((kt, friction)) => Some(
+            liemid::many::thermostat::Langevin::new(kt, friction, args.seed)
+                .map_err(|e| Failure::Input(e.to_string()))?,
+        ),
+        None => None,
+    };
     // Rank 0's files.
     let mut out = None;
     let opened = if rank == 0 {
@@ -267,9 +273,16 @@ fn run(cli: &ManyArgs, world: &SimpleCommunicator) -> CmdResult {
     let mut stepping = 0.0;
     for j in start..steps {
         let last = j + 1 == steps;
-        let dt = if last { t_end - (steps - 1) as f64 * h } else { h };
         let t0 = Instant::now();
-        domain.step(dt).map_err(domain_error)?;
+        match &thermostat {
+            // As one process: the step from the last time to the next, t0 + (j + 1) h or t_end.
+            Some(th) => {
+                let target = if last { t_end } else { (j + 1) as f64 * h };
+                domain.step_langevin(target - domain.bodies.t, th)
+            }
+            None => domain.step(if last { t_end - (steps - 1) as f64 * h } else { h }),
+        }
+        .map_err(domain_error)?;
         stepping += t0.elapsed().as_secs_f64();
         domain.bodies.t = if last { t_end } else { (j + 1) as f64 * h };
         observe(&domain, &mut out, j + 1, last)?;
@@ -358,7 +371,6 @@ fn prepare(cli: &ManyArgs, ranks: usize) -> Result<Prepared, Failure> {
         )));
     }
     for (given, what) in [
-        (args.thermostat.is_some(), "--temperature"),
         (cli.rdf.is_some(), "--rdf"),
         (cli.view.is_some(), "--view"),
         (cli.pair_list.as_deref() == Some("half"), "--pair-list half"),

@@ -537,6 +537,26 @@ impl<'a> DomainRun<'a> {
         Ok(())
     }
 
+    /// One BAOAB Langevin step ([`Bodies::step_langevin`]) on every rank, the noise of each
+    /// body keyed by (seed, its identity, step) as in one process: the same bits for any
+    /// number of ranks. `h` is the step (the caller keeps the time).
+    ///
+    /// # Errors
+    /// [`DomainError::Run`] on every rank when some rank's step failed.
+    pub fn step_langevin(&mut self, h: f64, thermostat: &crate::many::thermostat::Langevin) -> Result<(), DomainError> {
+        if !(h.is_finite() && h > 0.0) {
+            return Err(DomainError::Input(format!(
+                "the step must be positive and finite, found {h}"
+            )));
+        }
+        let ids = std::mem::take(&mut self.ids);
+        let moved = self.bodies.langevin_motion(h, thermostat, Some(&ids));
+        self.ids = ids;
+        self.evaluate(moved.as_ref().err())?;
+        self.bodies.kick(h);
+        Ok(())
+    }
+
     /// The whole system on rank 0 (`None` elsewhere), in body order, with the positions at
     /// the list's last build: every rank must call it.
     #[must_use]

@@ -109,6 +109,20 @@ impl Bodies {
         if !self.forces_valid {
             self.evaluate(interaction);
         }
+        self.langevin_motion(h, thermostat, None)?;
+        self.evaluate(interaction);
+        self.kick(h);
+        Ok(())
+    }
+
+    /// The part of [`Bodies::step_langevin`] before the new forces: the start impulse, the
+    /// B-A-O-A-B motion with the noise of body `ids[i]` (of `i` without `ids`: a domain's
+    /// bodies keep their identities in the whole system), `t ← t + h` and the step counter.
+    /// The forces must be valid.
+    ///
+    /// # Errors
+    /// A failed midpoint solve (the system is then mid-step).
+    pub(crate) fn langevin_motion(&mut self, h: f64, thermostat: &Langevin, ids: Option<&[u64]>) -> Result<()> {
         let hh = 0.5 * h;
         let t = self.t;
         let step = self.langevin_steps;
@@ -147,7 +161,7 @@ impl Bodies {
                 };
                 let mut run = || -> Result<()> {
                     half(&mut x[k], p[k], &mut r[k], &mut pi[k])?;
-                    let xi = noise(seed, i as u64, step);
+                    let xi = noise(seed, ids.map_or(i as u64, |ids| ids[i]), step);
                     if free[k] {
                         p[k] = p[k] * c + Vec3::new(xi[0], xi[1], xi[2]) * (sp * mass[k].sqrt());
                     }
@@ -171,8 +185,6 @@ impl Bodies {
         }
         self.t = t + h;
         self.langevin_steps += 1;
-        self.evaluate(interaction);
-        self.kick(h);
         Ok(())
     }
 }
