@@ -225,6 +225,16 @@ impl Sources {
     }
 }
 
+/// `text` for a message: whole up to 60 characters, else its first 40 and how long it is (an
+/// attribute of 200,000 numbers used to be echoed whole, a 400 KB error line).
+pub(crate) fn abbreviate(text: &str) -> String {
+    if text.chars().count() <= 60 {
+        return text.to_string();
+    }
+    let head: String = text.chars().take(40).collect();
+    format!("{head}… ({} characters)", text.chars().count())
+}
+
 /// `tag name="…"` (or just `tag`) for messages.
 pub(crate) fn describe(node: Node) -> String {
     let tag = node.tag_name().name();
@@ -271,12 +281,16 @@ impl<'a, 'i> Ctx<'a, 'i> {
     /// `node`, between `min` and `max` of them.
     pub(crate) fn floats(&self, node: Node, attr: &str, value: &str, min: usize, max: usize) -> Result<Vec<f64>> {
         let mut out = Vec::new();
+        let shown = abbreviate(value);
         for word in value.split_ascii_whitespace() {
-            let v: f64 = word
-                .parse()
-                .map_err(|_| self.err(node, format!("attribute {attr}=\"{value}\": `{word}` is not a number")))?;
+            let v: f64 = word.parse().map_err(|_| {
+                self.err(
+                    node,
+                    format!("attribute {attr}=\"{shown}\": `{}` is not a number", abbreviate(word)),
+                )
+            })?;
             if !v.is_finite() {
-                return Err(self.err(node, format!("attribute {attr}=\"{value}\": `{word}` is not finite")));
+                return Err(self.err(node, format!("attribute {attr}=\"{shown}\": `{word}` is not finite")));
             }
             out.push(v);
             if out.len() > max {
@@ -292,7 +306,7 @@ impl<'a, 'i> Ctx<'a, 'i> {
             let got = value.split_ascii_whitespace().count();
             return Err(self.err(
                 node,
-                format!("attribute {attr}=\"{value}\" has {got} values, {want} expected"),
+                format!("attribute {attr}=\"{shown}\" has {got} values, {want} expected"),
             ));
         }
         Ok(out)

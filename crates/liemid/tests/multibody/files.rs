@@ -542,3 +542,19 @@ fn keyframe_length_is_checked() {
              <keyframe>\n<key qpos=\"0 1\"/>\n</keyframe>\n</mujoco>";
     refused(mjcf::parse(t, "k.xml"), 4, "key", &["has 2 values, 1 expected"]);
 }
+
+#[test]
+fn a_long_attribute_is_abbreviated_in_the_error() {
+    // 200,000 numbers where three are expected: the message names the count and shows the
+    // value's start, not 400 KB of it.
+    let numbers = vec!["0.5"; 200_000].join(" ");
+    let t = one_body(&format!(
+        "<inertial pos=\"{numbers}\" mass=\"1\" diaginertia=\"1 1 1\"/>"
+    ));
+    let e = mjcf::parse(&t, "long.xml").unwrap_err().to_string();
+    assert!(e.len() < 300, "{} characters: {}", e.len(), &e[..300.min(e.len())]);
+    assert!(
+        e.contains("has 200000 values, 3 expected") && e.contains("characters)"),
+        "{e}"
+    );
+}
