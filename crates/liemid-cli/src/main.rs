@@ -104,7 +104,7 @@ fn main() -> ExitCode {
         Command::Run(args) => rigid::command::run(args),
         Command::Converge(args) => rigid::command::converge_cmd(args),
         Command::WorkPrecision(args) => rigid::command::work_precision_cmd(args),
-        Command::Many(args) => many::command::many(&args),
+        Command::Many(args) => many::run(&args),
         Command::Multibody(args) => multibody::command::multibody(&args),
         Command::Spins(args) => spin::command::spins(args),
         Command::Beam(args) => beam::command::beam(args),

@@ -464,12 +464,8 @@ pub(crate) fn resume_start(resumed: Option<&super::state::State>, h: f64, steps:
     Ok(r.steps)
 }
 
-/// Run `liemid many`.
+/// Run `liemid many` in one process.
 pub fn many(cli: &ManyArgs) -> CmdResult {
-    #[cfg(feature = "mpi")]
-    if super::mpi::launched() {
-        return super::mpi::many(cli);
-    }
     let input = Failure::Input;
     let mut args = settings(cli).map_err(input)?;
     let resumed = match &cli.resume {
