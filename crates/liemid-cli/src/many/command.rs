@@ -31,14 +31,6 @@ const WORKING_BYTES_PER_BODY: usize = 2 * liemid::many::BYTES_PER_BODY;
 /// Columns of the totals file.
 pub(crate) const TOTALS_COLUMNS: [&str; 8] = ["t", "energy", "px", "py", "pz", "lx", "ly", "lz"];
 
-/// Available memory from `/proc/meminfo` (bytes), if it can be read.
-fn available_memory() -> Option<u64> {
-    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
-}
-
 /// Arguments of `liemid many`.
 #[derive(clap::Args, Debug)]
 pub struct ManyArgs {
@@ -520,7 +512,7 @@ pub fn many(cli: &ManyArgs) -> CmdResult {
     }
     let per_body = args.rotation.bytes_per_body() + WORKING_BYTES_PER_BODY;
     let needed = n as f64 * per_body as f64;
-    if let Some(available) = available_memory() {
+    if let Some(available) = liemid_app::shared::memory::available_memory() {
         if needed > 0.8 * available as f64 {
             return Err(input(format!(
                 "--bodies {n}: the bodies need about {:.1} GB ({} bytes each with working storage), more \
