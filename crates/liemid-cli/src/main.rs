@@ -134,22 +134,52 @@ fn main() -> ExitCode {
     }
 }
 
-/// clap's message in one line: its first line without the `error: ` prefix, the possible
-/// values if it lists them, and where to find help.
+/// clap's message in one line: its first line without the `error: ` prefix, the lines it
+/// lists under it (the missing arguments), the possible values if it lists them, and the
+/// subcommand's help to read.
 fn usage_error(rendered: &str) -> String {
-    let mut lines = rendered.lines().map(str::trim).filter(|l| !l.is_empty());
-    let first = lines.next().unwrap_or("invalid arguments");
-    let first = first
+    let lines: Vec<&str> = rendered.lines().map(str::trim).filter(|l| !l.is_empty()).collect();
+    let first = lines.first().copied().unwrap_or("invalid arguments");
+    let mut first = first
         .strip_prefix("error: ")
         .unwrap_or(first)
         .replace(" is not in 1..18446744073709551615", " must be at least 1");
-    let values = rendered
-        .lines()
-        .map(str::trim)
+    if first.ends_with(':') {
+        // "the following required arguments were not provided:" and the list below it.
+        let listed: Vec<&str> = lines
+            .iter()
+            .skip(1)
+            .take_while(|l| !l.starts_with("Usage:") && !l.starts_with("For more information"))
+            .copied()
+            .collect();
+        first = format!("{first} {}", listed.join(", "));
+    }
+    let values = lines
+        .iter()
         .find(|l| l.starts_with("[possible values:"))
         .map(|l| format!(" {l}"))
         .unwrap_or_default();
-    format!("{first}{values} (see `liemid --help`)")
+    let tip = lines
+        .iter()
+        .find_map(|l| l.strip_prefix("tip: "))
+        .map(|t| format!(" ({t})"))
+        .unwrap_or_default();
+    // "Usage: liemid run [OPTIONS] <SCENARIO>" names the subcommand whose help to read.
+    let command: Vec<&str> = lines
+        .iter()
+        .find_map(|l| l.strip_prefix("Usage: "))
+        .map(|u| {
+            u.split_whitespace()
+                .take_while(|w| !w.starts_with(['[', '<', '-']))
+                .collect()
+        })
+        .unwrap_or_default();
+    let command = if command.is_empty() {
+        "liemid".to_string()
+    } else {
+        command.join(" ")
+    };
+    format!("{first}{values}{tip} (see `{command} --help`)")
 }
 
 fn one_line(m: &str) -> String {

@@ -19,7 +19,7 @@ pub enum Error {
         reason: String,
     },
     /// A model parameter is out of range or not finite.
-    #[error("invalid parameter `{name}` = {value}: {reason}")]
+    #[error("invalid parameter `{name}` = {}: {reason}", Num(*.value))]
     InvalidParameter {
         /// Name of the parameter.
         name: &'static str,
@@ -29,7 +29,7 @@ pub enum Error {
         reason: &'static str,
     },
     /// A state holds a NaN or an infinity.
-    #[error("state field `{field}` is not finite at t = {t}")]
+    #[error("state field `{field}` is not finite at t = {}", Num(*.t))]
     NonFiniteState {
         /// The field (`pi`, `rotation`, `t`, `p`, `u`).
         field: &'static str,
@@ -39,9 +39,9 @@ pub enum Error {
     /// An attitude that is not a rotation matrix: `‖RᵀR − I‖_F` above
     /// [`crate::rigid::ROTATION_TOLERANCE`] or `det R ≤ 0`.
     #[error(
-        "the attitude at t = {t} is not a rotation: orthogonality defect |R^T R - I| = {defect:.3e} \
+        "the attitude at t = {} is not a rotation: orthogonality defect |R^T R - I| = {defect:.3e} \
          (at most {tolerance:e} is accepted), determinant {determinant:.6}"
-    )]
+    , Num(*.t))]
     NotARotation {
         /// The state's time.
         t: f64,
@@ -53,7 +53,7 @@ pub enum Error {
         tolerance: f64,
     },
     /// The step size is zero or not finite.
-    #[error("step size h = {h} must be finite and non-zero")]
+    #[error("step size h = {} must be finite and non-zero", Num(*.h))]
     InvalidStep {
         /// The step size.
         h: f64,
@@ -92,10 +92,10 @@ pub enum Error {
     InvalidObserverInterval,
     /// Newton's method for an implicit step equation did not converge.
     #[error(
-        "{method}: {equation} did not converge in the step from t = {t} with h = {h} \
+        "{method}: {equation} did not converge in the step from t = {} with h = {} \
          (residual {residual:.3e} after {iterations} iterations); the step is probably too \
          large for the rotation rate"
-    )]
+    , Num(*.t), Num(*.h))]
     NewtonDidNotConverge {
         /// The integrator.
         method: &'static str,
@@ -112,9 +112,9 @@ pub enum Error {
     },
     /// The rotation increment of a step exceeds half a turn.
     #[error(
-        "{method}: the step from t = {t} with h = {h} turns the body by {angle:.3} rad, more than \
+        "{method}: the step from t = {} with h = {} turns the body by {angle:.3} rad, more than \
          half a turn; the midpoint equation has no unique solution there: reduce the step"
-    )]
+    , Num(*.t), Num(*.h))]
     StepTooLarge {
         /// The integrator.
         method: &'static str,
@@ -126,7 +126,7 @@ pub enum Error {
         angle: f64,
     },
     /// The state became NaN or infinite during a step.
-    #[error("{method}: the state became non-finite in the step from t = {t} with h = {h}")]
+    #[error("{method}: the state became non-finite in the step from t = {} with h = {}", Num(*.t), Num(*.h))]
     NonFiniteResult {
         /// The integrator.
         method: &'static str,
@@ -167,9 +167,9 @@ pub enum Error {
     /// The adaptive step-size control failed: the control variable `z` (the step density,
     /// `h = ε/z`) became non-positive or non-finite, or the step density was.
     #[error(
-        "adaptive step control failed at t = {t}: {what} = {value:e} with eps = {eps:e}; the \
+        "adaptive step control failed at t = {}: {what} = {value:e} with eps = {eps:e}; the \
          step density must stay finite and positive (reduce eps)"
-    )]
+    , Num(*.t))]
     StepControl {
         /// Time of the state where it failed.
         t: f64,
@@ -195,7 +195,7 @@ pub enum Error {
         message: String,
     },
     /// The observer asked the driver to stop with an error of its own.
-    #[error("observer stopped the run at t = {t}: {reason}")]
+    #[error("observer stopped the run at t = {}: {reason}", Num(*.t))]
     ObserverFailed {
         /// Time of the state the observer saw.
         t: f64,

@@ -47,9 +47,11 @@ impl Inertia {
                 let (j, l) = [(2, 3), (1, 3), (1, 2)][k];
                 return Err(Error::InvalidInertia {
                     reason: format!(
-                        "principal moments violate the triangle inequality: I{} = {m} > I{j} + I{l} = {others} \
+                        "principal moments violate the triangle inequality: I{} = {} > I{j} + I{l} = {} \
                          (no rigid body has these moments)",
-                        k + 1
+                        k + 1,
+                        crate::error::Num(m),
+                        crate::error::Num(others)
                     ),
                 });
             }

@@ -6,16 +6,24 @@
 //! cache ([`liemid::MethodCache`]) and how much of the trajectory file belongs to it.
 //! Numbers are written as shortest round-trip decimals and parsed exactly
 //! (`serde_json`'s `float_roundtrip`), so nothing is lost.
+//!
+//! A checkpoint carries a checksum: the CRC-32 of its own text written without the checksum
+//! (the pretty JSON of [`Checkpoint`] with `checksum` null). Reading parses the file,
+//! writes it again without the checksum and compares, so any edited or damaged value is
+//! refused, while the layout (spaces, line ends) may change. Then its content is validated
+//! like any input (grid, interval, time, attitude): a checkpoint edited on purpose and
+//! sealed again with [`reseal`] is still checked.
 
 use std::path::Path;
 
+use liemid::error::Num;
 use liemid::{Diagnostics, Mat3, MethodCache, Run, RunSummary, Vec3};
 use serde::{Deserialize, Serialize};
 
 use crate::shared::output::Written;
 
 /// The format tag of the checkpoint files this version reads and writes.
-pub const FORMAT: &str = "liemid-checkpoint-1";
+pub const FORMAT: &str = "liemid-checkpoint-2";
 
 /// Where the scenario came from.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -157,6 +165,31 @@ pub struct Checkpoint {
     pub max_conserved_momentum_change: f64,
     /// How much of the trajectory file belongs to the run at this point.
     pub written: Option<Written>,
+    /// `crc32:` and eight hex digits: the CRC-32 of the checkpoint's text with this field
+    /// null (see the module's documentation).
+    #[serde(default)]
+    checksum: Option<String>,
+}
+
+/// The checksum of a checkpoint: CRC-32 of its pretty JSON with `checksum` null.
+fn checksum(c: &Checkpoint) -> Result<String, String> {
+    let mut unsealed = c.clone();
+    unsealed.checksum = None;
+    let text = serde_json::to_string_pretty(&unsealed).map_err(|e| format!("checkpoint: {e}"))?;
+    Ok(format!("crc32:{:08x}", crc32fast::hash(text.as_bytes())))
+}
+
+/// The text of a checkpoint with its checksum made right: for tools and tests that edit a
+/// checkpoint on purpose (what they write is still validated when read).
+///
+/// # Errors
+/// When `text` is not a checkpoint of this format.
+pub fn reseal(text: &str) -> Result<String, String> {
+    let mut c: Checkpoint = serde_json::from_str(text).map_err(|e| format!("not a liemid checkpoint ({e})"))?;
+    c.checksum = Some(checksum(&c)?);
+    serde_json::to_string_pretty(&c)
+        .map(|t| t + "\n")
+        .map_err(|e| format!("checkpoint: {e}"))
 }
 
 impl Checkpoint {
@@ -208,6 +241,7 @@ impl Checkpoint {
             },
             max_conserved_momentum_change,
             written,
+            checksum: None,
         }
     }
 
@@ -257,7 +291,9 @@ impl Checkpoint {
 
     /// Write to `path` atomically (a `.partial` file renamed over it).
     pub fn write(&self, path: &Path) -> Result<(), String> {
-        let text = serde_json::to_string_pretty(self).map_err(|e| format!("checkpoint: {e}"))? + "\n";
+        let mut sealed = self.clone();
+        sealed.checksum = Some(checksum(self)?);
+        let text = serde_json::to_string_pretty(&sealed).map_err(|e| format!("checkpoint: {e}"))? + "\n";
         crate::shared::output::write_atomically(path, text.as_bytes())
             .map_err(|e| format!("writing the checkpoint {}: {e}", path.display()))
     }
@@ -273,6 +309,16 @@ impl Checkpoint {
                 "{shown}: checkpoint format `{}`, this liemid reads `{FORMAT}`",
                 c.format
             ));
+        }
+        match &c.checksum {
+            Some(sum) if *sum == checksum(&c)? => {}
+            Some(_) => {
+                return Err(format!(
+                    "{shown}: the checkpoint's checksum does not match its content (edited or damaged; \
+                     a run cannot resume from it)"
+                ))
+            }
+            None => return Err(format!("{shown}: the checkpoint has no checksum (edited or damaged)")),
         }
         let r = &c.run;
         if r.steps > r.total_steps || c.settings.every == 0 {
@@ -292,8 +338,12 @@ impl Checkpoint {
         let t = r.state.t;
         if grid != Some(r.total_steps) || !(t.is_finite() && t >= r.t0 && t <= r.t_end) {
             return Err(format!(
-                "{shown}: inconsistent checkpoint (t = {t} on the grid from {} to {} by {}: {} steps recorded)",
-                r.t0, r.t_end, r.h, r.total_steps
+                "{shown}: inconsistent checkpoint (t = {} on the grid from {} to {} by {}: {} steps recorded)",
+                Num(t),
+                Num(r.t0),
+                Num(r.t_end),
+                Num(r.h),
+                r.total_steps
             ));
         }
         let rotation = liemid::Mat3::from_row_major(r.state.rotation);

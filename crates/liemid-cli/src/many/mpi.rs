@@ -47,7 +47,7 @@ fn input_hash(cli: &ManyArgs) -> u64 {
         h = fnv(h, &[0]);
     }
     for p in [&cli.scenario, &cli.resume].into_iter().flatten() {
-        h = match std::fs::read(p) {
+        h = match liemid_app::shared::input::read_bytes(p, liemid_app::shared::input::MAX_START_BYTES) {
             Ok(b) => fnv(h, &b),
             Err(e) => fnv(h, e.to_string().as_bytes()),
         };

@@ -3,11 +3,12 @@
 //! resumed from it (in one process or on any number of MPI ranks) builds the same list and
 //! continues with the bits of an uninterrupted run.
 //!
-//! Layout (little-endian): the 18 bytes `LIEMID-MANY-STATE\n`, then u32 version (1), u64
+//! Layout (little-endian): the 18 bytes `LIEMID-MANY-STATE\n`, then u32 version (2), u64
 //! bodies `n`, u64 steps done, u64 Langevin steps, f64 time, f64 step, f64 box side (NaN
 //! without a box), u8 free rotation (0 midpoint, 1 exact), then per body 26 f64: mass,
 //! principal moments (3), free (1 or 0), position (3), linear momentum (3), attitude (9, by
-//! rows), body angular momentum (3), position at the last list build (3).
+//! rows), body angular momentum (3), position at the last list build (3); last, the u32
+//! CRC-32 of every byte before it, so that a damaged or edited file is refused.
 
 use std::path::Path;
 
@@ -15,7 +16,7 @@ use liemid::linalg::{Mat3, Vec3};
 use liemid::many::{Bodies, FreeRotation};
 
 const MAGIC: &[u8; 18] = b"LIEMID-MANY-STATE\n";
-const VERSION: u32 = 1;
+const VERSION: u32 = 2;
 const HEADER: usize = 18 + 4 + 8 * 6 + 1;
 const RECORD: usize = 26;
 
@@ -64,6 +65,8 @@ pub fn encode(s: &State) -> Vec<u8> {
             out.extend_from_slice(&v.to_le_bytes());
         }
     }
+    let sum = crc32fast::hash(&out);
+    out.extend_from_slice(&sum.to_le_bytes());
     out
 }
 
@@ -82,7 +85,7 @@ pub fn write(path: &Path, s: &State) -> Result<(), String> {
 /// The file cannot be read, is not a state file of this version, is cut short, or holds a
 /// body the library refuses (non-finite state, non-positive mass or moments).
 pub fn read(path: &Path) -> Result<State, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+    let bytes = liemid_app::shared::input::read_bytes(path, liemid_app::shared::input::MAX_START_BYTES)?;
     decode(&bytes).map_err(|e| format!("{}: {e}", path.display()))
 }
 
@@ -100,12 +103,16 @@ fn decode(bytes: &[u8]) -> Result<State, String> {
         ));
     }
     let n = u64_at(22);
-    let expected = (n as u128) * (RECORD as u128 * 8) + HEADER as u128;
+    let expected = (n as u128) * (RECORD as u128 * 8) + HEADER as u128 + 4;
     if bytes.len() as u128 != expected {
         return Err(format!(
             "{} bytes, but {n} bodies need {expected}: the file is cut short or not a state file",
             bytes.len()
         ));
+    }
+    let (content, sum) = bytes.split_at(bytes.len() - 4);
+    if crc32fast::hash(content).to_le_bytes() != sum {
+        return Err("the state file's checksum does not match its content (edited or damaged)".into());
     }
     let (steps, langevin) = (u64_at(30), u64_at(38));
     let (t, h, box_length) = (f64_at(46), f64_at(54), f64_at(62));

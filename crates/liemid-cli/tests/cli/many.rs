@@ -64,3 +64,28 @@ fn cutoff_form_errors_exit_2_naming_the_choices() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("switch_start"), "{}", stderr(&o));
 }
+
+/// A state file carries a CRC-32 of its content: one flipped bit anywhere is refused with
+/// exit 2 before the first step (it used to resume from the edited state), and the file as
+/// written resumes.
+#[test]
+fn a_damaged_state_file_is_refused_by_its_checksum() {
+    let dir = scratch("many-state-checksum");
+    let args = ["many", "--model", "dipoles", "--bodies", "27", "--t-end", "0.01"];
+    let o = run_in(&dir, &[&args[..], &["--state", "s.bin"]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let good = std::fs::read(dir.join("s.bin")).unwrap();
+    let resume = [&args[..], &["--resume", "d.bin"]].concat();
+    // A body's position, its reference position, and the time in the header.
+    for at in [71 + 8 * 5 + 2, good.len() - 10, 46] {
+        let mut bad = good.clone();
+        bad[at] ^= 0x10;
+        std::fs::write(dir.join("d.bin"), &bad).unwrap();
+        let o = run_in(&dir, &resume);
+        assert_eq!(o.status.code(), Some(2), "byte {at}: {}", stderr(&o));
+        assert!(stderr(&o).contains("checksum does not match"), "{}", stderr(&o));
+    }
+    std::fs::write(dir.join("d.bin"), &good).unwrap();
+    let o = run_in(&dir, &resume);
+    assert!(o.status.success(), "{}", stderr(&o));
+}

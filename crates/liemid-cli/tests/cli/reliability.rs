@@ -722,7 +722,9 @@ fn a_fifo_as_any_input_is_refused_without_blocking() {
 /// A hand-edited checkpoint is checked like any input before a step is taken: a checkpoint
 /// interval of 0 (it used to divide by zero, exit 101), a time beyond the run's end, a
 /// recorded step count off the run's grid, and an attitude that is not a rotation (each
-/// used to resume with exit 0) are refused with exit 2, one line, nothing written.
+/// used to resume with exit 0) are refused with exit 2, one line, nothing written: first by
+/// the checkpoint's checksum, and when sealed again, by the validation of its content. The
+/// layout alone (re-indented JSON) does not matter.
 #[test]
 fn an_edited_checkpoint_is_refused_before_the_first_step() {
     let dir = scratch("edited-checkpoint");
@@ -753,14 +755,25 @@ fn an_edited_checkpoint_is_refused_before_the_first_step() {
         ("on the grid", |c| c["run"]["total_steps"] = 1_000_000_000_000u64.into()),
         ("not a rotation", |c| c["run"]["state"]["rotation"][0] = 2.0.into()),
     ];
+    // Edited by hand, each is refused by its checksum; sealed again (an editor that knows the
+    // checksum), by the validation of its content.
     for (said, edit) in edits {
         let mut c = good.clone();
         edit(&mut c);
         std::fs::write(dir.join("e.json"), c.to_string()).unwrap();
         let o = run_in(&dir, &["run", "--resume", "e.json"]);
+        assert_input_error(&o, "checksum does not match");
+        let sealed = liemid_app::shared::checkpoint::reseal(&c.to_string()).unwrap();
+        std::fs::write(dir.join("e.json"), sealed).unwrap();
+        let o = run_in(&dir, &["run", "--resume", "e.json"]);
         assert_input_error(&o, said);
         assert!(!dir.join("cut.csv").exists(), "{said}: the trajectory was finished");
     }
+    // The same content in another layout (serde_json's compact text) resumes.
+    std::fs::write(dir.join("e.json"), good.to_string()).unwrap();
+    let o = run_in(&dir, &["run", "--resume", "e.json"]);
+    assert!(o.status.success(), "the same content in another layout: {}", stderr(&o));
+    assert!(dir.join("cut.csv").exists());
 }
 
 /// A lattice that does not fit the memory is refused before it is built, naming the memory

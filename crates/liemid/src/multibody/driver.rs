@@ -207,7 +207,22 @@ impl Simulation {
         if !energy.is_finite() {
             return Err(Error::InvalidModel {
                 reason: format!(
-                    "the start's energy is {energy} (a velocity or position too large for f64; rescale the units)"
+                    "the start's energy is {} (a velocity or position too large for f64; rescale the units)",
+                    crate::error::Num(energy)
+                ),
+            });
+        }
+        if let Err(s) = simulation.integrator.check_start_rows(&simulation.system, &state) {
+            let at = match (s.joint, s.body) {
+                (Some(j), _) => format!("joint `{}`", model.joints[j].name),
+                (None, Some(b)) => format!("body `{}`", model.bodies[b].name),
+                (None, None) => "a block".to_string(),
+            };
+            return Err(Error::InvalidModel {
+                reason: format!(
+                    "the constraint rows are dependent at the start, at {at} (relative pivot {:.1e}): a body of \
+                     (nearly) zero mass or inertia beside much heavier ones, or joints whose rows repeat each other",
+                    s.ratio
                 ),
             });
         }

@@ -69,6 +69,24 @@ impl core::fmt::Debug for Rattle {
 }
 
 impl Rattle {
+    /// Factor the start's constraint matrix `G M⁻¹ Gᵀ` at `state` once, to find before
+    /// the first step a model whose rows are dependent there (a body of zero mass or
+    /// inertia, a joint set with redundant rows). The cache is left invalid, so the first
+    /// step computes exactly what it computes without this check.
+    pub(super) fn check_start_rows(
+        &mut self,
+        system: &MultibodySystem,
+        state: &MultibodyState,
+    ) -> core::result::Result<(), super::blocks::SingularPivot> {
+        let w = &mut self.work;
+        w.start_rows_at(system, state);
+        let result = w
+            .solver
+            .factor_symmetric(&system.mass, &system.inertia_matrix, &system.pairs, &w.rows0);
+        w.reset();
+        result
+    }
+
     /// The integrator of `system` by `method`: every scratch array and the tree
     /// factorization sized once.
     #[must_use]
