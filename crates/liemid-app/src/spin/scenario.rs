@@ -181,9 +181,13 @@ pub fn parse(text: &str, name: &str, dir: &Path) -> Result<SpinScenario, String>
     }
     let system = SpinSystem::new(lattice, exchange, anisotropy, axis, field, mu_s, damping)
         .and_then(|s| s.with_dmi(dmi, dmi_kind))
-        .map_err(|e| match &h {
-            Some(h) => h.err("parameters", e),
-            None => format!("[dynamics] {e}"),
+        .map_err(|e| {
+            // The damping is read from [dynamics], every other parameter from [hamiltonian].
+            let section = match e {
+                liemid::Error::InvalidParameter { name: "damping", .. } => "dynamics",
+                _ => "hamiltonian",
+            };
+            format!("[{section}] {e}")
         })?;
     let n = system.len();
     let mut inputs = Vec::new();

@@ -229,7 +229,6 @@ pub fn run(args: RunArgs) -> CmdResult {
             ("--every", args.every.is_some()),
             ("--format", args.format.is_some()),
             ("--checkpoint", args.checkpoint.is_some()),
-            ("--max-steps", args.max_steps.is_some()),
             ("--t-end", args.t_end.is_some()),
         ];
         if let Some((flag, _)) = unsupported.iter().find(|(_, given)| *given) {
@@ -247,6 +246,7 @@ pub fn run(args: RunArgs) -> CmdResult {
             step: args.step,
             orbits: args.orbits.unwrap_or(1.0),
             json: args.json.as_deref(),
+            max_steps: args.max_steps,
         });
     }
     if args.orbits.is_some() {

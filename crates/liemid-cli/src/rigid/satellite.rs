@@ -50,6 +50,8 @@ pub struct RunRequest<'a> {
     pub orbits: f64,
     /// `--json FILE|-`.
     pub json: Option<&'a str>,
+    /// `--max-steps`: the step bound, checked before the first step.
+    pub max_steps: Option<u64>,
 }
 
 /// The density named by `--rho` for the satellite (default `orbit`).
@@ -112,7 +114,7 @@ pub fn run(req: &RunRequest) -> CmdResult {
     if !(req.orbits.is_finite() && req.orbits > 0.0) {
         return Err(Failure::Input(format!(
             "--orbits must be a positive number, found {}",
-            req.orbits
+            liemid::error::Num(req.orbits)
         )));
     }
     let t_end = req.orbits * p.period;
@@ -124,7 +126,13 @@ pub fn run(req: &RunRequest) -> CmdResult {
             let stepper = SatelliteAdaptive::new(sat, method, d).map_err(|e| Failure::Input(e.to_string()))?;
             let mut run = AdaptiveRun::new(stepper, p.initial, t_end, eps)
                 .map_err(|e| Failure::Input(format!("{PROBLEM}: {e}")))?;
+            let bound = crate::shared::command::check_adaptive_steps(run.span(), run.control(), eps, req.max_steps)?;
             while !run.is_done() {
+                if run.stats().steps >= bound {
+                    return Err(Failure::Run(format!(
+                        "{PROBLEM}: the adaptive run reached {bound} steps (--max-steps) before the end"
+                    )));
+                }
                 run.step().map_err(|e| Failure::Run(format!("{PROBLEM}: {e}")))?;
                 tracker.see(sat, run.state());
             }
@@ -134,6 +142,7 @@ pub fn run(req: &RunRequest) -> CmdResult {
         None => {
             let h = req.step.unwrap_or(DEFAULT_STEP);
             let steps = liemid::step_count(0.0, t_end, h).map_err(|e| Failure::Input(format!("--step: {e}")))?;
+            crate::shared::command::check_steps(steps, req.max_steps)?;
             let mut integrator = SatelliteIntegrator::new(method, sat).map_err(|e| Failure::Input(e.to_string()))?;
             let mut s = p.initial;
             for k in 1..=steps {

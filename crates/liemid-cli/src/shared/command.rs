@@ -24,24 +24,36 @@ pub fn check_positive(name: &str, v: f64) -> Result<f64, Failure> {
     }
 }
 
-/// The most steps a run takes unless `--max-steps` allows more: 10⁹ (a rigid body's run of
-/// that length takes a few minutes, a robot's hours), so that a mistyped `--t-end` is
-/// refused before the first step instead of running for days.
-pub const DEFAULT_MAX_STEPS: u64 = 1_000_000_000;
+pub use liemid_app::shared::bounds::DEFAULT_MAX_STEPS;
 
 /// Refuse (exit 2), before the first step, a run of `steps` steps beyond `--max-steps`
 /// (`max_steps`, [`DEFAULT_MAX_STEPS`] when not given).
 pub fn check_steps(steps: u64, max_steps: Option<u64>) -> Result<(), Failure> {
-    let max = max_steps.unwrap_or(DEFAULT_MAX_STEPS);
-    if steps <= max {
-        return Ok(());
+    liemid_app::shared::bounds::check_steps(steps, max_steps, "--max-steps").map_err(Failure::Input)
+}
+
+/// The step bound of an adaptive run, after its pre-flight: the steps at the start's pace,
+/// `(t_end − t0) z / ε` with `z` the start's step density (control), refused (exit 2) when
+/// beyond `--max-steps` (`max_steps`, [`DEFAULT_MAX_STEPS`] when not given). A run whose
+/// pace slows later is stopped at the returned bound.
+pub fn check_adaptive_steps(
+    (t0, t_end): (f64, f64),
+    control: f64,
+    eps: f64,
+    max_steps: Option<u64>,
+) -> Result<u64, Failure> {
+    let estimate = (t_end - t0) * control / eps;
+    let bound = max_steps.unwrap_or(DEFAULT_MAX_STEPS);
+    if !estimate.is_nan() && estimate <= bound as f64 {
+        return Ok(bound);
     }
-    let bound = match max_steps {
+    let limit = match max_steps {
         Some(m) => format!("--max-steps {m}"),
         None => format!("the default bound of {DEFAULT_MAX_STEPS} (--max-steps N to allow more)"),
     };
     Err(Failure::Input(format!(
-        "the run would take {steps} steps, more than {bound}"
+        "--adaptive {eps:e} to t = {t_end:e}: about {estimate:.1e} steps at the start's step {:.1e}, more than {limit}",
+        eps / control
     )))
 }
 

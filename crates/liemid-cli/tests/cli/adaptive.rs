@@ -115,3 +115,24 @@ fn an_adaptive_run_beyond_the_step_bound_is_refused_before_the_first_step() {
     );
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+/// The satellite takes `--max-steps` like every run (it refused the flag, so a run could
+/// not be bounded): fixed and adaptive runs beyond the bound are refused before the first
+/// step, and a run within it completes.
+#[test]
+fn the_satellite_run_is_bounded_by_max_steps() {
+    let dir = scratch("satellite-bound");
+    let sat = ["run", "--problem", "eccentric-satellite"];
+    for (extra, said) in [
+        (&["--max-steps", "10"][..], "4308 steps, more than --max-steps 10"),
+        (&["--orbits", "1e9"][..], "more than the default bound"),
+        (&["--adaptive", "1e-300"][..], "more than the default bound"),
+        (&["--adaptive", "1e-3", "--max-steps", "5"][..], "more than --max-steps 5"),
+    ] {
+        let o = run_in(&dir, &[&sat[..], extra].concat());
+        assert_eq!(o.status.code(), Some(2), "{extra:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(said), "{extra:?}: {}", stderr(&o));
+    }
+    let o = run_in(&dir, &[&sat[..], &["--max-steps", "4308"]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+}

@@ -11,6 +11,7 @@ mod adaptive;
 mod beam;
 mod free_flow_vs_dop853;
 mod many;
+mod messages;
 mod multibody;
 mod multibody_merged;
 mod reliability;

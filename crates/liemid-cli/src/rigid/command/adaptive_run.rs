@@ -64,24 +64,8 @@ pub(super) fn run_adaptive<D: RigidDensity>(
         .map_err(|e| Failure::Input(format!("{}: {e}", sc.name)))?;
     let mut run = AdaptiveRun::new(stepper, sc.initial, settings.t_end, eps)
         .map_err(|e| Failure::Input(format!("{}: {e}", sc.name)))?;
-    // Pre-flight: the steps at the start's pace, `(t_end − t0) z / ε`, against the step
-    // bound (a tiny ε or a huge t_end used to run without end).
-    let (t0, t_end) = run.span();
-    let estimate = (t_end - t0) * run.control() / eps;
-    let bound = args.max_steps.unwrap_or(crate::shared::command::DEFAULT_MAX_STEPS);
-    if estimate.is_nan() || estimate > bound as f64 {
-        let limit = match args.max_steps {
-            Some(m) => format!("--max-steps {m}"),
-            None => format!(
-                "the default bound of {} (--max-steps N to allow more)",
-                crate::shared::command::DEFAULT_MAX_STEPS
-            ),
-        };
-        return Err(Failure::Input(format!(
-            "--adaptive {eps:e} to t = {t_end:e}: about {estimate:.1e} steps at the start's step {:.1e}, more than {limit}",
-            eps / run.control()
-        )));
-    }
+    // Pre-flight: a tiny ε or a huge t_end used to run without end.
+    let bound = crate::shared::command::check_adaptive_steps(run.span(), run.control(), eps, args.max_steps)?;
     let first = liemid::Diagnostics::of(system, &sc.initial);
     let mut progress = RunSummary {
         state: sc.initial,
