@@ -48,9 +48,12 @@ fn beam_run<'py>(
             study::run_viewed(
                 &sc,
                 t_end,
-                sc.step,
-                sample,
-                force_step,
+                study::Stepping {
+                    step: sc.step,
+                    sample,
+                    force_step,
+                    max_steps: None,
+                },
                 &mut |_| None,
                 view.then_some(title.as_str()),
             )

@@ -93,19 +93,45 @@ impl BeamRun {
     }
 }
 
-/// Run `scenario` to `t_end` with `step` (default: 0.9 of the critical step for the
-/// explicit methods, 0.05 for Newmark), sampling every `sample` (rounded to whole steps).
-/// A step above the critical one is refused unless `force_step`. `stop` is asked between
-/// samples; `Some(reason)` ends the run with that message.
+/// How a beam run steps: `step` (default: 0.9 of the critical step for the explicit
+/// methods, 0.05 for Newmark), a sample every `sample` (rounded to whole steps), a step above
+/// the critical one refused unless `force_step`, and at most `max_steps` steps
+/// ([`DEFAULT_MAX_STEPS`](crate::shared::bounds::DEFAULT_MAX_STEPS) when `None`).
+#[derive(Clone, Copy, Debug)]
+pub struct Stepping {
+    /// The step, or the default.
+    pub step: Option<f64>,
+    /// The interval of the samples.
+    pub sample: f64,
+    /// Run an explicit step above the critical one anyway.
+    pub force_step: bool,
+    /// The step bound.
+    pub max_steps: Option<u64>,
+}
+
+impl Stepping {
+    /// The step `h`, a sample every `sample`, the critical step and the step bound enforced.
+    #[must_use]
+    pub fn fixed(h: f64, sample: f64) -> Self {
+        Stepping {
+            step: Some(h),
+            sample,
+            force_step: false,
+            max_steps: None,
+        }
+    }
+}
+
+/// Run `scenario` to `t_end` as `stepping` says. The step bound and the memory of the
+/// samples are checked before the first step. `stop` is asked between samples;
+/// `Some(reason)` ends the run with that message.
 pub fn run(
     scenario: &BeamScenario,
     t_end: f64,
-    step: Option<f64>,
-    sample: f64,
-    force_step: bool,
+    stepping: Stepping,
     stop: &mut dyn FnMut(f64) -> Option<String>,
 ) -> Result<BeamRun, RunFailure> {
-    run_viewed(scenario, t_end, step, sample, force_step, stop, None).map(|(run, _)| run)
+    run_viewed(scenario, t_end, stepping, stop, None).map(|(run, _)| run)
 }
 
 /// [`run`], and with `view = Some(title)` the 3-D page of the run: the deformed centre
@@ -113,20 +139,37 @@ pub fn run(
 pub fn run_viewed(
     scenario: &BeamScenario,
     t_end: f64,
-    step: Option<f64>,
-    sample: f64,
-    force_step: bool,
+    stepping: Stepping,
     stop: &mut dyn FnMut(f64) -> Option<String>,
     view: Option<&str>,
 ) -> Result<(BeamRun, Option<ViewPage>), RunFailure> {
     let input = RunFailure::Input;
     let system: BeamSystem = scenario.problem.system().map_err(|e| input(e.to_string()))?;
     let mut driver = BeamDriver::new(system, scenario.method);
+    let Stepping {
+        step,
+        sample,
+        force_step,
+        max_steps,
+    } = stepping;
     let plan = driver.plan(t_end, step, sample, force_step).map_err(|e| match e {
         liemid::Error::UnstableStep { .. } => input(format!("{e} (or --force-step)")),
         e => input(e.to_string()),
     })?;
     let (h, every, steps) = (plan.step, plan.every, plan.steps);
+    // Before the first step: the step bound, and the samples kept (t, the energy and three
+    // displacements per tracked node) against the memory.
+    crate::shared::bounds::check_steps(steps, max_steps, "--max-steps").map_err(input)?;
+    let samples = (steps / every + 2) as f64;
+    let tracked = scenario.problem.frame.names.len() as f64;
+    crate::shared::memory::check_fits(
+        &format!(
+            "{samples:.3e} samples (sample every {} s)",
+            liemid::error::Num(h * every as f64)
+        ),
+        samples * (16.0 + 24.0 * tracked),
+    )
+    .map_err(input)?;
     let explicit = scenario.method.explicit();
     let system = driver.system();
     let names: Vec<(String, usize)> = scenario.problem.frame.names.clone();
@@ -283,7 +326,7 @@ pub fn work_precision(per_leg: usize, repetitions: usize) -> Result<(Vec<WorkPoi
         .critical_step(BeamMethod::Splitting4);
     let fine = |fraction: f64| -> Result<BeamRun, RunFailure> {
         let h = sample / (sample / (fraction * critical4)).ceil();
-        run(&scenario(explicit4)?, t_end, Some(h), sample, false, &mut |_| None)
+        run(&scenario(explicit4)?, t_end, Stepping::fixed(h, sample), &mut |_| None)
     };
     let reference = fine(0.2)?;
     let check = fine(0.1)?;
@@ -294,7 +337,7 @@ pub fn work_precision(per_leg: usize, repetitions: usize) -> Result<(Vec<WorkPoi
         let mut best = f64::INFINITY;
         let mut last = None;
         for _ in 0..repetitions.max(1) {
-            let r = match run(&sc, t_end, Some(h), sample, false, &mut |_| None) {
+            let r = match run(&sc, t_end, Stepping::fixed(h, sample), &mut |_| None) {
                 Ok(r) => r,
                 // Newmark's Newton iteration can fail at a large step: a point it does not reach.
                 Err(RunFailure::Numerical(_)) if method == BeamIntegrator::Newmark => return Ok(None),

@@ -49,6 +49,9 @@ pub struct BeamArgs {
     /// Run an explicit step above the critical one anyway.
     #[arg(long)]
     pub force_step: bool,
+    /// Refuse runs of more than N steps (exit 2) before the first step [default: 10⁹].
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    pub max_steps: Option<u64>,
     /// Threads [default: all cores]; results are identical for any count.
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     pub threads: Option<u64>,
@@ -165,9 +168,12 @@ pub fn beam(args: BeamArgs) -> CmdResult {
         study::run_viewed(
             &sc,
             t_end,
-            sc.step,
-            sample,
-            args.force_step,
+            study::Stepping {
+                step: sc.step,
+                sample,
+                force_step: args.force_step,
+                max_steps: args.max_steps,
+            },
             &mut |t| {
                 interrupt.requested().map(|(name, code)| {
                     *signal.lock().expect("not poisoned") = Some(code);

@@ -220,6 +220,30 @@ fn row(s: &liemid::RigidState, d: &liemid::Diagnostics) -> [f64; 17] {
     ]
 }
 
+/// Refuse (exit 2) a trajectory of about `steps` steps written every `every` beyond
+/// [`MAX_TRAJECTORY_BYTES`], unless `--allow-large-output`.
+pub(super) fn check_trajectory_size(
+    path: &str,
+    steps: f64,
+    every: u64,
+    format: Format,
+    allow_large_output: bool,
+) -> Result<(), Failure> {
+    let rows = (steps / every as f64).floor() + 2.0;
+    let bytes = rows * row_bytes(format);
+    if bytes > MAX_TRAJECTORY_BYTES && !allow_large_output {
+        let fits = ((steps * row_bytes(format)) / 1e8).ceil().max(1.0);
+        return Err(Failure::Input(format!(
+            "{path}: the trajectory would take about {:.1} GB ({rows:.3e} rows, every {every} {}), more than \
+             the 4 GiB limit; write fewer rows (--every {fits:.0} makes about 100 MB) or give \
+             --allow-large-output",
+            bytes / 1e9,
+            plural(every, "step", "steps"),
+        )));
+    }
+    Ok(())
+}
+
 /// Run `liemid run`.
 pub fn run(args: RunArgs) -> CmdResult {
     if args.file.is_none() && args.resume.is_none() && args.problem == satellite::PROBLEM {
@@ -294,19 +318,7 @@ pub fn run(args: RunArgs) -> CmdResult {
     };
     let every = settings.every;
     if let Some((path, _)) = &settings.output {
-        let rows = (steps / every + 2) as f64;
-        let bytes = rows * row_bytes(format);
-        if bytes > MAX_TRAJECTORY_BYTES && !args.allow_large_output {
-            let fits = ((steps as f64 * row_bytes(format)) / 1e8).ceil().max(1.0);
-            return Err(Failure::Input(format!(
-                "{path}: the trajectory would take about {:.1} GB ({} rows, every {every} {}), more than \
-                 the 4 GiB limit; write fewer rows (--every {fits:.0} makes about 100 MB) or give \
-                 --allow-large-output",
-                bytes / 1e9,
-                rows as u64,
-                plural(every, "step", "steps"),
-            )));
-        }
+        check_trajectory_size(path, steps as f64, every, format, args.allow_large_output)?;
     }
 
     // Every output is checked before the first step.

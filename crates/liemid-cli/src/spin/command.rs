@@ -56,6 +56,9 @@ pub struct SpinsArgs {
     /// Refuse runs of more than N spin-steps (spins × steps; exit 2) before the first step.
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     pub max_spin_steps: Option<u64>,
+    /// Refuse runs of more than N steps (exit 2) before the first step [default: 10⁹].
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    pub max_steps: Option<u64>,
     /// Write a self-contained 3-D animation of the run (HTML) to FILE, sampled every
     /// `--every` steps (frames subsampled to the page's byte budget).
     #[arg(long)]
@@ -157,6 +160,7 @@ pub fn spins(args: SpinsArgs) -> CmdResult {
     }
     let steps = liemid::step_count(0.0, sc.t_end, sc.step)
         .map_err(|e| input(format!("step {} and t_end {}: {e}", Num(sc.step), Num(sc.t_end))))?;
+    crate::shared::command::check_steps(steps, args.max_steps)?;
     if let Some(max) = args.max_spin_steps {
         let work = steps as f64 * sc.system.len() as f64;
         if work > max as f64 {

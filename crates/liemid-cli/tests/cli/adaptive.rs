@@ -127,7 +127,10 @@ fn the_satellite_run_is_bounded_by_max_steps() {
         (&["--max-steps", "10"][..], "4308 steps, more than --max-steps 10"),
         (&["--orbits", "1e9"][..], "more than the default bound"),
         (&["--adaptive", "1e-300"][..], "more than the default bound"),
-        (&["--adaptive", "1e-3", "--max-steps", "5"][..], "more than --max-steps 5"),
+        (
+            &["--adaptive", "1e-3", "--max-steps", "5"][..],
+            "more than --max-steps 5",
+        ),
     ] {
         let o = run_in(&dir, &[&sat[..], extra].concat());
         assert_eq!(o.status.code(), Some(2), "{extra:?}: {}", stderr(&o));
@@ -135,4 +138,29 @@ fn the_satellite_run_is_bounded_by_max_steps() {
     }
     let o = run_in(&dir, &[&sat[..], &["--max-steps", "4308"]].concat());
     assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// `--adaptive --out` is held to the 4 GiB trajectory limit like a fixed-step run (it
+/// skipped the check and wrote 2.5 GB in 20 s): refused before the first step, nothing
+/// written; `--every` that fits, or `--allow-large-output`, is the way out.
+#[test]
+fn an_adaptive_trajectory_beyond_4_gib_is_refused_before_the_first_step() {
+    let dir = scratch("adaptive-large-output");
+    let o = run_in(
+        &dir,
+        &[
+            "run",
+            "--adaptive",
+            "1e-3",
+            "--t-end",
+            "900",
+            "--out",
+            "big.csv",
+            "--every",
+            "1",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("more than the 4 GiB limit"), "{}", stderr(&o));
+    assert!(std::fs::read_dir(&dir).unwrap().next().is_none(), "a file was written");
 }

@@ -180,3 +180,42 @@ fn beam_input_errors_name_the_cause_and_exit_2() {
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(std::fs::read_to_string(&file).unwrap().contains("[[member]]"));
 }
+
+/// `liemid beam` and `liemid spins` are held to the step bound like every run (they had
+/// none: `--t-end 1e9` ran for days), and a beam run whose samples would not fit the memory
+/// is refused before the first step, naming both sizes.
+#[test]
+fn beam_and_spins_runs_are_bounded_before_the_first_step() {
+    let dir = scratch("beam-bounds");
+    let o = run_in(&dir, &["beam", "--t-end", "1e9", "--out", "o.csv"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("more than the default bound of 1000000000"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!dir.join("o.csv").exists());
+    let o = run_in(&dir, &["beam", "--t-end", "1", "--max-steps", "10"]);
+    assert!(stderr(&o).contains("steps, more than --max-steps 10"), "{}", stderr(&o));
+    let available = liemid_app::shared::memory::available_memory().unwrap_or(0) as f64;
+    if available < 1e13 {
+        // About 1e10 samples of at least 40 bytes: 400 GB.
+        let o = run_in(
+            &dir,
+            &[
+                "beam",
+                "--t-end",
+                "10",
+                "--sample",
+                "1e-9",
+                "--max-steps",
+                "100000000000",
+            ],
+        );
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        assert!(stderr(&o).contains("of memory available"), "{}", stderr(&o));
+    }
+    let o = run_in(&dir, &["spins", "--t-end", "1e12"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("more than the default bound"), "{}", stderr(&o));
+}

@@ -66,6 +66,12 @@ pub(super) fn run_adaptive<D: RigidDensity>(
         .map_err(|e| Failure::Input(format!("{}: {e}", sc.name)))?;
     // Pre-flight: a tiny ε or a huge t_end used to run without end.
     let bound = crate::shared::command::check_adaptive_steps(run.span(), run.control(), eps, args.max_steps)?;
+    // The trajectory at the start's pace against the 4 GiB limit, as for fixed steps.
+    if let Some((path, _)) = settings.output.as_ref().filter(|(p, _)| p != "-") {
+        let (t0, t_end) = run.span();
+        let steps = (t_end - t0) * run.control() / eps;
+        super::check_trajectory_size(path, steps, settings.every, format, args.allow_large_output)?;
+    }
     let first = liemid::Diagnostics::of(system, &sc.initial);
     let mut progress = RunSummary {
         state: sc.initial,
