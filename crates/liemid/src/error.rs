@@ -205,11 +205,40 @@ pub enum Error {
 }
 
 fn model_file_message(file: &str, line: u32, element: &str, message: &str) -> String {
+    let message = abbreviate_quoted(message);
     if line == 0 {
         format!("{file}: {message}")
     } else {
         format!("{file}:{line}: <{element}>: {message}")
     }
+}
+
+/// `text` for a message: whole up to 60 characters, else its first 40 and how long it is (an
+/// attribute of 200,000 numbers used to be echoed whole, a 400 KB error line).
+pub(crate) fn abbreviate(text: &str) -> String {
+    if text.chars().count() <= 60 {
+        return text.to_string();
+    }
+    let head: String = text.chars().take(40).collect();
+    format!("{head}… ({} characters)", text.chars().count())
+}
+
+/// `message` with every value quoted in backticks abbreviated ([`abbreviate`]): whatever a
+/// model file's message quotes from the file stays short.
+fn abbreviate_quoted(message: &str) -> String {
+    let mut out = String::with_capacity(message.len().min(1024));
+    for (k, part) in message.split('`').enumerate() {
+        if k > 0 {
+            out.push('`');
+        }
+        // Odd parts lie between a pair of backticks.
+        if k % 2 == 1 {
+            out.push_str(&abbreviate(part));
+        } else {
+            out.push_str(part);
+        }
+    }
+    out
 }
 
 /// A number in messages: as Rust prints it between 1e-4 and 1e6 (`0.8`, `1000`), in

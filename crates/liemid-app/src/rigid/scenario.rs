@@ -333,7 +333,7 @@ pub fn parse(text: &str, name: &str) -> Result<Scenario, String> {
                 "gravity" => {
                     let mass = t.required_number("mass")?;
                     if mass <= 0.0 {
-                        return Err(t.err("mass", format!("must be positive, found {mass}")));
+                        return Err(t.err("mass", format!("must be positive, found {}", liemid::error::Num(mass))));
                     }
                     let gravity = t.vec3("gravity")?.unwrap_or(Vec3::new(0.0, 0.0, -9.81));
                     let com = t
@@ -395,7 +395,7 @@ pub fn parse(text: &str, name: &str) -> Result<Scenario, String> {
     })?;
     let step = integ.required_number("step")?;
     if step <= 0.0 {
-        return Err(integ.err("step", format!("must be positive, found {step}")));
+        return Err(integ.err("step", format!("must be positive, found {}", liemid::error::Num(step))));
     }
     let t_end = integ.required_number("t_end")?;
     if t_end < t0 {

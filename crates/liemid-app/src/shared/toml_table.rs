@@ -56,7 +56,7 @@ impl<'a> Section<'a> {
             other => return Err(self.err(key, format!("expected a number, found {}", other.type_str()))),
         };
         if !x.is_finite() {
-            return Err(self.err(key, format!("must be finite, found {x}")));
+            return Err(self.err(key, format!("must be finite, found {}", liemid::error::Num(x))));
         }
         if x.abs() > MAX_MAGNITUDE {
             return Err(self.err(
@@ -144,7 +144,10 @@ impl<'a> Section<'a> {
         a.iter()
             .map(|x| match x {
                 Value::Integer(i) if *i >= 1 => Ok(*i as u64),
-                other => Err(self.err(key, format!("expected whole numbers of at least 1, found {other}"))),
+                other => Err(self.err(
+                    key,
+                    format!("expected whole numbers of at least 1, found {}", shown(other)),
+                )),
             })
             .collect::<Result<Vec<u64>, String>>()
             .map(Some)
@@ -154,7 +157,10 @@ impl<'a> Section<'a> {
         match self.table.get(key) {
             None => Ok(None),
             Some(Value::Integer(i)) if *i >= 1 => Ok(Some(*i as u64)),
-            Some(other) => Err(self.err(key, format!("expected a whole number of at least 1, found {other}"))),
+            Some(other) => Err(self.err(
+                key,
+                format!("expected a whole number of at least 1, found {}", shown(other)),
+            )),
         }
     }
 
@@ -186,4 +192,30 @@ pub fn parse_table(text: &str) -> Result<Table, String> {
 
 fn line_of(text: &str, offset: usize) -> usize {
     text[..offset.min(text.len())].matches('\n').count() + 1
+}
+
+/// A value for a message: numbers through [`liemid::error::Num`] (no three hundred digits),
+/// arrays and tables element by element, and at most 60 characters of it.
+pub fn shown(v: &Value) -> String {
+    let text = match v {
+        Value::Float(x) => liemid::error::Num(*x).to_string(),
+        Value::Array(a) => format!("[{}]", a.iter().map(shown).collect::<Vec<_>>().join(", ")),
+        Value::Table(t) => format!(
+            "{{ {} }}",
+            t.iter()
+                .map(|(k, x)| format!("{k} = {}", shown(x)))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+        other => other.to_string(),
+    };
+    if text.chars().count() <= 60 {
+        text
+    } else {
+        format!(
+            "{}… ({} characters)",
+            text.chars().take(40).collect::<String>(),
+            text.chars().count()
+        )
+    }
 }

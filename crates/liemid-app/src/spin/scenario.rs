@@ -236,7 +236,10 @@ pub fn parse(text: &str, name: &str, dir: &Path) -> Result<SpinScenario, String>
                     "near-z" => {
                         let tilt = init.number("max_tilt")?.unwrap_or(0.3);
                         if !(0.0..=std::f64::consts::PI).contains(&tilt) {
-                            return Err(init.err("max_tilt", format!("must be in [0, pi] rad, found {tilt}")));
+                            return Err(init.err(
+                                "max_tilt",
+                                format!("must be in [0, pi] rad, found {}", liemid::error::Num(tilt)),
+                            ));
                         }
                         problems::near_z(n, tilt, seed)
                     }
@@ -247,13 +250,20 @@ pub fn parse(text: &str, name: &str, dir: &Path) -> Result<SpinScenario, String>
                         }
                         let radius = init.number("radius")?.unwrap_or(6.0);
                         if !(radius.is_finite() && radius > 0.0) {
-                            return Err(
-                                init.err("radius", format!("must be a positive number of sites, found {radius}"))
-                            );
+                            return Err(init.err(
+                                "radius",
+                                format!(
+                                    "must be a positive number of sites, found {}",
+                                    liemid::error::Num(radius)
+                                ),
+                            ));
                         }
                         let tilt = init.number("max_tilt")?.unwrap_or(0.0);
                         if !(0.0..=std::f64::consts::PI).contains(&tilt) {
-                            return Err(init.err("max_tilt", format!("must be in [0, pi] rad, found {tilt}")));
+                            return Err(init.err(
+                                "max_tilt",
+                                format!("must be in [0, pi] rad, found {}", liemid::error::Num(tilt)),
+                            ));
                         }
                         let mut s = problems::skyrmion_seed(nx, ny, radius, dmi >= 0.0);
                         spin::relax(&system, &mut s, 1e-10, 1_000_000)

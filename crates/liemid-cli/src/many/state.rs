@@ -106,8 +106,9 @@ fn decode(bytes: &[u8]) -> Result<State, String> {
     let expected = (n as u128) * (RECORD as u128 * 8) + HEADER as u128 + 4;
     if bytes.len() as u128 != expected {
         return Err(format!(
-            "{} bytes, but {n} bodies need {expected}: the file is cut short or not a state file",
-            bytes.len()
+            "{} bytes, but {n} bodies need {}: the file is cut short or not a state file",
+            bytes.len(),
+            liemid::error::Num(expected as f64)
         ));
     }
     let (content, sum) = bytes.split_at(bytes.len() - 4);

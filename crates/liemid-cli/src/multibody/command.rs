@@ -165,7 +165,7 @@ pub fn multibody(args: &MultibodyArgs) -> CmdResult {
     let (summary, sink) = match (method, prepared) {
         (Method::Liemid(m), Some(prepared)) => run_maximal(&sc, m, prepared, (step, t_end, n), every, sink)?,
         (Method::Rk4, _) => super::joint_run::rk4(&sc, (step, t_end, every, n), sink)?,
-        (_, _) => super::joint_run::dop853(&sc, rtol, t_end, every, sink)?,
+        (_, _) => super::joint_run::dop853(&sc, rtol, t_end, (every, args.max_steps), sink)?,
     };
     let quiet = args.json.as_deref() == Some("-") || out.as_deref() == Some(Path::new("-"));
     if let Some(base) = &args.plot {

@@ -227,9 +227,11 @@ pub(super) fn dop853(
     sc: &MultibodyScenario,
     rtol: f64,
     t_end: f64,
-    every: u64,
+    (every, max_steps): (u64, Option<u64>),
     mut sink: Sink,
 ) -> Result<(serde_json::Value, Sink), Failure> {
+    // The step bound, honoured as the solver's own limit (its steps are not known ahead).
+    let bound = max_steps.unwrap_or(crate::shared::command::DEFAULT_MAX_STEPS);
     let model = RefCell::new(model_of(sc)?);
     let y0 = {
         let m = model.borrow();
@@ -250,6 +252,7 @@ pub(super) fn dop853(
         t_end,
         y0,
         rtol,
+        u32::try_from(bound).unwrap_or(u32::MAX),
     );
     let stats = solver.integrate();
     let seconds = started.elapsed().as_secs_f64();
@@ -260,7 +263,19 @@ pub(super) fn dop853(
     if let Some(e) = error.borrow().as_ref() {
         return Err(sink.failed(format!("{}: dop853: {e}", sc.name)));
     }
-    let stats = stats.map_err(|e| Failure::Run(format!("{}: dop853 at rtol {}: {e}", sc.name, Num(rtol))))?;
+    let stats = stats.map_err(|e| {
+        let limit = match max_steps {
+            Some(m) => format!("--max-steps {m}"),
+            None => format!("the default bound of {bound} steps (--max-steps N to allow more)"),
+        };
+        let why = match e {
+            ode_solvers::dop_shared::IntegrationError::MaxNumStepReached { x, n_step } => {
+                format!("reached {limit} at t = {} ({n_step} steps) before t_end", Num(x))
+            }
+            e => e.to_string(),
+        };
+        Failure::Run(format!("{}: dop853 at rtol {}: {why}", sc.name, Num(rtol)))
+    })?;
     // The solver borrows the stepping model; a second one evaluates the outputs.
     let mut model = model_of(sc)?;
     let (times, states) = (solver.x_out(), solver.y_out());

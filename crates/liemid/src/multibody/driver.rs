@@ -213,15 +213,11 @@ impl Simulation {
             });
         }
         if let Err(s) = simulation.integrator.check_start_rows(&simulation.system, &state) {
-            let at = match (s.joint, s.body) {
-                (Some(j), _) => format!("joint `{}`", model.joints[j].name),
-                (None, Some(b)) => format!("body `{}`", model.bodies[b].name),
-                (None, None) => "a block".to_string(),
-            };
             return Err(Error::InvalidModel {
                 reason: format!(
-                    "the constraint rows are dependent at the start, at {at} (relative pivot {:.1e}): a body of \
+                    "the constraint rows are dependent at the start, at {} (relative pivot {:.1e}): a body of \
                      (nearly) zero mass or inertia beside much heavier ones, or joints whose rows repeat each other",
+                    simulation.system.describe_block(&s),
                     s.ratio
                 ),
             });

@@ -40,6 +40,9 @@ where
 /// Reference: docs/theory/multibody.md §1-§2.
 pub struct MultibodySystem {
     pub(super) name: String,
+    /// The bodies' and the joints' names, for messages.
+    pub(super) body_names: Vec<String>,
+    pub(super) joint_names: Vec<String>,
     pub(super) mass: Vec<f64>,
     pub(super) inertia: Vec<Inertia>,
     pub(super) inertia_matrix: Vec<Mat3>,
@@ -117,6 +120,8 @@ impl MultibodySystem {
         let z3 = vec![Vec3::ZERO; nb];
         Ok(MultibodySystem {
             name: model.name.clone(),
+            body_names: model.bodies.iter().map(|b| b.name.clone()).collect(),
+            joint_names: model.joints.iter().map(|j| j.name.clone()).collect(),
             mass: model.bodies.iter().map(|b| b.mass).collect(),
             inertia_matrix: inertia.iter().map(|i| *i.matrix()).collect(),
             inertia,
@@ -138,6 +143,15 @@ impl MultibodySystem {
     #[must_use]
     pub fn name(&self) -> &str {
         &self.name
+    }
+
+    /// Where a singular tree block lies, in words: "joint `j`" or "body `b`".
+    pub(super) fn describe_block(&self, s: &super::blocks::SingularPivot) -> String {
+        match (s.joint, s.body) {
+            (Some(j), _) => format!("joint `{}`", self.joint_names[j]),
+            (None, Some(b)) => format!("body `{}`", self.body_names[b]),
+            (None, None) => "a tree block".to_string(),
+        }
     }
 
     /// The model's length scale `L` (see [`Model::length_scale`]).

@@ -329,9 +329,10 @@ impl Workspace {
         self.factor_rows0 = result.is_ok() && matrix == Matrix::Start;
         result.map_err(|s| Error::InvalidModel {
             reason: format!(
-                "dependent constraint rows at joint {:?} / body {:?}: relative pivot {:.3e} (a joint set with \
-                     redundant rows in the tree, or a singular configuration)",
-                s.joint, s.body, s.ratio
+                "dependent constraint rows at {}: relative pivot {:.3e} (a joint set with redundant rows in the \
+                 tree, a body of near-zero mass or inertia, or a singular configuration)",
+                sys.describe_block(&s),
+                s.ratio
             ),
         })
     }

@@ -225,15 +225,7 @@ impl Sources {
     }
 }
 
-/// `text` for a message: whole up to 60 characters, else its first 40 and how long it is (an
-/// attribute of 200,000 numbers used to be echoed whole, a 400 KB error line).
-pub(crate) fn abbreviate(text: &str) -> String {
-    if text.chars().count() <= 60 {
-        return text.to_string();
-    }
-    let head: String = text.chars().take(40).collect();
-    format!("{head}… ({} characters)", text.chars().count())
-}
+pub(crate) use crate::error::abbreviate;
 
 /// `tag name="…"` (or just `tag`) for messages.
 pub(crate) fn describe(node: Node) -> String {
