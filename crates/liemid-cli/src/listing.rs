@@ -68,7 +68,7 @@ pub fn methods(spins: bool, json: bool) {
                 "two midpoint half steps, as in liemid-ea (the default; not symplectic, O(h^3) Lie-Poisson defect)"
             }
             liemid::variational::Drift::Variational => {
-                "two variational half steps, as in liemid-eav (Lie-Poisson: the step is symplectic)"
+                "two variational half steps, as in liemid-eav (a Lie-Poisson drift; measured symplectic: the beam methods, a free multibody body)"
             }
         };
         outln!("{:<11} {what}", drift.key());

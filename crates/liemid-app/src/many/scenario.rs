@@ -46,13 +46,13 @@ impl Rotation {
     pub fn description(self) -> &'static str {
         match self {
             Rotation::Midpoint => {
-                "half impulses around the drift and the torque-free midpoint Lie rotation of liemid-ea (order 2)"
+                "half impulses around the drift and the torque-free midpoint Lie rotation of liemid-ea (order 2, not symplectic)"
             }
             Rotation::Exact => {
-                "half impulses around the drift and the exact torque-free flow of liemid-ex (order 2, no Newton solve)"
+                "half impulses around the drift and the exact torque-free flow of liemid-ex (order 2, symplectic, no Newton solve)"
             }
             Rotation::Variational => {
-                "half impulses around the drift and the variational torque-free rotation of liemid-eav (order 2, symplectic)"
+                "half impulses around the drift and the variational torque-free rotation of liemid-eav (order 2, symplectic, no SIMD lanes)"
             }
         }
     }
