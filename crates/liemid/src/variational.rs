@@ -34,7 +34,8 @@ use crate::so3;
 /// LIEMID\[EA\] or the variational equation (V) of LIEMID\[EAV\]. Both are symmetric and
 /// second order and keep `|Π|` and the spatial momentum; (V)'s map is Lie–Poisson, (M)'s
 /// has a defect of `O(h³)` per step (docs/theory/rigid.md §9). Used by the multibody RATTLE
-/// step, the many-body splitting and the beams' node rotations.
+/// step, the many-body splitting, the beams' node rotations and the satellite's attitude
+/// (docs/theory/rigid.md §10).
 ///
 /// Reference: docs/theory/rigid.md §9; T. Lee, M. Leok, N. H. McClamroch, Comput. Methods
 /// Appl. Mech. Engrg. 196 (2007).
