@@ -61,6 +61,18 @@ pub fn methods(spins: bool, json: bool) {
         };
         outln!("{:<11} {order:>5}  {evaluations:<22} {what}", integrator.key());
     }
+    outln!("\nliemid beam --drift NAME and liemid multibody --drift NAME (the liemid methods' rotation):");
+    for drift in liemid::variational::Drift::ALL {
+        let what = match drift {
+            liemid::variational::Drift::Midpoint => {
+                "two midpoint half steps, as in liemid-ea (the default; not symplectic, O(h^3) Lie-Poisson defect)"
+            }
+            liemid::variational::Drift::Variational => {
+                "two variational half steps, as in liemid-eav (a Lie-Poisson drift; measured symplectic: the beam methods, a free multibody body)"
+            }
+        };
+        outln!("{:<11} {what}", drift.key());
+    }
     outln!("\nliemid multibody --method NAME:");
     outln!("{:<11} {:>5}  what it is", "name", "order");
     for m in MultibodyMethod::ALL {

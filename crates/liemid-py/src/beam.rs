@@ -15,7 +15,7 @@ use pyo3::types::PyDict;
 /// Run a beam scenario; returns a dict of the run (arrays flat, `tracked` per node (n·3)).
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (problem, text, elements_per_member, method, step, t_end, sample, force_step, view=false))]
+#[pyo3(signature = (problem, text, elements_per_member, method, step, t_end, sample, force_step, view=false, drift=None))]
 fn beam_run<'py>(
     py: Python<'py>,
     problem: Option<&str>,
@@ -27,6 +27,7 @@ fn beam_run<'py>(
     sample: Option<f64>,
     force_step: bool,
     view: bool,
+    drift: Option<&str>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let mut sc = match (problem, text) {
         (Some(p), None) => scenario::builtin(p, elements_per_member),
@@ -36,6 +37,9 @@ fn beam_run<'py>(
     .map_err(PyValueError::new_err)?;
     if let Some(m) = method {
         sc.method = scenario::integrator(m).map_err(|e| PyValueError::new_err(format!("method: {e}")))?;
+    }
+    if let Some(d) = drift {
+        sc.drift = scenario::drift(d).map_err(|e| PyValueError::new_err(format!("drift: {e}")))?;
     }
     if step.is_some() {
         sc.step = step;
@@ -73,6 +77,7 @@ fn beam_run<'py>(
         })?;
     let d = PyDict::new(py);
     d.set_item("method", run.method.key())?;
+    d.set_item("drift", run.drift.map(|d| d.key()))?;
     d.set_item("page", page.map(|p| p.html(run.steps)))?;
     d.set_item("t", run.t.clone().into_pyarray(py))?;
     let tracked: HashMap<String, Bound<'py, PyArray1<f64>>> = run

@@ -171,24 +171,21 @@ impl ManyBodies {
         result.map_err(|e| py_error(py, &e, ""))
     }
 
-    /// Choose the free rotation between the impulses: "midpoint" (as in LIEMID\[EA\]) or
-    /// "exact" (the exact torque-free flow, as in LIEMID\[EX\]).
+    /// Choose the free rotation between the impulses: "midpoint" (as in LIEMID\[EA\]),
+    /// "exact" (the exact torque-free flow, as in LIEMID\[EX\]) or "variational" (the
+    /// variational half steps, as in LIEMID\[EAV\]).
     fn set_rotation(&mut self, kind: &str) -> PyResult<()> {
-        let kind = match kind {
-            "midpoint" => liemid::many::FreeRotation::Midpoint,
-            "exact" => liemid::many::FreeRotation::Exact,
-            other => {
-                return Err(PyValueError::new_err(format!(
-                    "rotation: unknown rotation {other:?} (\"midpoint\", \"exact\")"
-                )))
-            }
-        };
+        let kind = liemid::many::FreeRotation::from_key(kind).ok_or_else(|| {
+            PyValueError::new_err(format!(
+                "rotation: unknown rotation {kind:?} (\"midpoint\", \"exact\", \"variational\")"
+            ))
+        })?;
         self.bodies
             .set_free_rotation(kind)
             .map_err(|e| PyValueError::new_err(format!("rotation: {e}")))
     }
 
-    /// The free rotation between the impulses ("midpoint" or "exact").
+    /// The free rotation between the impulses ("midpoint", "exact" or "variational").
     #[getter]
     fn rotation(&self) -> &'static str {
         self.bodies.free_rotation().key()

@@ -1,4 +1,5 @@
-"""liemid.beam: the same histories as the CLI, the benchmarks' physics, errors."""
+"""liemid.beam: the same histories as the CLI, the benchmarks' physics, the variational drift,
+errors."""
 
 from __future__ import annotations
 
@@ -61,3 +62,30 @@ def test_errors_name_the_cause() -> None:
     with pytest.raises(liemid.ConvergenceError):
         beam.run("right-angle-cantilever", elements_per_member=16, method="newmark", step=0.2)
     assert ("liemid", 2) in beam.methods() and any(n == "flying-beam" for n, _ in beam.problems())
+
+
+def test_the_variational_drift_matches_the_cli_bit_for_bit(liemid_cli: str) -> None:
+    run = beam.run("right-angle-cantilever", elements_per_member=4, t_end=2.0, sample=0.1, drift="variational")
+    assert run.drift == "variational"
+    out = subprocess.run(
+        [
+            liemid_cli, "beam", "--elements-per-member", "4", "--t-end", "2", "--sample", "0.1", "--drift",
+            "variational", "--json", "-",
+        ],
+        check=True,
+        capture_output=True,
+        text=True,
+    )
+    cli = json.loads(out.stdout)
+    assert cli["drift"] == "variational"
+    assert np.array_equal(run.tracked["elbow"], np.array(cli["tracked"]["elbow"]["u"]))
+    midpoint = beam.run("right-angle-cantilever", elements_per_member=4, t_end=2.0, sample=0.1)
+    assert midpoint.drift == "midpoint"
+    # Both drifts second order: close, not equal.
+    d = np.max(np.abs(run.tracked["elbow"] - midpoint.tracked["elbow"]))
+    assert 0.0 < d < 1e-3
+    assert beam.run("right-angle-cantilever", t_end=0.5, method="newmark", step=0.05).drift is None
+    with pytest.raises(ValueError, match="newmark has none"):
+        beam.run("right-angle-cantilever", t_end=0.5, method="newmark", drift="variational")
+    with pytest.raises(ValueError, match="unknown drift"):
+        beam.run("right-angle-cantilever", t_end=0.5, drift="cayley")

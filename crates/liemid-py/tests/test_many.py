@@ -98,6 +98,33 @@ def test_exact_rotation_is_liemid_ex_and_thread_independent() -> None:
         b.rotation = "spline"
 
 
+def test_variational_rotation_is_liemid_eav_and_thread_independent() -> None:
+    g = TOP.body.torque
+    assert isinstance(g, liemid.Gravity)
+    moments = np.diag(TOP.body.inertia)
+    sys_ = many.System(
+        [g.mass], moments, np.zeros((1, 3)), TOP.rotation[np.newaxis], TOP.angular_momentum[np.newaxis],
+        free=False, model=many.Independent(gravity=g.gravity, center_of_mass=g.center_of_mass),
+        rotation="variational",
+    )
+    assert sys_.rotation == "variational"
+    sys_.step(1e-4, 100)
+    eav = TOP.integrate(t_end=0.01, method="liemid-eav", step=1e-4)
+    _, _, r, pi = sys_.arrays()
+    norm = np.linalg.norm(eav.pi[-1])
+    assert np.max(np.abs(pi[0] - eav.pi[-1])) <= 1e-14 * norm
+    assert np.max(np.abs(r[0] - eav.rotation[-1])) <= 1e-14
+    a = many.System.dipolar_fluid(216, density=0.3, seed=2, rotation="variational")
+    b = many.System.dipolar_fluid(216, density=0.3, seed=2)
+    b.rotation = "variational"
+    a.step(1e-3, 20, threads=1)
+    b.step(1e-3, 20, threads=2)
+    for x, y in zip(a.arrays(), b.arrays()):
+        assert x.tobytes() == y.tobytes()
+    with pytest.raises(ValueError, match="midpoint.*exact.*variational"):
+        b.rotation = "cayley"
+
+
 def test_the_extended_xyz_trajectory_opens_in_ase(tmp_path: Path, liemid_cli: str) -> None:
     ase_io = pytest.importorskip("ase.io")
     out = tmp_path / "fluid.xyz"

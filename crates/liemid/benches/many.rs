@@ -62,14 +62,14 @@ fn throughput(c: &mut Criterion) {
             );
         }
     }
-    // The exact free rotation against the midpoint rotation, 1 thread: asymmetric rotors
-    // (the elliptic flow) and heavy tops (symmetric, closed form).
+    // The exact and variational free rotations against the midpoint rotation, 1 thread:
+    // asymmetric rotors (the elliptic flow) and heavy tops (symmetric, closed form).
     for n in [10_000usize] {
         group.throughput(Throughput::Elements(n as u64));
         let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
         let (rotors, free) = problems::torque_free_ensemble(n, 1);
         let (tops, gravity) = problems::top_ensemble(n, 1);
-        for kind in [FreeRotation::Midpoint, FreeRotation::Exact] {
+        for kind in FreeRotation::ALL {
             let mut state = rotors.clone();
             state.set_free_rotation(kind).unwrap();
             group.bench_with_input(

@@ -30,6 +30,72 @@ use crate::linalg::{Mat3, Vec3};
 use crate::midpoint::{NewtonStop, NotConverged, MAX_INCREMENT_ANGLE, MAX_ITERATIONS};
 use crate::so3;
 
+/// The torque-free rotation inside a drift of two half steps: the midpoint equation (M) of
+/// LIEMID\[EA\] or the variational equation (V) of LIEMID\[EAV\]. Both are symmetric and
+/// second order and keep `|Π|` and the spatial momentum; (V)'s map is Lie–Poisson, (M)'s
+/// has a defect of `O(h³)` per step (docs/theory/rigid.md §9). Used by the multibody RATTLE
+/// step, the many-body splitting, the beams' node rotations and the satellite's attitude
+/// (docs/theory/rigid.md §10).
+///
+/// Reference: docs/theory/rigid.md §9; T. Lee, M. Leok, N. H. McClamroch, Comput. Methods
+/// Appl. Mech. Engrg. 196 (2007).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Drift {
+    /// LIEMID\[EA\]'s pair of midpoint half steps (M): the default.
+    #[default]
+    Midpoint,
+    /// The pair of variational half steps (V) of LIEMID\[EAV\]: a Lie–Poisson drift.
+    Variational,
+}
+
+impl Drift {
+    /// Both drifts.
+    pub const ALL: [Drift; 2] = [Drift::Midpoint, Drift::Variational];
+
+    /// The key (`midpoint`, `variational`).
+    #[must_use]
+    pub fn key(self) -> &'static str {
+        match self {
+            Drift::Midpoint => "midpoint",
+            Drift::Variational => "variational",
+        }
+    }
+
+    /// The drift of a key ([`Drift::key`]).
+    #[must_use]
+    pub fn from_key(key: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|d| d.key() == key)
+    }
+
+    /// The equation the drift solves, for error messages (`midpoint equation (M)`,
+    /// `variational equation (V)`).
+    #[must_use]
+    pub fn equation(self) -> &'static str {
+        match self {
+            Drift::Midpoint => "midpoint equation (M)",
+            Drift::Variational => "variational equation (V)",
+        }
+    }
+
+    /// Solve the drift's equation for `Ψ` with `(P, h)` from its predictor:
+    /// [`crate::midpoint::solve_increment`] or [`solve_increment`].
+    ///
+    /// # Errors
+    /// As those solvers.
+    #[inline(always)]
+    pub(crate) fn solve_increment<I: InertiaOperator + ?Sized>(
+        self,
+        inertia: &I,
+        p: Vec3,
+        h: f64,
+    ) -> Result<(so3::Increment, u32), NotConverged> {
+        match self {
+            Drift::Midpoint => crate::midpoint::solve_increment(inertia, p, h),
+            Drift::Variational => solve_increment(inertia, p, h),
+        }
+    }
+}
+
 /// `(B'(θ)/θ, C'(θ)/θ)` at `t2 = θ²` given `s = sin θ/θ`, `B = (1 − cos θ)/θ²`,
 /// `C = (θ − sin θ)/θ³`: below `θ = 0.1` their series to `θ⁶`,
 /// `B'/θ = Σ (−1)ᵐ⁺¹ (2m+2) θ²ᵐ/(2m+4)!`, `C'/θ = Σ (−1)ᵐ⁺¹ (2m+2) θ²ᵐ/(2m+5)!` (the next

@@ -34,6 +34,7 @@
 //! [run]
 //! gravity = [0.0, 0.0, 0.0]
 //! method = "liemid"           # "liemid" | "liemid4" | "liemid-mts" | "liemid-sms" | "newmark"
+//! drift = "midpoint"          # the node rotations of the liemid methods: "midpoint" | "variational"
 //! step = 1e-3                 # default: 0.9 of the critical step (explicit), 0.05 (newmark)
 //! t_end = 30.0
 //! sample = 0.05               # output interval (time)
@@ -41,7 +42,7 @@
 
 use std::path::Path;
 
-use liemid::beam::{problems, Frame, History, NodalLoad, Section, Support};
+use liemid::beam::{problems, Drift, Frame, History, NodalLoad, Section, Support};
 use liemid::Vec3;
 use serde::Deserialize;
 
@@ -56,6 +57,12 @@ pub fn integrator(key: &str) -> Result<BeamIntegrator, String> {
     })
 }
 
+/// The node rotations' drift of `key` (`midpoint`, `variational`), or an error listing the
+/// keys.
+pub fn drift(key: &str) -> Result<Drift, String> {
+    Drift::from_key(key).ok_or_else(|| format!("unknown drift `{key}` (known: midpoint, variational)"))
+}
+
 /// A beam scenario: the model, the initial deflection of a built-in problem, and the run.
 #[derive(Clone, Debug)]
 pub struct BeamScenario {
@@ -65,6 +72,9 @@ pub struct BeamScenario {
     pub problem: problems::BeamProblem,
     /// Method.
     pub method: BeamIntegrator,
+    /// The node rotations' drift of the explicit methods (midpoint by default; Newmark
+    /// takes only the default).
+    pub drift: Drift,
     /// Step (`None`: the default of the method).
     pub step: Option<f64>,
     /// Output interval in time.
@@ -135,6 +145,7 @@ struct FileLoad {
 struct FileRun {
     gravity: Option<[f64; 3]>,
     method: Option<String>,
+    drift: Option<String>,
     step: Option<f64>,
     t_end: Option<f64>,
     sample: Option<f64>,
@@ -277,6 +288,7 @@ pub fn parse(text: &str, name: &str, elements: Option<usize>) -> Result<BeamScen
     }
     let method =
         integrator(file.run.method.as_deref().unwrap_or("liemid")).map_err(|e| format!("[run] method: {e}"))?;
+    let drift = drift(file.run.drift.as_deref().unwrap_or("midpoint")).map_err(|e| format!("[run] drift: {e}"))?;
     let t_end = file.run.t_end.ok_or("[run] t_end is missing")?;
     Ok(BeamScenario {
         name: name.to_string(),
@@ -288,6 +300,7 @@ pub fn parse(text: &str, name: &str, elements: Option<usize>) -> Result<BeamScen
             initial_mode: None,
         },
         method,
+        drift,
         step: file.run.step,
         sample: file.run.sample,
     })
@@ -307,6 +320,7 @@ pub fn builtin(name: &str, elements: Option<usize>) -> Result<BeamScenario, Stri
         name: problem.name.to_string(),
         problem,
         method: BeamIntegrator::Explicit(liemid::beam::BeamMethod::Splitting),
+        drift: Drift::Midpoint,
         step: None,
         sample: None,
     })

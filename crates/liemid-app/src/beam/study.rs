@@ -1,7 +1,7 @@
 //! Runs of a beam scenario (explicit splitting or implicit Newmark) sampled at a fixed
 //! interval, and the work-precision study of the two on the right-angle cantilever.
 
-use liemid::beam::{BeamDriver, BeamMethod, BeamSystem};
+use liemid::beam::{BeamDriver, BeamMethod, BeamSystem, Drift};
 use serde_json::{json, Value};
 
 use crate::beam::scenario::{BeamIntegrator, BeamScenario};
@@ -25,6 +25,8 @@ pub enum RunFailure {
 pub struct BeamRun {
     /// Method.
     pub method: BeamIntegrator,
+    /// The node rotations' drift (`None` for Newmark, which has none).
+    pub drift: Option<Drift>,
     /// Sample times.
     pub t: Vec<f64>,
     /// Tracked nodes: name, displacement at every sample.
@@ -75,6 +77,7 @@ impl BeamRun {
         json!({
             "problem": scenario,
             "method": self.method.key(),
+            "drift": self.drift.map(Drift::key),
             "tracked": tracked,
             "energy": if self.energy.is_empty() { Value::Null } else { json!(self.energy) },
             "steps": self.steps,
@@ -144,7 +147,15 @@ pub fn run_viewed(
     view: Option<&str>,
 ) -> Result<(BeamRun, Option<ViewPage>), RunFailure> {
     let input = RunFailure::Input;
-    let system: BeamSystem = scenario.problem.system().map_err(|e| input(e.to_string()))?;
+    let explicit = scenario.method.explicit();
+    if explicit.is_none() && scenario.drift != Drift::Midpoint {
+        return Err(input(format!(
+            "drift {}: the drift chooses the liemid methods' node rotation; newmark has none",
+            scenario.drift.key()
+        )));
+    }
+    let mut system: BeamSystem = scenario.problem.system().map_err(|e| input(e.to_string()))?;
+    system.set_drift(scenario.drift);
     let mut driver = BeamDriver::new(system, scenario.method);
     let Stepping {
         step,
@@ -170,11 +181,11 @@ pub fn run_viewed(
         samples * (16.0 + 24.0 * tracked),
     )
     .map_err(input)?;
-    let explicit = scenario.method.explicit();
     let system = driver.system();
     let names: Vec<(String, usize)> = scenario.problem.frame.names.clone();
     let mut out = BeamRun {
         method: scenario.method,
+        drift: explicit.map(|_| scenario.drift),
         t: Vec::new(),
         tracked: names.iter().map(|(n, _)| (n.clone(), Vec::new())).collect(),
         energy: Vec::new(),

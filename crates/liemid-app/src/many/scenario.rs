@@ -28,28 +28,31 @@ pub enum Rotation {
     Midpoint,
     /// The exact torque-free flow, as in `liemid-ex` (no Newton solve).
     Exact,
+    /// The variational torque-free rotation in two half steps, as in `liemid-eav` (a
+    /// Lie–Poisson drift; no SIMD lanes).
+    Variational,
 }
 
 impl Rotation {
-    /// Both rotations.
-    pub const ALL: [Rotation; 2] = [Rotation::Midpoint, Rotation::Exact];
+    /// Every rotation.
+    pub const ALL: [Rotation; 3] = [Rotation::Midpoint, Rotation::Exact, Rotation::Variational];
 
     /// The name on the command line and in files.
     pub fn key(self) -> &'static str {
-        match self {
-            Rotation::Midpoint => "midpoint",
-            Rotation::Exact => "exact",
-        }
+        self.free_rotation().key()
     }
 
     /// One line on the many-body step with this rotation.
     pub fn description(self) -> &'static str {
         match self {
             Rotation::Midpoint => {
-                "half impulses around the drift and the torque-free midpoint Lie rotation of liemid-ea (order 2)"
+                "half impulses around the drift and the torque-free midpoint Lie rotation of liemid-ea (order 2, not symplectic)"
             }
             Rotation::Exact => {
-                "half impulses around the drift and the exact torque-free flow of liemid-ex (order 2, no Newton solve)"
+                "half impulses around the drift and the exact torque-free flow of liemid-ex (order 2, symplectic, no Newton solve)"
+            }
+            Rotation::Variational => {
+                "half impulses around the drift and the variational torque-free rotation of liemid-eav (order 2, symplectic, no SIMD lanes)"
             }
         }
     }
@@ -59,6 +62,7 @@ impl Rotation {
         match self {
             Rotation::Midpoint => FreeRotation::Midpoint,
             Rotation::Exact => FreeRotation::Exact,
+            Rotation::Variational => FreeRotation::Variational,
         }
     }
 }
@@ -220,13 +224,12 @@ pub fn read(path: &Path) -> Result<Settings, String> {
             s.step = integ.number("step")?;
             s.t_end = integ.number("t_end")?;
             if let Some(r) = integ.string("rotation")? {
-                s.rotation = match r {
-                    "midpoint" => FreeRotation::Midpoint,
-                    "exact" => FreeRotation::Exact,
-                    other => {
-                        return Err(integ.err("rotation", format!("unknown rotation \"{other}\" (midpoint, exact)")))
-                    }
-                };
+                s.rotation = FreeRotation::from_key(r).ok_or_else(|| {
+                    integ.err(
+                        "rotation",
+                        format!("unknown rotation \"{r}\" (midpoint, exact, variational)"),
+                    )
+                })?;
             }
         }
         if let Some(out) = Section::new(&root, "output", &["path", "every"], false)? {

@@ -37,6 +37,11 @@ pub struct BeamArgs {
     /// newmark [default: the file's, else liemid].
     #[arg(long)]
     pub method: Option<String>,
+    /// The node rotations of the liemid methods: midpoint (EA's pair of midpoint half
+    /// steps) or variational (the pair of liemid-eav, a Lie-Poisson drift: the step is
+    /// then symplectic) [default: the file's, else midpoint].
+    #[arg(long)]
+    pub drift: Option<String>,
     /// Step [default: 0.9 of the critical step; 0.05 for newmark].
     #[arg(long, allow_negative_numbers = true)]
     pub step: Option<f64>,
@@ -113,6 +118,9 @@ fn load(args: &BeamArgs) -> Result<BeamScenario, Failure> {
     .map_err(Failure::Input)?;
     if let Some(m) = &args.method {
         sc.method = scenario::integrator(m).map_err(Failure::Input)?;
+    }
+    if let Some(d) = &args.drift {
+        sc.drift = scenario::drift(d).map_err(|e| Failure::Input(format!("--drift: {e}")))?;
     }
     if let Some(h) = args.step {
         sc.step = Some(h);
@@ -230,10 +238,11 @@ pub fn beam(args: BeamArgs) -> CmdResult {
             }
         }
         let title = format!(
-            "{}: {} elements, {} h = {:.3e}",
+            "{}: {} elements, {}{} h = {:.3e}",
             sc.name,
             run.elements,
             run.method.key(),
+            drift_note(&run),
             run.step
         );
         plot::histories(
@@ -261,9 +270,10 @@ pub fn beam(args: BeamArgs) -> CmdResult {
     emit_json(args.json.as_deref(), &summary)?;
     if args.json.as_deref() != Some("-") {
         crate::outln!(
-            "{} ({}): {} elements, {} steps of {:.4e} to t = {} on {threads} thread(s): {:.3} s, {:.3e} element-steps/s",
+            "{} ({}{}): {} elements, {} steps of {:.4e} to t = {} on {threads} thread(s): {:.3} s, {:.3e} element-steps/s",
             sc.name,
             run.method.key(),
+            drift_note(&run),
             run.elements,
             run.steps,
             run.step,
@@ -324,6 +334,14 @@ pub fn beam(args: BeamArgs) -> CmdResult {
         }
     }
     Ok(())
+}
+
+/// `", variational drift"` when the run's node rotations are not the default midpoint ones.
+fn drift_note(run: &study::BeamRun) -> String {
+    match run.drift {
+        Some(d) if d != liemid::beam::Drift::Midpoint => format!(", {} drift", d.key()),
+        _ => String::new(),
+    }
 }
 
 /// A labelled set of points `(t, value)`.

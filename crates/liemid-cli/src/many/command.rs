@@ -52,7 +52,8 @@ pub struct ManyArgs {
     #[arg(long, allow_negative_numbers = true)]
     pub step: Option<f64>,
     /// The free rotation between the impulses [default: midpoint]: the midpoint Lie rule
-    /// (as in `liemid-ea`) or the exact torque-free flow (as in `liemid-ex`).
+    /// (as in `liemid-ea`), the exact torque-free flow (as in `liemid-ex`) or the
+    /// variational rotation (as in `liemid-eav`; no SIMD lanes).
     #[arg(long, value_enum)]
     pub rotation: Option<Rotation>,
     /// Langevin thermostat at this k_B T (model units; BAOAB around the splitting, noise

@@ -5,7 +5,7 @@
 //!
 //! Layout (little-endian): the 18 bytes `LIEMID-MANY-STATE\n`, then u32 version (2), u64
 //! bodies `n`, u64 steps done, u64 Langevin steps, f64 time, f64 step, f64 box side (NaN
-//! without a box), u8 free rotation (0 midpoint, 1 exact), then per body 26 f64: mass,
+//! without a box), u8 free rotation (0 midpoint, 1 exact, 2 variational), then per body 26 f64: mass,
 //! principal moments (3), free (1 or 0), position (3), linear momentum (3), attitude (9, by
 //! rows), body angular momentum (3), position at the last list build (3); last, the u32
 //! CRC-32 of every byte before it, so that a damaged or edited file is refused.
@@ -47,7 +47,11 @@ pub fn encode(s: &State) -> Vec<u8> {
     for v in [b.t, s.h, s.box_length.unwrap_or(f64::NAN)] {
         out.extend_from_slice(&v.to_le_bytes());
     }
-    out.push(u8::from(b.free_rotation() == FreeRotation::Exact));
+    out.push(match b.free_rotation() {
+        FreeRotation::Midpoint => 0,
+        FreeRotation::Exact => 1,
+        FreeRotation::Variational => 2,
+    });
     for i in 0..b.len() {
         let (g, x, p, r, pi, x0) = (
             b.inertia[i].moments,
@@ -120,6 +124,7 @@ fn decode(bytes: &[u8]) -> Result<State, String> {
     let rotation = match bytes[70] {
         0 => FreeRotation::Midpoint,
         1 => FreeRotation::Exact,
+        2 => FreeRotation::Variational,
         k => return Err(format!("unknown free rotation {k}")),
     };
     let mut bodies = Bodies::new();

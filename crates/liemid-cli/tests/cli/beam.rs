@@ -1,5 +1,5 @@
 //! `liemid beam` end to end: the JSON contract, files, the example against the built-in
-//! problem, errors.
+//! problem, the variational drift, errors.
 
 use crate::common;
 use common::{examples, json, run_in, scratch, stderr, stdout};
@@ -162,6 +162,14 @@ fn beam_input_errors_name_the_cause_and_exit_2() {
             "support `glued`",
         ),
         ("[run]\nt_end = 1.0\nstep = 10.0\n", "critical step"),
+        (
+            "[run]\nt_end = 1.0\ndrift = \"cayley\"\n",
+            "[run] drift: unknown drift `cayley` (known: midpoint, variational)",
+        ),
+        (
+            "[run]\nt_end = 1.0\nmethod = \"newmark\"\ndrift = \"variational\"\n",
+            "newmark has none",
+        ),
         ("", "t_end is missing"),
     ] {
         let file = write(&dir, "bad.toml", &format!("{base}{extra}"));
@@ -218,4 +226,66 @@ fn beam_and_spins_runs_are_bounded_before_the_first_step() {
     let o = run_in(&dir, &["spins", "--t-end", "1e12"]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("more than the default bound"), "{}", stderr(&o));
+}
+
+#[test]
+fn the_variational_drift_is_a_choice_of_the_liemid_methods() {
+    let dir = scratch("beam-drift");
+    let args = ["beam", "--t-end", "1", "--sample", "0.5", "--json", "-"];
+    let run = |extra: &[&str]| {
+        let o = run_in(&dir, &[&args[..], extra].concat());
+        assert!(o.status.success(), "{}", stderr(&o));
+        json(&stdout(&o))
+    };
+    let midpoint = run(&[]);
+    assert_eq!(midpoint["drift"], "midpoint");
+    for method in ["liemid", "liemid4", "liemid-mts", "liemid-sms"] {
+        let [m, v] = ["midpoint", "variational"].map(|d| run(&["--method", method, "--drift", d]));
+        assert_eq!(v["drift"], "variational", "{method}");
+        // Both drifts second order: the elbow histories agree to the step's error, not to
+        // the last bit.
+        let elbow = |r: &serde_json::Value| r["tracked"]["elbow"]["u"][2][2].as_f64().unwrap();
+        let d = (elbow(&m) - elbow(&v)).abs();
+        assert!(
+            d > 0.0 && d < 1e-4 * elbow(&m).abs(),
+            "{method}: the drifts differ by {d:e}"
+        );
+    }
+    // The file's key, overridden by the flag.
+    let file = write(
+        &dir,
+        "drift.toml",
+        &std::fs::read_to_string(examples().join("right_angle_cantilever.toml"))
+            .unwrap()
+            .replace("[run]", "[run]\ndrift = \"variational\""),
+    );
+    let from_file = run_in(
+        &dir,
+        &[
+            "beam",
+            file.to_str().unwrap(),
+            "--t-end",
+            "1",
+            "--sample",
+            "0.5",
+            "--json",
+            "-",
+        ],
+    );
+    assert!(from_file.status.success(), "{}", stderr(&from_file));
+    assert_eq!(json(&stdout(&from_file))["drift"], "variational");
+    // Newmark has no drift to choose, and an unknown one is named.
+    for (extra, expected) in [
+        (
+            &["--method", "newmark", "--drift", "variational"][..],
+            "newmark has none",
+        ),
+        (&["--drift", "cayley"][..], "--drift: unknown drift `cayley`"),
+    ] {
+        let o = run_in(&dir, &[&args[..], extra].concat());
+        assert_eq!(o.status.code(), Some(2), "{extra:?}");
+        assert!(stderr(&o).contains(expected), "{extra:?}: {}", stderr(&o));
+    }
+    let newmark = run(&["--method", "newmark", "--step", "0.05"]);
+    assert!(newmark["drift"].is_null());
 }

@@ -1,5 +1,6 @@
 //! `liemid many --cutoff-form`: LAMMPS's shifted-force dipole potential from the command
-//! line and from a scenario, and its input errors.
+//! line and from a scenario, and its input errors; `--rotation variational` from the
+//! command and a scenario, checkpointed and resumed.
 
 use crate::common;
 use common::{json, run_in, scratch, stderr, stdout};
@@ -88,4 +89,111 @@ fn a_damaged_state_file_is_refused_by_its_checksum() {
     std::fs::write(dir.join("d.bin"), &good).unwrap();
     let o = run_in(&dir, &resume);
     assert!(o.status.success(), "{}", stderr(&o));
+}
+
+#[test]
+fn the_variational_rotation_runs_from_the_command_and_the_scenario_and_resumes_bit_for_bit() {
+    let dir = scratch("many-variational");
+    let args = [
+        "many", "--model", "dipoles", "--bodies", "216", "--t-end", "0.02", "--step", "1e-3", "--json", "-",
+    ];
+    let o = run_in(
+        &dir,
+        &[&args[..], &["--rotation", "variational", "--state", "whole.bin"]].concat(),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let variational = json(&stdout(&o));
+    assert_eq!(variational["rotation"], "variational");
+    // The fluid's dipoles are spheres, for which (M) and (V) have the same root `h I⁻¹ Π`;
+    // asymmetric torque-free rotors tell the drifts apart: both keep their energy only to
+    // the drift's order, with different errors.
+    let rotors = |rotation: &str| {
+        let o = run_in(
+            &dir,
+            &[
+                "many",
+                "--model",
+                "torque-free",
+                "--bodies",
+                "64",
+                "--t-end",
+                "0.2",
+                "--step",
+                "0.01",
+                "--rotation",
+                rotation,
+                "--json",
+                "-",
+            ],
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+        json(&stdout(&o))["max_relative_energy_error"].as_f64().unwrap()
+    };
+    let (midpoint, variational_rotors) = (rotors("midpoint"), rotors("variational"));
+    assert!(
+        midpoint > 1e-12 && variational_rotors > 1e-12 && midpoint != variational_rotors,
+        "energy errors: midpoint {midpoint:e}, variational {variational_rotors:e}"
+    );
+    std::fs::write(
+        dir.join("v.toml"),
+        "[system]\nmodel = \"dipoles\"\nbodies = 216\n[integrator]\nstep = 1e-3\nt_end = 0.02\nrotation = \"variational\"\n",
+    )
+    .unwrap();
+    let file = json(&stdout(&run_in(&dir, &["many", "--scenario", "v.toml", "--json", "-"])));
+    assert_eq!(file["energy"], variational["energy"]);
+    // Checkpointed after 7 steps and resumed: the state file of the whole run, byte for byte.
+    let o = run_in(
+        &dir,
+        &[
+            &args[..],
+            &[
+                "--rotation",
+                "variational",
+                "--checkpoint",
+                "c.bin",
+                "--checkpoint-at",
+                "7",
+            ],
+        ]
+        .concat(),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = run_in(
+        &dir,
+        &[
+            &args[..],
+            &[
+                "--rotation",
+                "variational",
+                "--resume",
+                "c.bin",
+                "--state",
+                "resumed.bin",
+            ],
+        ]
+        .concat(),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(
+        std::fs::read(dir.join("whole.bin")).unwrap(),
+        std::fs::read(dir.join("resumed.bin")).unwrap(),
+        "the resumed run's state differs"
+    );
+    // Resuming it with another rotation is refused, naming both.
+    let o = run_in(&dir, &[&args[..], &["--resume", "c.bin"]].concat());
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("variational rotation, this run asks for midpoint"),
+        "{}",
+        stderr(&o)
+    );
+    // An unknown rotation in a scenario names the three.
+    std::fs::write(
+        dir.join("bad.toml"),
+        "[system]\nmodel = \"dipoles\"\n[integrator]\nrotation = \"cayley\"\n",
+    )
+    .unwrap();
+    let o = run_in(&dir, &["many", "--scenario", "bad.toml"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("(midpoint, exact, variational)"), "{}", stderr(&o));
 }

@@ -333,6 +333,8 @@ fn listings_and_help() {
     // Every domain's methods, each under the subcommand that takes them.
     for (section, key) in [
         ("liemid many --rotation", "exact"),
+        ("liemid many --rotation", "variational"),
+        ("liemid beam --drift", "variational"),
         ("liemid spins --method", "split4"),
         ("liemid beam --method", "liemid-mts"),
         ("liemid multibody --method", "liemid8"),

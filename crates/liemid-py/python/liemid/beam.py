@@ -5,7 +5,9 @@ order 2, time-reversible, momenta kept for a free structure; ``"liemid4"``, orde
 ``"liemid-mts"``, axial forces in substeps; ``"liemid-sms"``, selective mass scaling of the
 axial waves for a 5.7x larger step on the right-angle cantilever), or the
 implicit Newmark baseline (``"newmark"``), on a built-in benchmark or a structure file
-(the TOML format of ``liemid beam``).
+(the TOML format of ``liemid beam``). The liemid methods' nodes turn by EA's midpoint half
+steps (``drift="midpoint"``, the default) or by LIEMID[EAV]'s variational ones
+(``drift="variational"``, a Lie–Poisson rotation: the step then keeps the symplectic form).
 
 >>> from liemid import beam
 >>> run = beam.run("right-angle-cantilever", elements_per_member=4, t_end=3.0, sample=0.1)
@@ -37,6 +39,7 @@ class BeamRun:
     nodes, ``energy`` (n,) (empty for Newmark), and what it cost."""
 
     method: str
+    drift: Optional[str]
     t: FloatArray
     tracked: Dict[str, FloatArray]
     energy: FloatArray
@@ -84,6 +87,7 @@ def run(
     sample: Optional[float] = None,
     force_step: bool = False,
     view: bool = False,
+    drift: Optional[str] = None,
 ) -> BeamRun:
     """Run a benchmark (``problems()``) or a structure (``file`` path or its ``text``).
 
@@ -91,7 +95,9 @@ def run(
     step above the critical one raises ``ValueError`` unless ``force_step``. ``sample`` is
     the output interval (default ``t_end/600``). A failed Newton iteration raises
     ``liemid.ConvergenceError``. With ``view=True`` the run keeps its 3-D page
-    (``BeamRun.view``).
+    (``BeamRun.view``). ``drift`` is the liemid methods' node rotation, ``"midpoint"`` or
+    ``"variational"`` (default: the file's, else midpoint; ``BeamRun.drift`` is ``None``
+    for Newmark, which refuses ``"variational"``).
     """
     sources = [s is not None for s in (problem, file, text)]
     if sum(sources) > 1:
@@ -112,10 +118,12 @@ def run(
         _optional_number("sample", sample),
         bool(force_step),
         bool(view),
+        None if drift is None else str(drift),
     )
     tracked = {name: np.asarray(out["tracked"][name]).reshape(-1, 3) for name in out["names"]}
     return BeamRun(
         method=str(out["method"]),
+        drift=None if out["drift"] is None else str(out["drift"]),
         t=np.asarray(out["t"]),
         tracked=tracked,
         energy=np.asarray(out["energy"]),

@@ -94,11 +94,13 @@ class System:
     free : bool or (N,) array_like of bool
         Free bodies translate; rotors turn about a fixed pivot (default: free).
     model : Independent or Dipoles
-    rotation : {"midpoint", "exact"}
+    rotation : {"midpoint", "exact", "variational"}
         How each body turns between the impulses: the torque-free midpoint Lie rule in two
-        half steps (as LIEMID[EA], the default) or the exact torque-free flow (as
+        half steps (as LIEMID[EA], the default), the exact torque-free flow (as
         LIEMID[EX]: no error in the free spin, no Newton solve; costlier per step for
-        asymmetric bodies).
+        asymmetric bodies) or two half steps of the variational equation (as
+        LIEMID[EAV]: a Lie–Poisson rotation, so the step keeps the symplectic form; no
+        SIMD lanes).
     """
 
     def __init__(
@@ -145,13 +147,16 @@ class System:
 
     @property
     def rotation(self) -> str:
-        """The free rotation between the impulses, ``"midpoint"`` or ``"exact"``."""
+        """The free rotation between the impulses, ``"midpoint"``, ``"exact"`` or
+        ``"variational"``."""
         return str(self._inner.rotation)
 
     @rotation.setter
     def rotation(self, kind: str) -> None:
         if not isinstance(kind, str):
-            raise TypeError(f"rotation: expected \"midpoint\" or \"exact\", found {type(kind).__name__}")
+            raise TypeError(
+                f"rotation: expected \"midpoint\", \"exact\" or \"variational\", found {type(kind).__name__}"
+            )
         self._inner.set_rotation(kind)
 
     def step(self, h: float, steps: int = 1, *, threads: int = 0) -> None:

@@ -45,7 +45,7 @@
 use super::{BeamSystem, NodeRef};
 use crate::error::{Error, Result};
 use crate::linalg::Vec3;
-use crate::many::{self, Configuration};
+use crate::many::Configuration;
 use crate::midpoint::newton_error;
 
 /// The forces the impulse method keeps between steps.
@@ -156,9 +156,9 @@ impl BeamSystem {
         {
             let b = &mut self.bodies;
             for i in 0..b.len() {
-                if let Err(e) = many::free_rotation(&b.inertia[i], &mut b.rotation[i], &mut b.pi[i], hh) {
+                if let Err((equation, e)) = b.rotate_free(i, h) {
                     self.impulse.valid = false;
-                    return Err(newton_error("impulse method", "midpoint equation (M)", t, h, e));
+                    return Err(newton_error("impulse method", equation, t, h, e));
                 }
             }
         }

@@ -19,9 +19,15 @@
 //! ```
 //!
 //! It is second order and time reversible (not symplectic: the nodes turn by EA's midpoint
-//! drift, whose Lie–Poisson defect is `O(h³)` per step, docs/theory/rigid.md §9); the internal forces sum to zero
-//! force and moment ([`element`]), so a free-flying structure keeps its total linear and
-//! angular momentum (orbital `Σ x × p` plus nodal spins `Σ R Π`) to round-off. Symmetric
+//! drift, whose Lie–Poisson defect is `O(h³)` per step, docs/theory/rigid.md §9); the
+//! internal forces sum to zero force and moment ([`element`]), so a free-flying structure
+//! keeps its total linear and angular momentum (orbital `Σ x × p` plus nodal spins
+//! `Σ R Π`) to round-off. With the variational drift ([`BeamSystem::set_drift`],
+//! [`Drift::Variational`]) the nodes turn by two half steps of (V),
+//! `(1/h) I Ψ = Jr(Ψ) P` (LIEMID\[EAV\]'s free rotation), a Lie–Poisson map: every piece
+//! of the step is then symplectic and so is the step (measured in
+//! `tests/beam/symplectic.rs`, docs/beams.md), with the same order, symmetry and
+//! momenta. Symmetric
 //! compositions ([`BeamSystem::step_composed`]) raise the order to 4 and beyond. The step
 //! is explicit: it is stable below `2/ω_max` (Verlet; less for compositions, see
 //! [`stability`]); [`BeamSystem::stability`] bounds `ω_max` element by element.
@@ -60,6 +66,7 @@ use crate::error::{Error, Result};
 use crate::linalg::symmetric_eigen;
 use crate::linalg::{Mat3, Vec3};
 use crate::many::{Bodies, Configuration, Interaction, Totals, CHUNK};
+pub use crate::variational::Drift;
 use element::from_columns;
 
 /// Where a node's pose lives.
@@ -635,6 +642,23 @@ impl BeamSystem {
             self.bodies.evaluate(&self.structure);
             self.impulse.valid = false;
         }
+    }
+
+    /// Choose the node rotations' drift of the explicit methods (`liemid`, `liemid4`,
+    /// `liemid-mts`, `liemid-sms`): two half steps of the midpoint equation (M) (EA's, the
+    /// default) or of the variational equation (V) (EAV's, Lie–Poisson). Both are
+    /// second order and symmetric; the methods' orders, reversibility and momenta are the
+    /// same with either (docs/theory/rigid.md §9). Newmark does not use it.
+    pub fn set_drift(&mut self, drift: Drift) {
+        self.bodies.set_drift(drift);
+        self.impulse.valid = false;
+    }
+
+    /// The node rotations' drift; `None` when the nodes turn by their exact free flow
+    /// (set on [`BeamSystem::bodies`] by hand, the structure tests' control).
+    #[must_use]
+    pub fn drift(&self) -> Option<Drift> {
+        self.bodies.free_rotation().drift()
     }
 
     /// One explicit step (see the module documentation).

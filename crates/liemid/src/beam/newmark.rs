@@ -203,6 +203,23 @@ impl Newmark {
         &self.system
     }
 
+    /// The momenta of body `i` at the current state, `(m v, J W)`: the linear momentum
+    /// (zero for a rotor) and the body angular momentum, the explicit methods' `p` and `Π`
+    /// (the canonical momenta of `(x, R)`).
+    ///
+    /// # Panics
+    /// `i` not a body of the system.
+    #[must_use]
+    pub fn momenta(&self, i: usize) -> (Vec3, Vec3) {
+        let b = &self.system.bodies;
+        let p = if b.free[i] {
+            self.now.velocity[i] * b.mass[i]
+        } else {
+            Vec3::ZERO
+        };
+        (p, b.inertia[i].moments.component_mul(self.now.omega[i]))
+    }
+
     /// Time.
     #[must_use]
     pub fn t(&self) -> f64 {

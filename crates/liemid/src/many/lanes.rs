@@ -10,7 +10,10 @@
 //! lanes: small increments (`|Ψ| < 0.1`, where the coefficients come from their short
 //! series). Anything else (a large increment, a singular Jacobian, a non-finite value, a
 //! slow convergence) returns `false` with nothing written, and the caller takes the scalar
-//! path, which is the reference and reports errors.
+//! path, which is the reference and reports errors. The variational drift (V)
+//! ([`super::FreeRotation::Variational`]) has no lanes: it always takes the scalar path
+//! (its Newton terms, `Jr(Ψ) P` and its exact Jacobian, are a second kernel to vectorise;
+//! not done).
 //!
 //! The module exists with the `simd` feature on x86-64. A lane value is one 256-bit AVX
 //! register; the kernels are compiled for AVX and the caller runs them only where the
@@ -786,8 +789,9 @@ fn half_body(
 mod tests {
     use super::*;
     use crate::inertia::PrincipalInertia;
-    use crate::many::free_rotation;
+    use crate::many::free_rotation_by;
     use crate::random::Rng;
+    use crate::variational::Drift;
 
     /// Lanes and the scalar path agree bit for bit, and the lanes take the common case.
     #[test]
@@ -841,7 +845,7 @@ mod tests {
             taken += 1;
             for k in 0..LANES {
                 let (mut rs, mut ps) = (r[k], pi[k]);
-                free_rotation(&inertia[k], &mut rs, &mut ps, h).unwrap();
+                free_rotation_by(Drift::Midpoint, &inertia[k], &mut rs, &mut ps, h).unwrap();
                 assert!(rs.bitwise_eq(&r_lanes[k]), "attitude, trial {trial}, lane {k}");
                 assert_eq!(
                     ps.to_array().map(f64::to_bits),

@@ -20,11 +20,19 @@
 //!
 //! With [`FreeRotation::Exact`] ([`Bodies::set_free_rotation`]) the torque-free rotation
 //! is the exact flow ([`FreeFlow`]) instead of the two midpoint half steps: for one body it
-//! is then LIEMID\[EX\], with the same structure and no Newton solve.
+//! is then LIEMID\[EX\], with the same structure and no Newton solve. With
+//! [`FreeRotation::Variational`] each half step solves the variational equation
+//! `(1/h) I Ψ = Jr(Ψ) P`, `Π ← exp(−Ψ) P` (V) instead of (M): for one body it is then
+//! LIEMID\[EAV\].
 //!
 //! For one body with a torque it is exactly LIEMID\[EA\]; it is time reversible (not
-//! symplectic with the midpoint rotation: EA's midpoint drift has a Lie–Poisson defect of `O(h³)` per step (docs/theory/rigid.md §9)), and keeps the total linear and angular momentum (orbital plus spin) of any
-//! translation- and rotation-invariant interaction to round-off. Work is split into
+//! symplectic with the midpoint rotation: EA's midpoint drift has a Lie–Poisson defect of
+//! `O(h³)` per step (docs/theory/rigid.md §9)), and keeps the total linear and angular
+//! momentum (orbital plus spin) of any translation- and rotation-invariant interaction to
+//! round-off. With the exact or the variational rotation every piece is a symplectic map
+//! (the kicks are exact flows of the potential, the drift the exact flow of `|p|²/2m`, the
+//! rotation a Lie–Poisson map), so the step keeps the canonical form of
+//! `T*(ℝ³ × SO(3))ⁿ` (measured: `tests/many/structure.rs`). Work is split into
 //! chunks of [`CHUNK`] bodies; each body's force is gathered from its neighbours in a fixed
 //! order and every reduction runs in index order, so results are bit-for-bit identical for
 //! any number of threads.
@@ -39,6 +47,7 @@ mod lanes;
 pub mod mpi;
 pub mod observables;
 pub mod problems;
+mod rotation;
 pub mod thermostat;
 
 use std::sync::Mutex;
@@ -51,6 +60,10 @@ use crate::linalg::{Mat3, Vec3};
 use crate::midpoint;
 use crate::midpoint::newton_error;
 use crate::rigid::free_flow::FreeFlow;
+use crate::variational::Drift;
+pub(crate) use rotation::free_rotation_by;
+pub use rotation::FreeRotation;
+use rotation::{lanes_available, rotate_group, GROUP};
 
 /// Bodies per parallel work item (fixed, so that results do not depend on the threads).
 pub const CHUNK: usize = 256;
@@ -85,39 +98,6 @@ pub struct Bodies {
     rotation_kind: FreeRotation,
     /// Langevin steps taken: the step counter of the thermostat's noise.
     pub langevin_steps: u64,
-}
-
-/// How [`Bodies::step`] moves each body between the impulses.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum FreeRotation {
-    /// The torque-free midpoint Lie rotation, two half steps as in LIEMID\[EA\] (one
-    /// Newton solve each; SIMD lanes with the `simd` feature).
-    #[default]
-    Midpoint,
-    /// The exact torque-free flow ([`FreeFlow`]), as in LIEMID\[EX\]: no Newton solve,
-    /// no error in the free spin.
-    Exact,
-}
-
-impl FreeRotation {
-    /// The name on the command line and in files.
-    #[must_use]
-    pub fn key(self) -> &'static str {
-        match self {
-            FreeRotation::Midpoint => "midpoint",
-            FreeRotation::Exact => "exact",
-        }
-    }
-
-    /// Bytes of state per body: [`BYTES_PER_BODY`], plus the flow's constants for
-    /// [`FreeRotation::Exact`].
-    #[must_use]
-    pub fn bytes_per_body(self) -> usize {
-        match self {
-            FreeRotation::Midpoint => BYTES_PER_BODY,
-            FreeRotation::Exact => BYTES_PER_BODY + std::mem::size_of::<FreeFlow>(),
-        }
-    }
 }
 
 /// Bytes of state per body.
@@ -327,75 +307,6 @@ fn kick_chunk(free: &[bool], p: &mut [Vec3], pi: &mut [Vec3], force: &[Vec3], to
     }
 }
 
-/// Bodies per group of the SIMD lanes.
-const GROUP: usize = 4;
-
-/// Whether [`rotate_group`] can run: the `simd` feature on an x86-64 processor with AVX.
-#[inline]
-fn lanes_available() -> bool {
-    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
-    {
-        lanes::use_avx()
-    }
-    #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
-    {
-        false
-    }
-}
-
-/// The torque-free rotation of a group of [`GROUP`] bodies in SIMD lanes, equal bit for bit
-/// to [`free_rotation`] of each; `false`, with nothing written, when the group needs the
-/// scalar path (always without `lanes`, which must be [`lanes_available`]).
-#[inline]
-#[allow(unused_variables)]
-fn rotate_group(lanes: bool, inertia: &[PrincipalInertia], r: &mut [Mat3], pi: &mut [Vec3], hh: f64) -> bool {
-    #[cfg(all(feature = "simd", target_arch = "x86_64"))]
-    {
-        use crate::inertia::InertiaOperator;
-        let (Ok(group), Ok(r), Ok(pi)) = (
-            <&[PrincipalInertia; GROUP]>::try_from(inertia),
-            <&mut [Mat3; GROUP]>::try_from(r),
-            <&mut [Vec3; GROUP]>::try_from(pi),
-        ) else {
-            return false;
-        };
-        lanes::free_rotation_x4(
-            lanes,
-            &group.map(|g| g.moments),
-            &group.map(|g| g.inverse),
-            group.map(|g| g.inverse_norm_bound()),
-            r,
-            pi,
-            hh,
-        )
-    }
-    #[cfg(not(all(feature = "simd", target_arch = "x86_64")))]
-    false
-}
-
-/// The torque-free midpoint Lie rotation of one body: two half steps
-/// `solve (M) → Ψ; R ← R exp(Ψ); Π ← exp(−Ψ) Π`. On an error nothing is written.
-///
-/// Works on local copies (`Π` read component by component, see [`Vec3::load_split`]) and
-/// writes once at the end: writing `Π` back between the half steps and reading it again
-/// cost the scalar many-body path 4% (5.08 against 4.87 M body-steps/s).
-#[inline]
-pub(crate) fn free_rotation(
-    inertia: &PrincipalInertia,
-    r: &mut Mat3,
-    pi: &mut Vec3,
-    hh: f64,
-) -> std::result::Result<(), midpoint::NotConverged> {
-    let (mut rotation, mut momentum) = (*r, Vec3::load_split(pi));
-    for _ in 0..2 {
-        let (inc, _) = midpoint::solve_increment(inertia, momentum, hh)?;
-        rotation = inc.rotate(&rotation);
-        momentum = inc.inverse_apply(momentum);
-    }
-    (*r, *pi) = (rotation, momentum);
-    Ok(())
-}
-
 #[derive(Clone, Copy)]
 /// What the motion of a step between the impulses reads: the bodies' constants, the free
 /// rotation, the step.
@@ -405,6 +316,9 @@ struct Motion<'a> {
     mass: &'a [f64],
     /// The exact flows, for [`FreeRotation::Exact`].
     exact: Option<&'a [FreeFlow]>,
+    /// The equation of the rotation's half steps otherwise.
+    rotation_drift: Drift,
+    /// Whether the SIMD lanes take groups of bodies (the midpoint drift only).
     lanes: bool,
     h: f64,
     /// The time at the start of the step (for error messages).
@@ -416,10 +330,10 @@ struct Motion<'a> {
 
 impl Motion<'_> {
     /// The start impulse, the drift of free bodies and the torque-free rotation (exact, or
-    /// the midpoint Lie rule in two half steps as in EA, four bodies at a time in SIMD lanes
-    /// where they take the common path) of the run of bodies `c` starting at `start`.
-    /// `false` when a body's midpoint equation failed (recorded in `failure`; the run is
-    /// then left part-way).
+    /// two half steps of the midpoint rule as in EA, four bodies at a time in SIMD lanes
+    /// where they take the common path, or of the variational equation as in EAV) of the
+    /// run of bodies `c` starting at `start`. `false` when a body's equation failed
+    /// (recorded in `failure`; the run is then left part-way).
     #[inline]
     fn move_chunk(&self, start: usize, c: &mut Chunk<'_>, failure: &Mutex<Option<(usize, Error)>>) -> bool {
         let (h, hh) = (self.h, 0.5 * self.h);
@@ -454,8 +368,8 @@ impl Motion<'_> {
             }
             // The scalar path: the rest of the chunk, and groups the lanes hand over.
             for k in k..end {
-                if let Err(e) = free_rotation(&inertia[k], &mut r[k], &mut pi[k], hh) {
-                    let err = newton_error("many-body splitting", "midpoint equation (M)", self.t, h, e);
+                if let Err(e) = free_rotation_by(self.rotation_drift, &inertia[k], &mut r[k], &mut pi[k], hh) {
+                    let err = newton_error("many-body splitting", self.rotation_drift.equation(), self.t, h, e);
                     keep_first_failure(failure, start + k, err);
                     return false;
                 }
@@ -493,7 +407,8 @@ impl Bodies {
 
     /// Choose the free rotation of [`Bodies::step`] (the default is
     /// [`FreeRotation::Midpoint`]); for [`FreeRotation::Exact`] each body's flow is built
-    /// here and for every body pushed later.
+    /// here and for every body pushed later. It also sets the rotation of the steps built
+    /// on the bodies (the Langevin step, the beams' methods).
     ///
     /// # Errors
     /// Not expected: the moments were checked when the bodies were pushed.
@@ -508,6 +423,37 @@ impl Bodies {
         }
         self.rotation_kind = kind;
         Ok(())
+    }
+
+    /// The torque-free rotation of body `i` over `h` by the chosen free rotation (the exact
+    /// flow, or two half steps of (M) or (V)), for the steps built on the bodies that move
+    /// one body at a time (the beams' impulse method). On an error nothing is written; the
+    /// error names the equation.
+    pub(crate) fn rotate_free(
+        &mut self,
+        i: usize,
+        h: f64,
+    ) -> std::result::Result<(), (&'static str, midpoint::NotConverged)> {
+        match self.rotation_kind.drift() {
+            None => {
+                let (pi, r) = self.flows[i].flow(Vec3::load_split(&self.pi[i]), &self.rotation[i], h);
+                (self.pi[i], self.rotation[i]) = (pi, r);
+                Ok(())
+            }
+            Some(drift) => free_rotation_by(drift, &self.inertia[i], &mut self.rotation[i], &mut self.pi[i], 0.5 * h)
+                .map_err(|e| (drift.equation(), e)),
+        }
+    }
+
+    /// Turn the bodies by two half steps of `drift`'s equation ([`FreeRotation::Midpoint`]
+    /// or [`FreeRotation::Variational`]); [`Bodies::set_free_rotation`] without the exact
+    /// flow, which alone can fail to build.
+    pub fn set_drift(&mut self, drift: Drift) {
+        self.flows.clear();
+        self.rotation_kind = match drift {
+            Drift::Midpoint => FreeRotation::Midpoint,
+            Drift::Variational => FreeRotation::Variational,
+        };
     }
 
     /// Bytes of state per body with the chosen free rotation.
@@ -606,7 +552,8 @@ impl Bodies {
             free: &self.free,
             mass: &self.mass,
             exact: (self.rotation_kind == FreeRotation::Exact).then_some(self.flows.as_slice()),
-            lanes: lanes_available(),
+            rotation_drift: self.rotation_kind.drift().unwrap_or_default(),
+            lanes: lanes_available() && self.rotation_kind == FreeRotation::Midpoint,
             h,
             t: self.t,
             drift: true,
@@ -625,8 +572,8 @@ impl Bodies {
     /// One step of the splitting integrator (see the module documentation).
     ///
     /// # Errors
-    /// A bad step, or a body whose midpoint equation fails (the step is then too large for
-    /// its spin); the system is then left mid-step.
+    /// A bad step, or a body whose rotation's equation, (M) or (V), fails (the step is then
+    /// too large for its spin); the system is then left mid-step.
     pub fn step<I: Interaction + ?Sized>(&mut self, interaction: &I, h: f64) -> Result<()> {
         if !(h.is_finite() && h != 0.0) {
             return Err(Error::InvalidStep { h });
@@ -682,7 +629,7 @@ impl Bodies {
     /// (forces evaluated first if they are stale). [`Bodies::finish_step`] completes it.
     ///
     /// # Errors
-    /// A bad step, or a body whose midpoint equation fails.
+    /// A bad step, or a body whose rotation's equation fails.
     pub(crate) fn kick_rotate<I: Interaction + ?Sized>(&mut self, interaction: &I, h: f64) -> Result<()> {
         if !(h.is_finite() && h != 0.0) {
             return Err(Error::InvalidStep { h });

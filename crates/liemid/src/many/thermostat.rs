@@ -20,7 +20,7 @@
 //! T. E. Ouldridge, M. V. Tretyakov, *New Langevin and gradient thermostats for rigid body
 //! dynamics*, J. Chem. Phys. 142, 144114 (2015).
 
-use super::{for_each_chunk, free_rotation, keep_first_failure, kick_chunk, Bodies, Interaction};
+use super::{for_each_chunk, free_rotation_by, keep_first_failure, kick_chunk, Bodies, Interaction};
 use crate::error::{Error, Result};
 use crate::linalg::Vec3;
 use crate::midpoint::newton_error;
@@ -96,7 +96,8 @@ impl Bodies {
     /// [`Bodies::langevin_steps`], counted by this method.
     ///
     /// # Errors
-    /// A bad step or thermostat, or a failed midpoint solve (the system is then mid-step).
+    /// A bad step or thermostat, or a failed solve of the rotation's equation (the system is then
+    /// mid-step).
     pub fn step_langevin<I: Interaction + ?Sized>(
         &mut self,
         interaction: &I,
@@ -121,7 +122,7 @@ impl Bodies {
     /// The forces must be valid.
     ///
     /// # Errors
-    /// A failed midpoint solve (the system is then mid-step).
+    /// A failed solve of the rotation's equation (the system is then mid-step).
     pub(crate) fn langevin_motion(&mut self, h: f64, thermostat: &Langevin, ids: Option<&[u64]>) -> Result<()> {
         let hh = 0.5 * h;
         let t = self.t;
@@ -137,7 +138,13 @@ impl Bodies {
         let failure: Mutex<Option<(usize, Error)>> = Mutex::new(None);
         let seed = thermostat.seed;
         let (motion, all) = self.split(h);
-        let (inertia, free, mass, exact) = (motion.inertia, motion.free, motion.mass, motion.exact);
+        let (inertia, free, mass, exact, drift) = (
+            motion.inertia,
+            motion.free,
+            motion.mass,
+            motion.exact,
+            motion.rotation_drift,
+        );
         for_each_chunk(all, |start, ch| {
             let (p, pi, x, r) = (ch.momentum, ch.pi, ch.position, ch.rotation);
             let n = p.len();
@@ -155,8 +162,8 @@ impl Bodies {
                             (*pi, *r) = (pe, re);
                             Ok(())
                         }
-                        None => free_rotation(&inertia[i], r, pi, 0.5 * hh)
-                            .map_err(|e| newton_error("Langevin splitting", "midpoint equation (M)", t, h, e)),
+                        None => free_rotation_by(drift, &inertia[i], r, pi, 0.5 * hh)
+                            .map_err(|e| newton_error("Langevin splitting", drift.equation(), t, h, e)),
                     }
                 };
                 let mut run = || -> Result<()> {

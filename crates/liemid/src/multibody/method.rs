@@ -5,6 +5,10 @@
 
 use crate::composition::Scheme;
 
+/// The torque-free rotation inside the drift of the multibody step: a foundation
+/// ([`crate::variational::Drift`]), shared with the beams' node rotations.
+pub use crate::variational::Drift;
+
 /// Iteration cap of the position (λ) solve.
 pub const MAX_ITERATIONS: u32 = 60;
 
@@ -24,37 +28,6 @@ pub enum MultibodyMethod {
     Liemid6,
     /// Kahan-Li 17-stage composition, order 8.
     Liemid8,
-}
-
-/// The torque-free rotation inside the drift of the multibody step (both second order,
-/// symmetric; docs/theory/rigid.md §9).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Drift {
-    /// LIEMID\[EA\]'s pair of midpoint half steps (M): the default.
-    #[default]
-    Midpoint,
-    /// The pair of variational half steps (V) of LIEMID\[EAV\]: a Lie–Poisson drift.
-    Variational,
-}
-
-impl Drift {
-    /// Both drifts.
-    pub const ALL: [Drift; 2] = [Drift::Midpoint, Drift::Variational];
-
-    /// The key (`midpoint`, `variational`).
-    #[must_use]
-    pub fn key(self) -> &'static str {
-        match self {
-            Drift::Midpoint => "midpoint",
-            Drift::Variational => "variational",
-        }
-    }
-
-    /// The drift of a key ([`Drift::key`]).
-    #[must_use]
-    pub fn from_key(key: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|d| d.key() == key)
-    }
 }
 
 impl MultibodyMethod {

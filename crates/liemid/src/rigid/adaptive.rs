@@ -1,5 +1,5 @@
 //! Reversible adaptive steps: the time-transformed stepping of Hairer and Söderlind for the
-//! symmetric methods (LIEMID\[EA\], \[EX\], \[FS\] and their compositions, Verlet, the
+//! symmetric methods (LIEMID\[EA\], \[EAV\], \[EX\], \[FS\] and their compositions, Verlet, the
 //! coupled orbit + attitude step of [`crate::rigid::satellite`]).
 //!
 //! A step density `ρ(y) > 0` (steps per unit time, up to the factor `1/ε`) is given by the

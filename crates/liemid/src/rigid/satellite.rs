@@ -17,10 +17,13 @@
 //! The energy `½ m |v|² + ½ Π·I⁻¹Π + V` and the total angular momentum `m r × v + R Π` are
 //! conserved. The coupled splitting ([`SatelliteIntegrator`]) kicks both momenta with `F`
 //! and `T` over `h/2`, drifts the orbit (`r += h v`) while the body turns freely (two
-//! midpoint half steps for LIEMID\[EA\], the exact free flow for LIEMID\[EX\], Fassò's
-//! splitting for \[FS\]), and kicks again: symmetric, time-reversible under
-//! `(v, Π) → (−v, −Π)`, one force-and-torque evaluation per stage; compositions raise the
-//! order to 4, 6 or 8. The orbit's updates are summed with compensation (Kahan), so the
+//! midpoint half steps for LIEMID\[EA\], two variational half steps for LIEMID\[EAV\], the
+//! exact free flow for LIEMID\[EX\], Fassò's splitting for \[FS\]), and kicks again:
+//! symmetric, time-reversible under `(v, Π) → (−v, −Π)`, one force-and-torque evaluation
+//! per stage; compositions raise the order to 4, 6 or 8. The kicks are exact flows of `V`
+//! and the orbit's drift the exact flow of `½ m |v|²`, so with a Lie–Poisson rotation (EAV,
+//! EX, FS) the step is symplectic on `T*(ℝ³ × SO(3))`, and with EA's midpoint rotation it
+//! is not (its defect is `O(h³)` per step; measured in `tests/rigid/symplectic.rs`). The orbit's updates are summed with compensation (Kahan), so the
 //! rounding of `r` and `v` does not accumulate over long runs.
 //!
 //! ## Reference
@@ -33,12 +36,12 @@ use crate::error::check_step;
 use crate::error::{Error, Result};
 use crate::inertia::Inertia;
 use crate::linalg::{Mat3, Vec3};
-use crate::midpoint;
 use crate::midpoint::newton_error;
 use crate::rigid::adaptive::ReversibleStepper;
 use crate::rigid::free_flow::FreeFlow;
 use crate::rigid::rotation::RotationMethod;
 use crate::so3;
+use crate::variational::Drift;
 
 /// The state of a satellite: time, orbit (position, velocity in the inertial frame) and
 /// attitude (body angular momentum, attitude matrix).
@@ -196,14 +199,15 @@ pub fn eccentric_satellite() -> SatelliteProblem {
 /// How the free rotation inside a stage is done.
 #[derive(Clone, Copy, Debug)]
 enum FreeRotation {
-    /// Two midpoint-rule half steps (LIEMID\[EA\]).
-    Midpoint,
+    /// Two half steps of the midpoint rule (LIEMID\[EA\]) or of the variational equation
+    /// (LIEMID\[EAV\]).
+    HalfSteps(Drift),
     /// The exact free flow (LIEMID\[EX\]) or Fassò's splitting (\[FS\]).
     Flow(FreeFlow, bool),
 }
 
-/// The coupled orbit + attitude step (see the [module](self)) of an EA, EX or FS method,
-/// composed by the method's scheme.
+/// The coupled orbit + attitude step (see the [module](self)) of an EA, EAV, EX or FS
+/// method, composed by the method's scheme.
 ///
 /// ```text
 /// v½ = v + (h/2) F(r, R)/m;   P = Π + (h/2) T(r, R);   r⁺ = r + h v½;
@@ -298,31 +302,43 @@ fn add_scaled(hi: Vec3, low: Vec3, a: f64, x: Vec3, x_low: Vec3, small: Vec3) ->
 }
 
 impl SatelliteIntegrator {
-    /// The coupled step of `method` (the EA, EX or FS family) for `satellite`.
+    /// The coupled step of `method` (the EA, EAV, EX or FS family) for `satellite`.
     ///
     /// # Errors
     /// [`Error::NotReversible`] for any other method; the free flow's inertia error.
     pub fn new(method: RotationMethod, satellite: &Satellite) -> Result<Self> {
         use RotationMethod as M;
         method.check_reversible()?;
+        // The rotation of a family: 0 midpoint, 1 variational, 2 exact flow, 3 Fassò.
         let (family, scheme) = match method {
             M::LieMidpointAlternating => (0, None),
             M::LieMidpointAlternating4 => (0, Some(Scheme::SUZUKI4)),
             M::LieMidpointAlternating4Yoshida => (0, Some(Scheme::YOSHIDA4)),
             M::LieMidpointAlternating6 => (0, Some(Scheme::KAHAN_LI6)),
             M::LieMidpointAlternating8 => (0, Some(Scheme::KAHAN_LI8)),
-            M::LieMidpointExact => (1, None),
-            M::LieMidpointExact4 => (1, Some(Scheme::SUZUKI4)),
-            M::LieMidpointExact6 => (1, Some(Scheme::KAHAN_LI6)),
-            M::LieMidpointExact8 => (1, Some(Scheme::KAHAN_LI8)),
-            M::LieMidpointFasso => (2, None),
-            M::LieMidpointFasso4 => (2, Some(Scheme::SUZUKI4)),
-            M::LieMidpointFasso6 => (2, Some(Scheme::KAHAN_LI6)),
-            _ => (2, Some(Scheme::KAHAN_LI8)),
+            M::LieVariationalAlternating => (1, None),
+            M::LieVariationalAlternating4 => (1, Some(Scheme::SUZUKI4)),
+            M::LieVariationalAlternating6 => (1, Some(Scheme::KAHAN_LI6)),
+            M::LieVariationalAlternating8 => (1, Some(Scheme::KAHAN_LI8)),
+            M::LieMidpointExact => (2, None),
+            M::LieMidpointExact4 => (2, Some(Scheme::SUZUKI4)),
+            M::LieMidpointExact6 => (2, Some(Scheme::KAHAN_LI6)),
+            M::LieMidpointExact8 => (2, Some(Scheme::KAHAN_LI8)),
+            M::LieMidpointFasso => (3, None),
+            M::LieMidpointFasso4 => (3, Some(Scheme::SUZUKI4)),
+            M::LieMidpointFasso6 => (3, Some(Scheme::KAHAN_LI6)),
+            M::LieMidpointFasso8 => (3, Some(Scheme::KAHAN_LI8)),
+            _ => {
+                return Err(Error::NotReversible {
+                    method: method.name(),
+                    reason: "the satellite's coupled step is wired for the liemid-ea, -eav, -ex and -fs families only",
+                })
+            }
         };
         let rotation = match family {
-            0 => FreeRotation::Midpoint,
-            f => FreeRotation::Flow(FreeFlow::new(&satellite.inertia)?, f == 2),
+            0 => FreeRotation::HalfSteps(Drift::Midpoint),
+            1 => FreeRotation::HalfSteps(Drift::Variational),
+            f => FreeRotation::Flow(FreeFlow::new(&satellite.inertia)?, f == 3),
         };
         Ok(SatelliteIntegrator {
             name: method.name(),
@@ -392,12 +408,13 @@ impl SatelliteIntegrator {
         let (p_free, rotation) = match &self.rotation {
             FreeRotation::Flow(flow, false) => flow.flow(p, &s.rotation, h),
             FreeRotation::Flow(flow, true) => flow.split_flow(p, &s.rotation, h),
-            FreeRotation::Midpoint => {
-                let name = self.name;
+            FreeRotation::HalfSteps(drift) => {
+                let (name, drift) = (self.name, *drift);
                 let solve = |p: Vec3| {
-                    midpoint::solve_increment(&satellite.inertia, p, hh)
+                    drift
+                        .solve_increment(&satellite.inertia, p, hh)
                         .map(|(inc, _)| inc)
-                        .map_err(|e| newton_error(name, "midpoint equation (M)", s.t, step, e))
+                        .map_err(|e| newton_error(name, drift.equation(), s.t, step, e))
                 };
                 let inc1 = solve(p)?;
                 let pi_half = inc1.inverse_apply(p);

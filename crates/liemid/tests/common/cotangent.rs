@@ -8,12 +8,18 @@
 //! (`[ξ₁, ξ₂] = ξ₁ × ξ₂`),
 //!
 //! ```text
-//! ω(u, v) = δx_u · δp_v − δx_v · δp_u + ξ_u · δΠ_v − ξ_v · δΠ_u − Π · (ξ_u × ξ_v)
+//! ω(u, v) = δx_u · δp_v − δx_v · δp_u + ξ_u · δΠ_v − ξ_v · δΠ_u + Π · (ξ_u × ξ_v)
 //! ```
 //!
 //! (up to an overall sign, which the test does not see). A map is symplectic exactly when it
 //! keeps `ω`; the exact flows (LIEMID[EX]'s free flow, the kicks of a potential) do, which
 //! checks the sign of the last term.
+//!
+//! The differences' step is `10⁻⁴` along every direction unless [`defect_with_steps`] is
+//! given others. The truncation error of the extrapolated differences is `O(e⁴)` times the
+//! map's fifth derivative along the direction, which is large along `Π` for bodies of small
+//! inertia (a change `δΠ` turns a body by `h δΠ / I`): there a smaller step along `Π` keeps
+//! the truncation below the rounding, which grows as `u/e`.
 //!
 //! Reference: J. E. Marsden, T. S. Ratiu, *Introduction to Mechanics and Symmetry*, 2nd ed.,
 //! Springer 1999, §4.4 and §13.
@@ -61,9 +67,39 @@ fn moved(state: &[Body], i: usize, d: usize, e: f64) -> Vec<Body> {
     s
 }
 
-/// The tangent image of the basis direction: central differences at `e` and `e/2`,
-/// extrapolated.
-fn pushed(map: &dyn Fn(&[Body]) -> Vec<Body>, state: &[Body], image: &[Body], i: usize, d: usize) -> Vec<Tangent> {
+/// The central differences' step along each kind of basis direction.
+#[derive(Clone, Copy, Debug)]
+pub struct Steps {
+    pub x: f64,
+    pub p: f64,
+    pub xi: f64,
+    pub pi: f64,
+}
+
+impl Steps {
+    /// `10⁻⁴` along every direction.
+    pub const UNIFORM: Steps = Steps {
+        x: 1e-4,
+        p: 1e-4,
+        xi: 1e-4,
+        pi: 1e-4,
+    };
+
+    /// The step along basis direction `d` (`x`, `p`, `ξ`, `Π`, three each).
+    fn along(&self, d: usize) -> f64 {
+        [self.x, self.p, self.xi, self.pi][d / 3]
+    }
+}
+
+/// The tangent image of the basis direction `(i, d)`: central differences at `2e` and `e`,
+/// extrapolated, `e` the step along the direction.
+fn pushed(
+    map: &dyn Fn(&[Body]) -> Vec<Body>,
+    state: &[Body],
+    image: &[Body],
+    (i, d): (usize, usize),
+    steps: &Steps,
+) -> Vec<Tangent> {
     let central = |e: f64| -> Vec<Tangent> {
         let (a, b) = (map(&moved(state, i, d, e)), map(&moved(state, i, d, -e)));
         a.iter()
@@ -81,7 +117,8 @@ fn pushed(map: &dyn Fn(&[Body]) -> Vec<Body>, state: &[Body], image: &[Body], i:
             })
             .collect()
     };
-    let (coarse, fine) = (central(2e-4), central(1e-4));
+    let e = steps.along(d);
+    let (coarse, fine) = (central(2.0 * e), central(e));
     fine.iter()
         .zip(&coarse)
         .map(|(f, c)| Tangent {
@@ -121,6 +158,11 @@ fn basis(n: usize, i: usize, d: usize) -> Vec<Tangent> {
 /// over the basis, with `translations` false for rotors (no `x`, `p` directions), relative
 /// to the largest `|ω(u_a, u_b)|`.
 pub fn defect(map: &dyn Fn(&[Body]) -> Vec<Body>, state: &[Body], translations: bool) -> f64 {
+    defect_with_steps(map, state, translations, &Steps::UNIFORM)
+}
+
+/// [`defect`] with the differences' `steps` along each kind of direction.
+pub fn defect_with_steps(map: &dyn Fn(&[Body]) -> Vec<Body>, state: &[Body], translations: bool, steps: &Steps) -> f64 {
     let n = state.len();
     let image = map(state);
     let directions: Vec<(usize, usize)> = (0..n)
@@ -128,7 +170,7 @@ pub fn defect(map: &dyn Fn(&[Body]) -> Vec<Body>, state: &[Body], translations: 
         .collect();
     let images: Vec<Vec<Tangent>> = directions
         .iter()
-        .map(|&(i, d)| pushed(map, state, &image, i, d))
+        .map(|&direction| pushed(map, state, &image, direction, steps))
         .collect();
     let (mut worst, mut scale) = (0.0f64, 0.0f64);
     for (a, &(ia, da)) in directions.iter().enumerate() {

@@ -1,6 +1,11 @@
 //! Many-body systems: the splitting integrator against LIEMID[EA], momentum conservation
 //! of an isolated dipolar cluster, thread-count independence, and the dipole forces and
-//! torques against finite differences of the energy.
+//! torques against finite differences of the energy; the structure of the step with each
+//! free rotation and the variational rotation's own tests in `structure`.
+
+#[path = "../common/cotangent.rs"]
+mod cotangent;
+mod structure;
 
 use liemid::interactions::{CutoffForm, Dipoles, Independent};
 use liemid::many::{Bodies, FreeRotation, Interaction};
@@ -806,56 +811,6 @@ fn the_potential_energy_over_the_half_list_is_the_cell_sum_on_any_thread_count()
         listed != 0.0 && ((listed - cells) / cells).abs() < 1e-12,
         "{listed} vs {cells}"
     );
-}
-
-/// The Lie–Poisson defect `max |J hat(Π) Jᵀ − hat(Π⁺)| / |Π|` of the many-body step's
-/// torque-free rotation of one rotor (`I = diag(1, 2, 2.5)`, `|Π| = 2`) with `rotation`, `J`
-/// by central differences extrapolated once (resolution about 1e-10); as
-/// `tests/rigid/lie_poisson.rs` measures the rigid methods.
-fn rotation_defect(rotation: FreeRotation, h: f64) -> f64 {
-    let pi0 = Vec3::new(0.9, -1.1, 1.3) * (2.0 / Vec3::new(0.9, -1.1, 1.3).norm());
-    let image = |pi: Vec3| {
-        let mut b = Bodies::new();
-        b.push(
-            1.0,
-            Vec3::new(1.0, 2.0, 2.5),
-            false,
-            Vec3::ZERO,
-            Vec3::ZERO,
-            Mat3::IDENTITY,
-            pi,
-        )
-        .unwrap();
-        b.set_free_rotation(rotation).unwrap();
-        b.step(&Independent::torque_free(), h).unwrap();
-        b.pi[0]
-    };
-    let central = |e: f64| {
-        let cols: Vec<Vec3> = [Vec3::new(e, 0.0, 0.0), Vec3::new(0.0, e, 0.0), Vec3::new(0.0, 0.0, e)]
-            .iter()
-            .map(|&d| (image(pi0 + d) - image(pi0 - d)) * (0.5 / e))
-            .collect();
-        Mat3::from_rows([
-            [cols[0].x, cols[1].x, cols[2].x],
-            [cols[0].y, cols[1].y, cols[2].y],
-            [cols[0].z, cols[1].z, cols[2].z],
-        ])
-    };
-    let j = (central(1e-3) * 4.0 - central(2e-3)) * (1.0 / 3.0);
-    (j * so3::hat(pi0) * j.transpose() - so3::hat(image(pi0))).max_abs() / pi0.norm()
-}
-
-#[test]
-fn the_exact_rotation_is_lie_poisson_and_the_midpoint_rotation_is_not() {
-    for h in [0.2, 0.1] {
-        let (exact, midpoint) = (
-            rotation_defect(FreeRotation::Exact, h),
-            rotation_defect(FreeRotation::Midpoint, h),
-        );
-        println!("h = {h}: exact rotation defect {exact:.2e}, midpoint rotation defect {midpoint:.2e}");
-        assert!(exact < 1e-11, "exact at h = {h}: {exact:e}");
-        assert!(midpoint > 1e-7, "midpoint at h = {h}: {midpoint:e}");
-    }
 }
 
 /// A slab of a periodic dipolar fluid (`DomainForces`: its own bodies and the ghosts within
