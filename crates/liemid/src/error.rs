@@ -93,9 +93,8 @@ pub enum Error {
     /// Newton's method for an implicit step equation did not converge.
     #[error(
         "{method}: {equation} did not converge in the step from t = {} with h = {} \
-         (residual {residual:.3e} after {iterations} iterations); the step is probably too \
-         large for the rotation rate"
-    , Num(*.t), Num(*.h))]
+         ({}); the step is probably too large for the rotation rate"
+    , Num(*.t), Num(*.h), Residual(*.residual, *.iterations))]
     NewtonDidNotConverge {
         /// The integrator.
         method: &'static str,
@@ -241,6 +240,26 @@ fn abbreviate_quoted(message: &str) -> String {
     out
 }
 
+/// The end of a failed solve in words: "residual 2.044e-12 after 60 iterations", "the
+/// residual became non-finite after 3 iterations", or, when no residual was measured (a
+/// failure before the first iteration's residual), "after 0 iterations" alone: never a
+/// residual of 0 for a solve that failed.
+struct Residual(f64, u32);
+
+impl core::fmt::Display for Residual {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let Residual(r, n) = *self;
+        let iterations = if n == 1 { "iteration" } else { "iterations" };
+        if !r.is_finite() {
+            write!(f, "the residual became non-finite after {n} {iterations}")
+        } else if r == 0.0 {
+            write!(f, "after {n} {iterations}")
+        } else {
+            write!(f, "residual {r:.3e} after {n} {iterations}")
+        }
+    }
+}
+
 /// A number in messages: as Rust prints it between 1e-4 and 1e6 (`0.8`, `1000`), in
 /// exponent form outside (`1e300`, not three hundred digits).
 #[derive(Clone, Copy, Debug)]
@@ -267,5 +286,43 @@ pub(crate) fn check_step(h: f64) -> Result<()> {
         Ok(())
     } else {
         Err(Error::InvalidStep { h })
+    }
+}
+
+#[cfg(test)]
+mod message_tests {
+    use super::*;
+
+    /// A failed solve never reports a residual of 0 (issue 48: "residual 0.000e0").
+    #[test]
+    fn a_failed_solve_says_what_its_residual_was() {
+        let e = |residual| Error::NewtonDidNotConverge {
+            method: "m",
+            equation: "e",
+            t: 1e300,
+            h: 0.5,
+            residual,
+            iterations: 3,
+        };
+        let text = e(2.5e-12).to_string();
+        assert!(text.contains("residual 2.500e-12 after 3 iterations") && text.contains("t = 1e300"), "{text}");
+        assert!(e(f64::NAN).to_string().contains("(the residual became non-finite after 3 iterations)"));
+        let zero = e(0.0).to_string();
+        assert!(zero.contains("(after 3 iterations)") && !zero.contains("0.000e0"), "{zero}");
+    }
+
+    /// Whatever a model file's message quotes is abbreviated.
+    #[test]
+    fn quoted_values_are_abbreviated() {
+        let long = "1.5 ".repeat(10_000);
+        let text = Error::ModelFile {
+            file: "m.xml".into(),
+            line: 3,
+            element: "geom".into(),
+            message: format!("unknown geom type `{long}`, known `sphere`"),
+        }
+        .to_string();
+        assert!(text.len() < 200, "{text}");
+        assert!(text.contains("(40000 characters)`, known `sphere`"), "{text}");
     }
 }

@@ -159,6 +159,8 @@ pub fn run_case(bin: &Path, dir: &Path, case: &Case) -> Outcome {
         problem = Some(format!("{} lines on stderr: {err}", said.len()));
     } else if code == Some(0) && !said.is_empty() && !case.to_stdout {
         problem = Some(format!("{} lines on stderr after success: {err}", said.len()));
+    } else if err.contains("residual 0.000e0") {
+        problem = Some(format!("a failure to converge with a residual of 0: {err}"));
     } else if code != Some(0) && (err.contains("Some(") || err.contains("None /")) {
         problem = Some(format!("Rust debug text: {err}"));
     } else if code != Some(0) && (longest_digits(&err) > 20 || err.len() > 1000) {
