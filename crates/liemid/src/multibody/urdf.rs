@@ -29,6 +29,7 @@ use std::path::Path;
 use roxmltree::Node;
 
 use super::model::Model;
+use super::shapes::{Shape, ShapeKind};
 use super::xml::{
     build, check_inertia, line_starts, parse_document, read_bounded, rpy, Ctx, Ignored, MassProps, Merge, RawBody,
     RawKind, Sources,
@@ -193,6 +194,7 @@ pub fn parse(text: &str, name_for_errors: &str) -> Result<Loaded> {
         },
         ignored: ignored.into_vec(),
         merged: built.merged,
+        shapes: built.shapes,
     })
 }
 
@@ -200,6 +202,8 @@ struct LinkData<'a, 'i> {
     name: &'a str,
     node: Node<'a, 'i>,
     mass: MassProps,
+    /// The link's visuals, in its frame.
+    shapes: Vec<Shape>,
 }
 
 struct JointData<'a, 'i> {
@@ -238,6 +242,7 @@ fn raw_body(
         damping: 0.0,
         armature: 0.0,
         merge,
+        shapes: link.shapes.clone(),
         file: cx.file.to_string(),
         line: cx.line(link.node),
         element: super::xml::describe(link.node),
@@ -266,13 +271,81 @@ fn origin(cx: &Ctx, node: Node) -> Result<(Vec3, Mat3)> {
 fn read_link<'a, 'i>(cx: &Ctx, node: Node<'a, 'i>, ignored: &mut Ignored) -> Result<LinkData<'a, 'i>> {
     let name = required(cx, node, "name")?;
     let mut mass = MassProps::ZERO;
+    let mut shapes = Vec::new();
     for c in node.children().filter(Node::is_element) {
         match c.tag_name().name() {
             "inertial" => mass = read_inertial(cx, c)?,
+            "visual" => shapes.extend(read_visual(cx, c, ignored)?),
             other => ignored.note(other),
         }
     }
-    Ok(LinkData { name, node, mass })
+    Ok(LinkData {
+        name,
+        node,
+        mass,
+        shapes,
+    })
+}
+
+/// The shape of a `<visual>`: `<origin>`, `<geometry>` (box, cylinder, sphere; a mesh is not
+/// read: noted) and `<material><color rgba>`; `None` for a mesh.
+fn read_visual(cx: &Ctx, node: Node, ignored: &mut Ignored) -> Result<Option<Shape>> {
+    let (position, rotation) = origin(cx, node)?;
+    let Some(g) = child(node, "geometry").and_then(|g| g.children().find(Node::is_element)) else {
+        return Err(cx.err(node, "a <visual> needs a <geometry> with a shape"));
+    };
+    let positive = |attr: &str| -> Result<f64> {
+        let [v] = cx.array_of::<1>(g, attr, required(cx, g, attr)?)?;
+        if v.is_finite() && v > 0.0 {
+            Ok(v)
+        } else {
+            Err(cx.err(
+                g,
+                format!("{attr} = {}: must be positive and finite", crate::error::Num(v)),
+            ))
+        }
+    };
+    let kind = match g.tag_name().name() {
+        "box" => {
+            let s = cx.array_of::<3>(g, "size", required(cx, g, "size")?)?;
+            if !s.iter().all(|v| v.is_finite() && *v > 0.0) {
+                return Err(cx.err(g, "size: three positive, finite edges"));
+            }
+            ShapeKind::Box {
+                half: s.map(|v| 0.5 * v),
+            }
+        }
+        "cylinder" => ShapeKind::Cylinder {
+            radius: positive("radius")?,
+            half_length: 0.5 * positive("length")?,
+        },
+        "sphere" => ShapeKind::Sphere {
+            radius: positive("radius")?,
+        },
+        "mesh" => {
+            ignored.note("mesh visuals (not drawn: the files are not read)");
+            return Ok(None);
+        }
+        other => return Err(cx.err(g, format!("unknown geometry <{other}>"))),
+    };
+    let rgba = match child(node, "material").and_then(|m| child(m, "color")) {
+        Some(c) => {
+            let v = cx.array_of::<4>(c, "rgba", required(cx, c, "rgba")?)?;
+            if v.iter().any(|x| !(0.0..=1.0).contains(x)) {
+                return Err(cx.err(c, "rgba: each component must lie in [0, 1]"));
+            }
+            v.map(|x| x as f32)
+        }
+        None => [0.5, 0.5, 0.5, 1.0],
+    };
+    Ok(Some(Shape {
+        body: None,
+        kind,
+        position,
+        rotation,
+        rgba,
+        group: 0,
+    }))
 }
 
 fn read_inertial(cx: &Ctx, node: Node) -> Result<MassProps> {

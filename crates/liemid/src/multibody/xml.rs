@@ -38,6 +38,8 @@ pub struct Loaded {
     /// (URDF fixed joints; massless MJCF bodies without a joint): `(merged, into)`, where
     /// `into` is a body of the model or `"world"`. Readouts of `merged` use `into`.
     pub merged: Vec<(String, String)>,
+    /// The shapes the file draws (MJCF geoms, URDF visuals), for viewers.
+    pub shapes: Vec<super::shapes::Shape>,
 }
 
 /// The kinds of content ignored, each once.
@@ -472,17 +474,22 @@ pub(crate) struct RawBody {
     pub damping: f64,
     pub armature: f64,
     pub merge: Merge,
+    /// The shapes drawn with the body, posed in its frame (`body` not yet set).
+    pub shapes: Vec<super::shapes::Shape>,
     /// File, line and element description for errors.
     pub file: String,
     pub line: u32,
     pub element: String,
 }
 
-/// The result of [`build`]: bodies, joints and the merge record.
+/// The result of [`build`]: bodies, joints, the merge record and the shapes.
 pub(crate) struct Built {
     pub bodies: Vec<Body>,
     pub joints: Vec<Joint>,
     pub merged: Vec<(String, String)>,
+    /// The bodies' shapes (those of merged bodies on the body they were merged into, or on
+    /// the world).
+    pub shapes: Vec<super::shapes::Shape>,
 }
 
 /// Builds bodies and tree joints from raw bodies listed parents before children: merges
@@ -506,6 +513,7 @@ pub(crate) fn build(mut raw: Vec<RawBody>) -> Result<Built> {
     }
     let mut removed = vec![false; n];
     let mut into: Vec<Option<usize>> = vec![None; n];
+    let mut world_shapes = Vec::new();
     for i in (0..n).rev() {
         let b = &raw[i];
         let merge = match b.merge {
@@ -520,9 +528,16 @@ pub(crate) fn build(mut raw: Vec<RawBody>) -> Result<Built> {
         removed[i] = true;
         let (parent, pos, rot, mass) = (b.parent, b.pos, b.rot, b.mass);
         into[i] = parent;
+        let shapes: Vec<_> = std::mem::take(&mut raw[i].shapes)
+            .iter()
+            .map(|s| s.moved(pos, &rot))
+            .collect();
         if let Some(p) = parent {
             let moved = mass.transformed(pos, &rot);
             raw[p].mass = raw[p].mass.combine(&moved);
+            raw[p].shapes.extend(shapes);
+        } else {
+            world_shapes.extend(shapes);
         }
         for c in std::mem::take(&mut children[i]) {
             let child = &mut raw[c];
@@ -535,6 +550,7 @@ pub(crate) fn build(mut raw: Vec<RawBody>) -> Result<Built> {
         }
     }
     let mut merged = Vec::new();
+    let mut shapes = world_shapes;
     let mut index = vec![usize::MAX; n];
     let mut bodies = Vec::new();
     let mut joints = Vec::new();
@@ -578,6 +594,10 @@ pub(crate) fn build(mut raw: Vec<RawBody>) -> Result<Built> {
             }
         };
         index[i] = bodies.len();
+        shapes.extend(b.shapes.iter().map(|s| super::shapes::Shape {
+            body: Some(index[i]),
+            ..s.clone()
+        }));
         bodies.push(Body {
             name: b.name.clone(),
             mass: b.mass.mass,
@@ -620,5 +640,10 @@ pub(crate) fn build(mut raw: Vec<RawBody>) -> Result<Built> {
             armature: b.armature,
         });
     }
-    Ok(Built { bodies, joints, merged })
+    Ok(Built {
+        bodies,
+        joints,
+        merged,
+        shapes,
+    })
 }

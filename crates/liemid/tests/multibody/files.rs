@@ -353,9 +353,17 @@ fn ros_style_arm_lumps_fixed_joints() {
             axis: Vec3::new(0.0, 0.0, 1.0)
         }
     );
-    for kind in ["material", "visual", "collision", "transmission", "joint friction"] {
+    // The base's visual is a mesh: not drawn, and said so.
+    for kind in [
+        "material",
+        "mesh visuals (not drawn: the files are not read)",
+        "collision",
+        "transmission",
+        "joint friction",
+    ] {
         assert!(l.ignored.iter().any(|s| s == kind), "{kind} not in {:?}", l.ignored);
     }
+    assert!(l.shapes.is_empty());
 }
 
 // ---- refusals: each names the element and its line ----

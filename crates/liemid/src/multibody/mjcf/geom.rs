@@ -1,14 +1,117 @@
 //! The mass properties of MJCF geoms (sphere, capsule, cylinder, box, ellipsoid; `size`,
-//! `fromto`, `mass` or `density`) for bodies without an `<inertial>`.
+//! `fromto`, `mass` or `density`) for bodies without an `<inertial>`, and the shapes geoms
+//! draw (with `rgba`, a `material`'s colour and the visual `group`).
 //!
 //! Reference: MuJoCo documentation, XML reference, `geom`.
 
+use roxmltree::Node;
+
+use super::super::shapes::{Shape, ShapeKind};
 use super::super::xml::{rotation_to_z, MassProps};
 use super::{Elem, State};
 use crate::error::Result;
 use crate::linalg::{Mat3, Vec3};
 
+/// MuJoCo's default geom colour.
+const DEFAULT_RGBA: [f32; 4] = [0.5, 0.5, 0.5, 1.0];
+
 impl<'a, 'i> State<'a, 'i> {
+    /// The colours of `<asset><material name rgba>`.
+    pub(super) fn read_materials(&mut self, asset: Node<'a, 'i>) -> Result<()> {
+        let cx = self.cx;
+        for m in asset.children().filter(|c| c.has_tag_name("material")) {
+            if let (Some(name), Some(rgba)) = (m.attribute("name"), cx.array::<4>(m, "rgba")?) {
+                self.materials.insert(name, rgba.map(|c| c as f32));
+            }
+        }
+        Ok(())
+    }
+
+    /// The shape a geom draws, in its body's frame; `None` for a mesh, a height field or an
+    /// SDF (their files are not read: noted once).
+    pub(super) fn geom_shape(&mut self, g: &Elem<'a, 'i>) -> Result<Option<Shape>> {
+        let cx = self.cx;
+        let node = g.node;
+        let ty = g.get("type").unwrap_or("sphere");
+        if matches!(ty, "mesh" | "hfield" | "sdf") {
+            self.ignored
+                .note(&format!("{ty} geoms (not drawn: the files are not read)"));
+            return Ok(None);
+        }
+        let size = match g.get("size") {
+            Some(v) => cx.floats(node, "size", v, 1, 3)?,
+            None => Vec::new(),
+        };
+        let (mut position, mut rotation) = self.frame(node, &|a| g.get(a))?;
+        let mut half_length = None;
+        if let Some(v) = g.get("fromto") {
+            let f = cx.array_of::<6>(node, "fromto", v)?;
+            let (a, b) = (Vec3::new(f[0], f[1], f[2]), Vec3::new(f[3], f[4], f[5]));
+            rotation = rotation_to_z(cx.unit(node, "fromto", (b - a).to_array())?);
+            position = (a + b) * 0.5;
+            half_length = Some(0.5 * (b - a).norm());
+        }
+        let at = |k: usize| size.get(k).copied().unwrap_or(0.0);
+        let kind = match ty {
+            "plane" => ShapeKind::Plane { half: [at(0), at(1)] },
+            "sphere" => ShapeKind::Sphere { radius: at(0) },
+            "capsule" => ShapeKind::Capsule {
+                radius: at(0),
+                half_length: half_length.unwrap_or(at(1)),
+            },
+            "cylinder" => ShapeKind::Cylinder {
+                radius: at(0),
+                half_length: half_length.unwrap_or(at(1)),
+            },
+            "box" => ShapeKind::Box {
+                half: [at(0), at(1), half_length.unwrap_or(at(2))],
+            },
+            "ellipsoid" => ShapeKind::Ellipsoid {
+                radii: [at(0), at(1), half_length.unwrap_or(at(2))],
+            },
+            other => return Err(cx.err(node, format!("unknown geom type `{other}`"))),
+        };
+        let finite = match &kind {
+            ShapeKind::Plane { half } => half.iter().all(|s| s.is_finite() && *s >= 0.0),
+            ShapeKind::Sphere { radius } => radius.is_finite() && *radius > 0.0,
+            ShapeKind::Capsule { radius, half_length } | ShapeKind::Cylinder { radius, half_length } => {
+                radius.is_finite() && *radius > 0.0 && half_length.is_finite() && *half_length >= 0.0
+            }
+            ShapeKind::Box { half } => half.iter().all(|s| s.is_finite() && *s > 0.0),
+            ShapeKind::Ellipsoid { radii } => radii.iter().all(|s| s.is_finite() && *s > 0.0),
+        };
+        if !finite {
+            return Err(cx.err(node, format!("a {ty} geom needs positive, finite size values")));
+        }
+        let explicit = match g.get("rgba") {
+            Some(v) => Some(cx.array_of::<4>(node, "rgba", v)?.map(|c| c as f32)),
+            None => None,
+        };
+        let material = g.get("material").and_then(|m| self.materials.get(m).copied());
+        let rgba = explicit.or(material).unwrap_or(DEFAULT_RGBA);
+        if rgba.iter().any(|c| !(0.0..=1.0).contains(c)) {
+            return Err(cx.err(node, "rgba: each component must lie in [0, 1]"));
+        }
+        let group = match g.get("group") {
+            Some(v) => {
+                let [k] = cx.array_of::<1>(node, "group", v)?;
+                if !(0.0..=5.0).contains(&k) || k.fract() != 0.0 {
+                    return Err(cx.err(node, format!("group {k}: expected a whole number from 0 to 5")));
+                }
+                k as u8
+            }
+            None => 0,
+        };
+        Ok(Some(Shape {
+            body: None,
+            kind,
+            position,
+            rotation,
+            rgba,
+            group,
+        }))
+    }
+
     /// The mass properties of a geom in its body's frame (zero for a massless geom).
     pub(super) fn geom_mass(&mut self, g: Elem<'a, 'i>) -> Result<MassProps> {
         let cx = self.cx;

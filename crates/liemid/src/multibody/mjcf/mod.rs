@@ -104,6 +104,8 @@ fn parse_assembled(text: &str, name_for_errors: &str, sources: &Sources) -> Resu
         refs: Vec::new(),
         body_names: HashMap::new(),
         joint_names: HashMap::new(),
+        materials: HashMap::new(),
+        world_shapes: Vec::new(),
     };
     st.classes.insert("main", Class::default());
     let elements: Vec<Node> = root.children().filter(Node::is_element).collect();
@@ -112,6 +114,7 @@ fn parse_assembled(text: &str, name_for_errors: &str, sources: &Sources) -> Resu
         match node.tag_name().name() {
             "compiler" => st.read_compiler(node)?,
             "default" => st.read_default(node, None)?,
+            "asset" => st.read_materials(node)?,
             _ => {}
         }
     }
@@ -151,7 +154,8 @@ fn parse_assembled(text: &str, name_for_errors: &str, sources: &Sources) -> Resu
         Some(&key) => st.read_key(key)?,
         None => (None, None),
     };
-    let built = build(std::mem::take(&mut st.raw))?;
+    let mut built = build(std::mem::take(&mut st.raw))?;
+    built.shapes.extend(std::mem::take(&mut st.world_shapes));
     let mut model = Model {
         name: root.attribute("model").unwrap_or_default().to_string(),
         bodies: built.bodies,
@@ -168,6 +172,7 @@ fn parse_assembled(text: &str, name_for_errors: &str, sources: &Sources) -> Resu
         model,
         ignored: st.ignored.into_vec(),
         merged: built.merged,
+        shapes: built.shapes,
     })
 }
 
@@ -219,6 +224,10 @@ struct State<'a, 'i> {
     refs: Vec<KeyMap>,
     body_names: HashMap<String, Node<'a, 'i>>,
     joint_names: HashMap<&'a str, Node<'a, 'i>>,
+    /// `<asset><material name rgba>`: the colours geoms name.
+    materials: HashMap<&'a str, [f32; 4]>,
+    /// The shapes of `<worldbody>`'s own geoms.
+    world_shapes: Vec<crate::multibody::shapes::Shape>,
 }
 
 /// An element with its default class: attribute lookup falls back on the class.
@@ -394,7 +403,19 @@ impl<'a, 'i> State<'a, 'i> {
             match c.tag_name().name() {
                 "body" => self.read_body(c, parent, childclass)?,
                 "joint" | "freejoint" | "inertial" if parent.is_some() => {}
-                "geom" => self.ignored.note("geom contacts"),
+                "geom" => {
+                    self.ignored.note("geom contacts");
+                    if parent.is_none() {
+                        let class = self.class_of(c, childclass)?;
+                        let elem = Elem {
+                            node: c,
+                            defaults: self.classes[class].geom.clone(),
+                        };
+                        if let Some(shape) = self.geom_shape(&elem)? {
+                            self.world_shapes.push(shape);
+                        }
+                    }
+                }
                 "include" => return Err(cx.err(c, NO_INCLUDE)),
                 tag @ ("frame" | "composite" | "flexcomp" | "replicate" | "attach") => {
                     return Err(cx.err(c, format!("<{tag}> is not supported by this loader")));
@@ -465,6 +486,15 @@ impl<'a, 'i> State<'a, 'i> {
                 total
             }
         };
+        let mut shapes = Vec::new();
+        for g in node.children().filter(|c| c.has_tag_name("geom")) {
+            let class = self.class_of(g, childclass)?;
+            let elem = Elem {
+                node: g,
+                defaults: self.classes[class].geom.clone(),
+            };
+            shapes.extend(self.geom_shape(&elem)?);
+        }
         let (file, line) = cx.locate(node);
         let mut body = RawBody {
             name,
@@ -481,6 +511,7 @@ impl<'a, 'i> State<'a, 'i> {
             damping: 0.0,
             armature: 0.0,
             merge: Merge::IfMassless,
+            shapes,
             file,
             line,
             element: super::xml::describe(node),

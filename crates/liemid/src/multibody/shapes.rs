@@ -1,0 +1,86 @@
+//! The shapes a model file draws (MJCF geoms, URDF visuals): what a viewer shows of a model,
+//! not part of its dynamics (the masses come from `<inertial>` or from the geoms' volumes).
+//! Each shape is posed in its body's frame (the frame origin of the model file, not the
+//! centre of mass) or in the world.
+//!
+//! Reference: MuJoCo documentation, XML reference, `geom` (types, `size`, `fromto`, `rgba`,
+//! `material`, `group`); URDF `<visual>`.
+
+use crate::linalg::{Mat3, Vec3};
+
+/// The geometry of a shape, in its own frame (MuJoCo's conventions: axes along z).
+#[derive(Clone, Debug, PartialEq)]
+pub enum ShapeKind {
+    /// A plane through the origin with normal z: half its extent along x and y (0: unbounded,
+    /// drawn as a floor grid).
+    Plane {
+        /// Half-extents along x and y.
+        half: [f64; 2],
+    },
+    /// A sphere about the origin.
+    Sphere {
+        /// Radius.
+        radius: f64,
+    },
+    /// A capsule along z: a cylinder of `half_length` each side of the origin with
+    /// hemispherical caps.
+    Capsule {
+        /// Radius.
+        radius: f64,
+        /// Half the length of its cylinder.
+        half_length: f64,
+    },
+    /// A cylinder along z.
+    Cylinder {
+        /// Radius.
+        radius: f64,
+        /// Half its length.
+        half_length: f64,
+    },
+    /// A box about the origin.
+    Box {
+        /// Half its edges.
+        half: [f64; 3],
+    },
+    /// An ellipsoid about the origin.
+    Ellipsoid {
+        /// Its semi-axes.
+        radii: [f64; 3],
+    },
+}
+
+/// A shape of a model, posed in a body's frame or in the world.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Shape {
+    /// The body it moves with (index into `Model::bodies`), or `None` for the world.
+    pub body: Option<usize>,
+    /// The geometry.
+    pub kind: ShapeKind,
+    /// Its origin in the body's frame (from the frame origin) or in the world.
+    pub position: Vec3,
+    /// Its attitude in the body's frame or in the world.
+    pub rotation: Mat3,
+    /// Colour and opacity, each in [0, 1].
+    pub rgba: [f32; 4],
+    /// MuJoCo's visual group (0 to 5; groups 0, 1 and 2 are shown by default).
+    pub group: u8,
+}
+
+impl Shape {
+    /// Shown by default, as MuJoCo shows groups 0, 1 and 2.
+    #[must_use]
+    pub fn shown_by_default(&self) -> bool {
+        self.group <= 2
+    }
+
+    /// The same shape posed through `(position, rotation)`: the frame it was posed in, seen
+    /// from its parent (a welded body merged into its parent).
+    #[must_use]
+    pub fn moved(&self, position: Vec3, rotation: &Mat3) -> Shape {
+        Shape {
+            position: position + *rotation * self.position,
+            rotation: *rotation * self.rotation,
+            ..self.clone()
+        }
+    }
+}
