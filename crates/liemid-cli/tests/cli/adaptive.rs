@@ -127,7 +127,10 @@ fn the_satellite_run_is_bounded_by_max_steps() {
         (&["--max-steps", "10"][..], "4308 steps, more than --max-steps 10"),
         (&["--orbits", "1e9"][..], "more than the default bound"),
         (&["--adaptive", "1e-300"][..], "more than the default bound"),
-        (&["--adaptive", "1e-3", "--max-steps", "5"][..], "more than --max-steps 5"),
+        (
+            &["--adaptive", "1e-3", "--max-steps", "5"][..],
+            "more than --max-steps 5",
+        ),
     ] {
         let o = run_in(&dir, &[&sat[..], extra].concat());
         assert_eq!(o.status.code(), Some(2), "{extra:?}: {}", stderr(&o));

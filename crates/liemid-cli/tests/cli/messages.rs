@@ -7,7 +7,10 @@ use common::{run_in, scratch, stderr, write};
 
 /// The longest run of digits in `text`.
 fn longest_digits(text: &str) -> usize {
-    text.split(|c: char| !c.is_ascii_digit()).map(str::len).max().unwrap_or(0)
+    text.split(|c: char| !c.is_ascii_digit())
+        .map(str::len)
+        .max()
+        .unwrap_or(0)
 }
 
 fn assert_input_error(o: &std::process::Output, expected: &str) {
@@ -17,7 +20,11 @@ fn assert_input_error(o: &std::process::Output, expected: &str) {
     assert_eq!(errors.len(), 1, "{err}");
     assert!(err.contains(expected), "expected `{expected}` in: {err}");
     assert!(!err.contains("Some(") && !err.contains("None"), "debug text: {err}");
-    assert!(longest_digits(&err) < 20, "a number of {} digits: {err}", longest_digits(&err));
+    assert!(
+        longest_digits(&err) < 20,
+        "a number of {} digits: {err}",
+        longest_digits(&err)
+    );
 }
 
 /// Two bodies on a ball and a slide joint with the given `<inertial>` attributes.
@@ -36,7 +43,10 @@ fn two_bodies(inertial: &str) -> String {
 #[test]
 fn dependent_constraint_rows_are_refused_naming_the_body() {
     let dir = scratch("messages-pivot");
-    for inertial in ["mass=\"1e-30\" diaginertia=\"1 1 1\"", "mass=\"1\" diaginertia=\"1e-40 1e-40 1e-40\""] {
+    for inertial in [
+        "mass=\"1e-30\" diaginertia=\"1 1 1\"",
+        "mass=\"1\" diaginertia=\"1e-40 1e-40 1e-40\"",
+    ] {
         write(&dir, "m.xml", &two_bodies(inertial));
         let o = run_in(&dir, &["multibody", "m.xml", "--t-end", "0.01", "--out", "o.csv"]);
         assert_input_error(&o, "dependent at the start, at body `b`");
@@ -77,10 +87,18 @@ fn a_usage_error_names_the_argument_it_is_about() {
 fn a_spins_parameter_error_names_the_section_it_was_read_from() {
     let dir = scratch("messages-spins");
     let base = "[lattice]\nkind = \"square\"\nsize = [4, 4]\nperiodic = true\n[hamiltonian]\nexchange = 1.0\n";
-    write(&dir, "d.toml", &format!("{base}[dynamics]\ndamping = -1\nt_end = 0.1\n"));
+    write(
+        &dir,
+        "d.toml",
+        &format!("{base}[dynamics]\ndamping = -1\nt_end = 0.1\n"),
+    );
     let o = run_in(&dir, &["spins", "d.toml"]);
     assert_input_error(&o, "[dynamics] invalid parameter `damping` = -1");
-    write(&dir, "h.toml", &base.replace("exchange = 1.0", "exchange = 1.0\nmu_s = -2"));
+    write(
+        &dir,
+        "h.toml",
+        &base.replace("exchange = 1.0", "exchange = 1.0\nmu_s = -2"),
+    );
     let o = run_in(&dir, &["spins", "h.toml"]);
     assert_input_error(&o, "[hamiltonian] invalid parameter `mu_s`");
 }
