@@ -22,6 +22,24 @@ pub(crate) fn mat(m: &[f64]) -> PyResult<Mat3> {
     Ok(Mat3::from_row_major(a))
 }
 
+/// Threads per core at most in a pool (as the command's `--threads`).
+const THREADS_PER_CORE: usize = 4;
+
+/// A pool of `threads` threads (0: all cores); more than four per core is refused (a
+/// mistyped count used to start that many threads).
+pub(crate) fn pool(threads: usize) -> PyResult<rayon::ThreadPool> {
+    let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+    if threads > THREADS_PER_CORE * cores {
+        return Err(PyValueError::new_err(format!(
+            "threads: {threads} is more than {THREADS_PER_CORE} per core ({cores} cores here); use 0 for all cores"
+        )));
+    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| PyValueError::new_err(format!("threads: {e}")))
+}
+
 /// A library error as a Python exception: a failed step is a `ConvergenceError` with its
 /// time and step, everything else a `ValueError`.
 pub(crate) fn py_error(py: Python<'_>, e: &Error, context: &str) -> PyErr {

@@ -5,13 +5,18 @@
 //! arrays; results come back as owned numpy arrays that it reshapes. Errors of the library
 //! become `ValueError` (bad input) or `liemid.ConvergenceError` (a step too large, carrying
 //! `t` and `h`); a Python torque that raises re-raises its own exception. Pure-Rust work
-//! runs with the GIL released.
+//! runs with the GIL released. Every run is held to a step bound (`max_steps`) and its
+//! samples to the memory before the first step (`bounds`), and looks for Ctrl-C between
+//! steps (`signals`).
 
 mod beam;
+mod bounds;
 mod convert;
+mod files;
 mod many;
 mod multibody;
 mod rigid;
+mod signals;
 mod spins;
 mod view;
 
@@ -26,5 +31,6 @@ fn _liemid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     beam::register(m)?;
     multibody::register(m)?;
     view::register(m)?;
+    files::register(m)?;
     Ok(())
 }

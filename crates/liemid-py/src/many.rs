@@ -5,10 +5,17 @@
 use liemid::many::Bodies;
 use liemid::{Mat3, Vec3};
 use numpy::IntoPyArray;
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyMemoryError, PyValueError};
 use pyo3::prelude::*;
 
+use crate::bounds::check_steps;
 use crate::convert::{py_error, v3, Array, Triple};
+use crate::signals::Interrupt;
+use liemid::error::Num;
+
+/// Body steps in one call of `Bodies::advance` between two looks at the pending signals
+/// (a few milliseconds).
+const CHUNK_WORK: u64 = 1 << 16;
 
 /// The interaction of a many-body system (one per system, so the size of the dipoles'
 /// variant, with its Verlet-list scratch, does not matter).
@@ -138,6 +145,11 @@ impl ManyBodies {
     #[staticmethod]
     #[pyo3(signature = (n, density, seed, cutoff))]
     fn dipolar_fluid(n: usize, density: f64, seed: u64, cutoff: f64) -> PyResult<Self> {
+        // The bodies with the exact rotation's storage (it may be chosen later) and the
+        // interaction's working storage, as the command counts them.
+        let per_body = liemid::many::FreeRotation::Exact.bytes_per_body() + 2 * liemid::many::BYTES_PER_BODY;
+        liemid_app::shared::memory::check_fits(&format!("n: {} bodies", Num(n as f64)), n as f64 * per_body as f64)
+            .map_err(PyMemoryError::new_err)?;
         let (mut bodies, d) = liemid::many::problems::dipolar_fluid_with_cutoff(n, density, seed, cutoff)
             .map_err(|e| PyValueError::new_err(e.to_string()))?;
         bodies.evaluate(&d);
@@ -149,26 +161,39 @@ impl ManyBodies {
 
     /// `steps` steps of `h` on `threads` threads (0: all cores); bit-identical for any count.
     /// The steps are taken by `Bodies::advance` (a team of threads for the dipolar fluid's
-    /// neighbour list; the same bits as single steps).
-    #[pyo3(signature = (h, steps, threads))]
-    fn step(&mut self, py: Python<'_>, h: f64, steps: u64, threads: usize) -> PyResult<()> {
+    /// neighbour list; the same bits as single steps), in chunks of about [`CHUNK_WORK`]
+    /// body steps, between which a pending signal (Ctrl-C) stops the run with its exception.
+    /// `steps` is held to `max_steps` (10⁹ when `None`) before the first.
+    #[pyo3(signature = (h, steps, threads, max_steps=None))]
+    fn step(&mut self, py: Python<'_>, h: f64, steps: u64, threads: usize, max_steps: Option<u64>) -> PyResult<()> {
         if !(h.is_finite() && h != 0.0) {
             return Err(PyValueError::new_err(format!(
-                "h: must be finite and non-zero, found {h}"
+                "h: must be finite and non-zero, found {}",
+                Num(h)
             )));
         }
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .map_err(|e| PyValueError::new_err(format!("threads: {e}")))?;
+        check_steps(steps, max_steps, "steps")?;
+        let pool = crate::convert::pool(threads)?;
         let ManyBodies { bodies, model } = self;
-        let result = py.detach(|| {
-            pool.install(|| match model {
-                Model::Independent(m) => bodies.advance(m, h, steps),
-                Model::Dipoles(m) => bodies.advance(m, h, steps),
-            })
+        let chunk = (CHUNK_WORK / bodies.len().max(1) as u64).max(1);
+        let mut interrupt = Interrupt::every(1);
+        let result: PyResult<_> = py.detach(|| {
+            let mut done = 0;
+            while done < steps {
+                let k = chunk.min(steps - done);
+                let advanced = pool.install(|| match model {
+                    Model::Independent(m) => bodies.advance(m, h, k),
+                    Model::Dipoles(m) => bodies.advance(m, h, k),
+                });
+                if let Err(e) = advanced {
+                    return Ok(Err(e));
+                }
+                done += k;
+                interrupt.step()?;
+            }
+            Ok(Ok(()))
         });
-        result.map_err(|e| py_error(py, &e, ""))
+        result?.map_err(|e| py_error(py, &e, ""))
     }
 
     /// Choose the free rotation between the impulses: "midpoint" (as in LIEMID\[EA\]),

@@ -15,7 +15,10 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
+use crate::bounds::{check_samples, check_steps, SAMPLE_HINT};
 use crate::convert::py_error;
+use crate::signals::Interrupt;
+use liemid::error::Num;
 
 /// A jointed model and what its file held that is not simulated.
 #[pyclass(module = "liemid._liemid")]
@@ -152,9 +155,12 @@ impl Samples {
 }
 
 /// Run `model` with `method` at step `step` to `t_end`, sampling every `every` steps (and
-/// the last); returns a dict of flat arrays and the run's maxima.
+/// the last); returns a dict of flat arrays and the run's maxima. Before the first step,
+/// the steps are held to `max_steps` (10⁹ when `None`) and the samples to the memory
+/// available; a pending signal (Ctrl-C) stops the run with its exception.
 #[pyfunction]
-#[pyo3(signature = (model, method, step, t_end, every, drift = "midpoint"))]
+#[pyo3(signature = (model, method, step, t_end, every, drift = "midpoint", max_steps = None))]
+#[allow(clippy::too_many_arguments)]
 fn multibody_run<'py>(
     py: Python<'py>,
     model: &MultibodyModel,
@@ -163,6 +169,7 @@ fn multibody_run<'py>(
     t_end: f64,
     every: u64,
     drift: &str,
+    max_steps: Option<u64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let method = Method::from_key(method).map_err(|e| PyValueError::new_err(format!("method: {e}")))?;
     let drift = Drift::from_key(drift).ok_or_else(|| {
@@ -177,19 +184,28 @@ fn multibody_run<'py>(
     }
     if !(step.is_finite() && step > 0.0) {
         return Err(PyValueError::new_err(format!(
-            "step: must be a positive number, found {step}"
+            "step: must be a positive number, found {}",
+            Num(step)
         )));
     }
     if !(t_end.is_finite() && t_end > 0.0) {
         return Err(PyValueError::new_err(format!(
-            "t_end: must be a positive number, found {t_end}"
+            "t_end: must be a positive number, found {}",
+            Num(t_end)
         )));
     }
     if every == 0 {
         return Err(PyValueError::new_err("every: at least 1, found 0"));
     }
-    let n = liemid::rigid::driver::step_count(0.0, t_end, step).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let n = liemid::rigid::driver::step_count(0.0, t_end, step)
+        .map_err(|e| PyValueError::new_err(format!("step, t_end: {e}")))?;
+    check_steps(n, max_steps, "t_end, step")?;
     let sc = &model.scenario;
+    let bodies = sc.model.bodies.len();
+    let coordinates = sc.model.joints.iter().filter(|j| j.kind.axis().is_some()).count();
+    check_samples((n / every) as f64 + 2.0, 2 + 7 * bodies + coordinates, SAMPLE_HINT)?;
+    let mut interrupt = Interrupt::for_work(bodies);
+    let mut stopped: Option<PyErr> = None;
     let mut samples = Samples::default();
     let (mut max_pos, mut max_vel) = (0.0f64, 0.0f64);
     let notes;
@@ -207,16 +223,21 @@ fn multibody_run<'py>(
             let joints = sc.model.joints.len();
             let system = &sim.system;
             samples.push_maximal(system, &state, joints);
-            let run = py
-                .detach(|| {
-                    sim.integrator.integrate(system, &mut state, t_end, step, |k, state, _| {
-                        if k % every == 0 || k == n {
-                            samples.push_maximal(system, state, joints);
-                        }
-                        Ok(())
+            let run = py.detach(|| {
+                sim.integrator.integrate(system, &mut state, t_end, step, |k, state, _| {
+                    if k % every == 0 || k == n {
+                        samples.push_maximal(system, state, joints);
+                    }
+                    interrupt.step().map_err(|e| {
+                        stopped = Some(e);
+                        "stopped".to_string()
                     })
                 })
-                .map_err(|e| py_error(py, &e, &sc.name))?;
+            });
+            if let Some(e) = stopped {
+                return Err(e);
+            }
+            let run = run.map_err(|e| py_error(py, &e, &sc.name))?;
             (max_pos, max_vel) = (run.max_position_violation, run.max_velocity_violation);
             m.name().to_string()
         }
@@ -229,7 +250,7 @@ fn multibody_run<'py>(
             samples
                 .push_joint_space(&mut seen, &kinds, 0.0, &q, &v)
                 .map_err(|e| py_error(py, &e, &sc.name))?;
-            py.detach(|| {
+            let run = py.detach(|| {
                 js.integrate_rk4(&mut q, &mut v, (0.0, t_end, step), |k, t, q, v| {
                     if k % every == 0 || k == n {
                         let mut unit = q.to_vec();
@@ -238,10 +259,16 @@ fn multibody_run<'py>(
                             .push_joint_space(&mut seen, &kinds, t, &unit, v)
                             .map_err(|e| e.to_string())?;
                     }
-                    Ok(())
+                    interrupt.step().map_err(|e| {
+                        stopped = Some(e);
+                        "stopped".to_string()
+                    })
                 })
-            })
-            .map_err(|e| py_error(py, &e, &sc.name))?;
+            });
+            if let Some(e) = stopped {
+                return Err(e);
+            }
+            run.map_err(|e| py_error(py, &e, &sc.name))?;
             "RK4 (joint coordinates)".to_string()
         }
         Method::Dop853 => {

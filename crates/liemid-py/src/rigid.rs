@@ -4,22 +4,27 @@
 //! (`python/liemid/_core.py`, `problems.py`) checks and reshapes.
 
 use std::cell::RefCell;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
+use liemid::error::Num;
 use liemid::rigid::adaptive::{
     AdaptiveRun, AdaptiveStats, AngularSpeed, ReversibleStepper, RigidAdaptive, RigidDensity, TorqueRate,
 };
 use liemid::{
-    so3, ConstantTorque, Error, HeavyTop, Inertia, Mat3, RigidBodySystem, RigidState, RotationMethod, Run, Vec3,
+    so3, ConstantTorque, Error, HeavyTop, Inertia, Mat3, RigidBodySystem, RigidState, RotationIntegrator,
+    RotationMethod, Run, Vec3,
 };
 use numpy::{IntoPyArray, PyReadonlyArray1};
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use rayon::prelude::*;
 
+use crate::bounds::{check_estimate, check_samples, check_steps, SAMPLE_HINT};
 use crate::convert::{mat, py_error, v3, Array, Triple};
-use liemid_app::shared::progress::Silent;
+use crate::signals::{watched, Interrupt};
+use liemid_app::shared::progress::Progress;
 
 /// A body's torque model: built-in terms summed in order, and optionally a Python callable
 /// (through the adapter of the Python layer, which takes `(R row-major 9-tuple, t)` and
@@ -134,9 +139,9 @@ fn attitude(kind: &str, values: &[f64]) -> PyResult<Mat3> {
             let d = so3::orthogonality_defect(&m);
             if !(d <= liemid::rigid::ROTATION_TOLERANCE && m.determinant() > 0.0) {
                 return Err(PyValueError::new_err(format!(
-                    "rotation: not a rotation matrix (orthogonality defect {d:.3e}, at most {:e} accepted; determinant {:.6})",
+                    "rotation: not a rotation matrix (orthogonality defect {d:.3e}, at most {:e} accepted; determinant {})",
                     liemid::rigid::ROTATION_TOLERANCE,
-                    m.determinant()
+                    Num(m.determinant())
                 )));
             }
             so3::orthonormalize(&m).ok_or_else(|| PyValueError::new_err("rotation: cannot be orthonormalised"))
@@ -156,7 +161,8 @@ fn attitude(kind: &str, values: &[f64]) -> PyResult<Mat3> {
             let n = q.norm();
             if !(n.is_finite() && (n - 1.0).abs() <= 1e-6) {
                 return Err(PyValueError::new_err(format!(
-                    "quaternion: must be a unit quaternion [w, x, y, z] (norm 1 to 1e-6), norm is {n}"
+                    "quaternion: must be a unit quaternion [w, x, y, z] (norm 1 to 1e-6), norm is {}",
+                    Num(n)
                 )));
             }
             Ok(q.normalized().to_matrix())
@@ -175,8 +181,11 @@ fn parse_method(name: &str) -> PyResult<RotationMethod> {
 /// summary)` with flat arrays. With `adaptive = eps` (and `step` unused) the reversible
 /// adaptive steps of `liemid::rigid::adaptive` with the density `rho` (`omega`, the default,
 /// or `torque`); the summary then has `adaptive: (eps, rho, min_step, max_step, last_step)`.
+/// Before the first step, the steps are held to `max_steps` (10⁹ when `None`; an adaptive
+/// run's at the start's pace, and it stops there) and the samples to the memory available.
+/// A pending signal (Ctrl-C) stops the run with its exception.
 #[pyfunction]
-#[pyo3(signature = (inertia, gravity, constant, torque, potential, attitude_kind, attitude_values, momentum, t0, t_end, step, method, every, adaptive=None, rho=None))]
+#[pyo3(signature = (inertia, gravity, constant, torque, potential, attitude_kind, attitude_values, momentum, t0, t_end, step, method, every, adaptive=None, rho=None, max_steps=None))]
 #[allow(clippy::too_many_arguments)]
 fn integrate<'py>(
     py: Python<'py>,
@@ -195,6 +204,7 @@ fn integrate<'py>(
     every: u64,
     adaptive: Option<f64>,
     rho: Option<&str>,
+    max_steps: Option<u64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let system = PySystem::new(&inertia, gravity, constant, torque, potential)?;
     let rotation = attitude(attitude_kind, &attitude_values)?;
@@ -211,17 +221,20 @@ fn integrate<'py>(
     let initial = RigidState::new(t0, pi, rotation);
     if let Some(eps) = adaptive {
         initial.check_valid().map_err(|e| py_error(py, &e, ""))?;
+        let limits = Limits { every, max_steps };
         return match rho.unwrap_or("omega") {
-            "omega" => integrate_adaptive(py, &system, initial, t_end, eps, method, every, AngularSpeed),
-            "torque" => integrate_adaptive(py, &system, initial, t_end, eps, method, every, TorqueRate),
+            "omega" => integrate_adaptive(py, &system, initial, t_end, eps, method, limits, AngularSpeed),
+            "torque" => integrate_adaptive(py, &system, initial, t_end, eps, method, limits, TorqueRate),
             other => Err(PyValueError::new_err(format!(
                 "rho: unknown step density {other:?} (known: 'omega', 'torque')"
             ))),
         };
     }
     let mut run = Run::new(&system, initial, t_end, step).map_err(|e| py_error(py, &e, ""))?;
-    let rows = (run.total_steps / every + 2) as usize;
-    let mut out = Trajectory::with_capacity(rows);
+    check_steps(run.total_steps, max_steps, "t_end, step")?;
+    let rows = run.total_steps / every + 2;
+    check_samples(rows as f64, Trajectory::NUMBERS, SAMPLE_HINT)?;
+    let mut out = Trajectory::with_capacity(rows as usize);
     let mut integrator = method.integrator();
     let started = Instant::now();
     // With a Python callable the GIL is needed at every step; otherwise it is released.
@@ -235,7 +248,7 @@ fn integrate<'py>(
     if let Some(e) = system.take_raised() {
         return Err(e);
     }
-    result.map_err(|e| py_error(py, &e, ""))?;
+    result?.map_err(|e| py_error(py, &e, ""))?;
     let s = run.summary();
     let d = PyDict::new(py);
     out.into_dict(py, &d)?;
@@ -279,6 +292,13 @@ impl Largest {
     }
 }
 
+/// What holds a run: its sampling and its step bound.
+#[derive(Clone, Copy)]
+struct Limits {
+    every: u64,
+    max_steps: Option<u64>,
+}
+
 /// [`integrate`] with reversible adaptive steps (`h = eps / z`, Hairer-Söderlind) of a
 /// symmetric `method` and the step density `density`; the last step lands on `t_end`.
 #[allow(clippy::too_many_arguments)]
@@ -289,22 +309,22 @@ fn integrate_adaptive<'py, D: RigidDensity + Send>(
     t_end: f64,
     eps: f64,
     method: RotationMethod,
-    every: u64,
+    limits: Limits,
     density: D,
 ) -> PyResult<Bound<'py, PyDict>> {
     let started = Instant::now();
     // With a Python callable the GIL is needed at every step; otherwise it is released.
     let result = if system.has_callable() {
-        adaptive_to_end(system, initial, t_end, eps, method, every, density)
+        adaptive_to_end(system, initial, t_end, eps, method, limits, density)
     } else {
         let shared = SharedSystem(system);
-        py.detach(|| adaptive_to_end(shared.get(), initial, t_end, eps, method, every, density))
+        py.detach(|| adaptive_to_end(shared.get(), initial, t_end, eps, method, limits, density))
     };
     let wall = started.elapsed().as_secs_f64();
     if let Some(e) = system.take_raised() {
         return Err(e);
     }
-    let (out, largest, stats, density_name) = result.map_err(|e| py_error(py, &e, "adaptive"))?;
+    let (out, largest, stats, density_name) = result?.map_err(|e| py_error(py, &e, "adaptive"))?;
     let d = PyDict::new(py);
     out.into_dict(py, &d)?;
     d.set_item("steps", stats.steps)?;
@@ -321,20 +341,45 @@ fn integrate_adaptive<'py, D: RigidDensity + Send>(
     Ok(d)
 }
 
+/// An adaptive run's trajectory, largest diagnostics errors, steps and density name.
+type AdaptiveResult = (Trajectory, Largest, AdaptiveStats, &'static str);
+
 /// The adaptive run of [`integrate_adaptive`]: the trajectory (every `every` steps, the
 /// first and the last), the largest diagnostics errors, the steps and the density's name.
+/// Its steps at the start's pace are held to `max_steps` and their samples to the memory
+/// before the first step (`ValueError`, `MemoryError`); a run whose pace slows stops at
+/// `max_steps` (`RuntimeError`), and a pending signal stops it with its exception. The
+/// library's errors are the inner ones.
 fn adaptive_to_end<D: RigidDensity>(
     system: &PySystem,
     initial: RigidState,
     t_end: f64,
     eps: f64,
     method: RotationMethod,
-    every: u64,
+    Limits { every, max_steps }: Limits,
     density: D,
-) -> Result<(Trajectory, Largest, AdaptiveStats, &'static str), Error> {
-    let stepper = RigidAdaptive::new(system, method, density)?;
+) -> PyResult<Result<AdaptiveResult, Error>> {
+    let stepper = match RigidAdaptive::new(system, method, density) {
+        Ok(s) => s,
+        Err(e) => return Ok(Err(e)),
+    };
     let density_name = stepper.density_name();
-    let mut run = AdaptiveRun::new(stepper, initial, t_end, eps)?;
+    let mut run = match AdaptiveRun::new(stepper, initial, t_end, eps) {
+        Ok(r) => r,
+        Err(e) => return Ok(Err(e)),
+    };
+    let bounds = liemid_app::shared::bounds::check_adaptive_steps;
+    let bound = bounds(
+        run.span(),
+        run.control(),
+        eps,
+        max_steps,
+        ("adaptive", crate::bounds::MAX_STEPS),
+    )
+    .map_err(PyValueError::new_err)?;
+    let estimate = liemid_app::shared::bounds::adaptive_estimate(run.span(), run.control(), eps);
+    check_samples(estimate / every as f64 + 2.0, Trajectory::NUMBERS, SAMPLE_HINT)?;
+    let mut interrupt = Interrupt::new();
     let first = liemid::Diagnostics::of(system, &initial);
     let mut largest = Largest {
         orthogonality: first.orthogonality_defect,
@@ -343,7 +388,17 @@ fn adaptive_to_end<D: RigidDensity>(
     let mut out = Trajectory::with_capacity(1024);
     out.push(&initial, &first);
     while !run.is_done() {
-        run.step()?;
+        if run.stats().steps >= bound {
+            return Err(PyRuntimeError::new_err(format!(
+                "adaptive: the run reached {bound} steps (max_steps) at t = {} before t_end = {}",
+                Num(run.state().t),
+                Num(t_end)
+            )));
+        }
+        if let Err(e) = run.step() {
+            return Ok(Err(e));
+        }
+        interrupt.step()?;
         let s = *run.state();
         let d = liemid::Diagnostics::of(system, &s);
         largest.see(&first, &d);
@@ -351,26 +406,33 @@ fn adaptive_to_end<D: RigidDensity>(
             out.push(&s, &d);
         }
     }
-    Ok((out, largest, run.stats(), density_name))
+    Ok(Ok((out, largest, run.stats(), density_name)))
 }
 
-/// Step `run` to its end, recording the state every `every` steps (and the first and last).
+/// Step `run` to its end, recording the state every `every` steps (and the first and
+/// last); a pending signal stops it with its exception (the outer error), the library's
+/// errors are the inner ones.
 fn run_to_end(
     run: &mut Run,
     integrator: &mut liemid::AnyRotationIntegrator,
     system: &PySystem,
     every: u64,
     out: &mut Trajectory,
-) -> Result<(), Error> {
+) -> PyResult<Result<(), Error>> {
+    let mut interrupt = Interrupt::new();
     out.push(run.state(), &run.progress.initial);
     while !run.is_done() {
-        let d = run.step(integrator, system)?;
+        let d = match run.step(integrator, system) {
+            Ok(d) => d,
+            Err(e) => return Ok(Err(e)),
+        };
+        interrupt.step()?;
         let k = run.progress.steps;
         if k % every == 0 || run.is_done() {
             out.push(run.state(), &d);
         }
     }
-    Ok(())
+    Ok(Ok(()))
 }
 
 /// Trajectory columns, flat.
@@ -384,6 +446,9 @@ struct Trajectory {
 }
 
 impl Trajectory {
+    /// Numbers per sample: t, Π (3), R (9), the quaternion (4), the energy, π (3).
+    const NUMBERS: usize = 21;
+
     fn with_capacity(rows: usize) -> Self {
         Trajectory {
             t: Vec::with_capacity(rows),
@@ -420,9 +485,11 @@ impl Trajectory {
 const ENSEMBLE_CHUNK: usize = 64;
 
 /// N independent bodies from flat `rotations (9N)` and `momenta (3N)` to `t_end`, on
-/// `threads` threads (0: all cores); returns the final `(pi (3N), rotation (9N))`.
+/// `threads` threads (0: all cores); returns the final `(pi (3N), rotation (9N))`. Each
+/// body's steps are held to `max_steps` (10⁹ when `None`); a pending signal (Ctrl-C) stops
+/// the bodies within a few steps and raises its exception.
 #[pyfunction]
-#[pyo3(signature = (inertia, gravity, constant, attitude_kind, attitudes, momenta, momentum_kind, t0, t_end, step, method, threads))]
+#[pyo3(signature = (inertia, gravity, constant, attitude_kind, attitudes, momenta, momentum_kind, t0, t_end, step, method, threads, max_steps=None))]
 #[allow(clippy::too_many_arguments)]
 fn ensemble<'py>(
     py: Python<'py>,
@@ -438,15 +505,12 @@ fn ensemble<'py>(
     step: f64,
     method: &str,
     threads: usize,
+    max_steps: Option<u64>,
 ) -> PyResult<(Array<'py>, Array<'py>)> {
     let system = PySystem::new(&inertia, gravity, constant, None, None)?;
     let method = parse_method(method)?;
     let attitudes = attitudes.as_slice()?;
-    if threads > 4 * std::thread::available_parallelism().map_or(1, |c| c.get()) {
-        return Err(PyValueError::new_err(format!(
-            "threads: {threads} is more than 4 per core; use 0 for all cores"
-        )));
-    }
+    let pool = crate::convert::pool(threads)?;
     let momenta = momenta.as_slice()?;
     let n = momenta.len() / 3;
     let per = match attitude_kind {
@@ -468,16 +532,13 @@ fn ensemble<'py>(
             .map_err(|e| PyValueError::new_err(format!("body {i}: {}", e.value(py))))?;
         rotations.push(r);
     }
-    liemid::step_count(t0, t_end, step).map_err(|e| py_error(py, &e, ""))?;
+    let steps = liemid::step_count(t0, t_end, step).map_err(|e| py_error(py, &e, ""))?;
+    check_steps(steps, max_steps, "t_end, step")?;
     let by_velocity = momentum_kind == "angular_velocity";
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|e| PyValueError::new_err(format!("threads: {e}")))?;
     let mut pi_out = vec![0.0; 3 * n];
     let mut r_out = vec![0.0; 9 * n];
     let shared = SharedSystem(&system);
-    let errors: Vec<Option<(usize, Error)>> = py.detach(|| {
+    let errors: Vec<Option<(usize, Error)>> = watched(py, |stop| {
         pool.install(|| {
             pi_out
                 .par_chunks_mut(3 * ENSEMBLE_CHUNK)
@@ -492,7 +553,7 @@ fn ensemble<'py>(
                         let p = if by_velocity { system.inertia.apply(w) } else { w };
                         let mut state = RigidState::new(t0, p, rotation);
                         let mut integrator = method.integrator();
-                        if let Err(e) = liemid::advance(&mut integrator, system, &mut state, t_end, step) {
+                        if let Err(e) = advance(&mut integrator, system, &mut state, (t_end, step), stop) {
                             return Some((i, e));
                         }
                         pi.copy_from_slice(&state.pi.to_array());
@@ -502,11 +563,35 @@ fn ensemble<'py>(
                 })
                 .collect()
         })
-    });
+    })?;
     if let Some((i, e)) = errors.into_iter().flatten().next() {
         return Err(py_error(py, &e, &format!("body {i}")));
     }
     Ok((pi_out.into_pyarray(py), r_out.into_pyarray(py)))
+}
+
+/// `liemid::advance` (the same steps, the same bits) that returns early, leaving `state`
+/// mid-run, once `stop` is set (read every [`crate::signals::STEPS`] steps).
+fn advance(
+    method: &mut liemid::AnyRotationIntegrator,
+    system: &PySystem,
+    state: &mut RigidState,
+    (t_end, h): (f64, f64),
+    stop: &AtomicBool,
+) -> Result<(), Error> {
+    state.check_valid()?;
+    let t0 = state.t;
+    let steps = liemid::step_count(t0, t_end, h)?;
+    for k in 1..=steps {
+        if k % crate::signals::STEPS == 0 && stop.load(Ordering::Relaxed) {
+            return Ok(());
+        }
+        let target = if k == steps { t_end } else { t0 + k as f64 * h };
+        let dt = if k == steps { target - state.t } else { h };
+        method.step(system, state, dt)?;
+        state.t = target;
+    }
+    Ok(())
 }
 
 /// A system without Python callables, shared by the ensemble's threads (it only reads).
@@ -583,9 +668,24 @@ fn scenario_of(problem: &str, scenario_text: Option<&str>) -> PyResult<liemid_ap
     }
 }
 
-/// The convergence study of `liemid converge`, as its JSON text.
+/// A study's progress that nobody watches, asked to stop when a signal is pending
+/// (`signals::watched` sets the flag; the study reads it between runs).
+struct Watch<'a>(&'a AtomicBool);
+
+impl Progress for Watch<'_> {
+    fn start(&self, _total: u64, _unit: &str) {}
+    fn advance(&self) {}
+    fn finish(&self) {}
+    fn stopped(&self) -> bool {
+        self.0.load(Ordering::Relaxed)
+    }
+}
+
+/// The convergence study of `liemid converge`, as its JSON text. The steps of its runs
+/// (every method at every step) are held to `max_steps` (10⁹ when `None`) before the
+/// first; a pending signal (Ctrl-C) stops it between runs.
 #[pyfunction]
-#[pyo3(signature = (problem, scenario_text, methods, steps, t_end))]
+#[pyo3(signature = (problem, scenario_text, methods, steps, t_end, max_steps=None))]
 fn converge(
     py: Python<'_>,
     problem: &str,
@@ -593,6 +693,7 @@ fn converge(
     methods: Option<Vec<String>>,
     steps: Option<Vec<f64>>,
     t_end: Option<f64>,
+    max_steps: Option<u64>,
 ) -> PyResult<String> {
     let sc = scenario_of(problem, scenario_text)?;
     let methods: Vec<RotationMethod> = match methods {
@@ -606,15 +707,24 @@ fn converge(
         ));
     }
     let t_end = t_end.unwrap_or(sc.t_end);
-    let study = py
-        .detach(|| liemid_app::rigid::converge::study(&sc, &methods, &steps, t_end, &Silent))
-        .map_err(|e| py_error(py, &e, "reference"))?;
+    let mut total: u64 = 0;
+    for &h in &steps {
+        let n = liemid::step_count(sc.initial.t, t_end, h).map_err(|e| py_error(py, &e, "steps, t_end"))?;
+        total = total.saturating_add(n.saturating_mul(methods.len() as u64));
+    }
+    check_steps(total, max_steps, "converge: steps, t_end")?;
+    let study = watched(py, |stop| {
+        liemid_app::rigid::converge::study(&sc, &methods, &steps, t_end, &Watch(stop))
+    })?
+    .map_err(|e| py_error(py, &e, "reference"))?;
     serde_json::to_string(&study).map_err(|e| PyValueError::new_err(e.to_string()))
 }
 
-/// The work-precision study of `liemid work-precision`, as its JSON text.
+/// The work-precision study of `liemid work-precision`, as its JSON text. Its coarsest run
+/// is held to `max_steps` (10⁹ when `None`) before the reference is computed; a pending
+/// signal (Ctrl-C) stops it between runs and within its DOP853 and RK4 references.
 #[pyfunction]
-#[pyo3(signature = (problem, scenario_text, methods, t_end, repetitions, budget, min_error, max_points))]
+#[pyo3(signature = (problem, scenario_text, methods, t_end, repetitions, budget, min_error, max_points, max_steps=None))]
 #[allow(clippy::too_many_arguments)]
 fn work_precision(
     py: Python<'_>,
@@ -626,6 +736,7 @@ fn work_precision(
     budget: f64,
     min_error: f64,
     max_points: usize,
+    max_steps: Option<u64>,
 ) -> PyResult<String> {
     use liemid_app::rigid::study::{study, Entry, Options};
     let sc = scenario_of(problem, scenario_text)?;
@@ -650,9 +761,20 @@ fn work_precision(
         max_points,
     };
     let t_end = t_end.unwrap_or(sc.t_end);
-    let result = py
-        .detach(|| study(&sc, t_end, &options, &Silent))
-        .map_err(PyValueError::new_err)?;
+    if !(t_end.is_finite() && t_end > sc.initial.t) {
+        return Err(PyValueError::new_err(format!(
+            "t_end: must be a finite time after the start {}, found {}",
+            Num(sc.initial.t),
+            Num(t_end)
+        )));
+    }
+    let coarsest = liemid_app::rigid::study::coarsest_steps(&sc, t_end);
+    check_estimate(
+        coarsest,
+        max_steps,
+        "work_precision: t_end: the study's coarsest run would take",
+    )?;
+    let result = watched(py, |stop| study(&sc, t_end, &options, &Watch(stop)))?.map_err(PyValueError::new_err)?;
     serde_json::to_string(&result).map_err(|e| PyValueError::new_err(e.to_string()))
 }
 

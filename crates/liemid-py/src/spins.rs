@@ -5,10 +5,16 @@
 use liemid::spin::{self, problems, DmiKind, Lattice, LatticeKind, SpinIntegrator, SpinMethod, SpinSystem};
 use liemid::Vec3;
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1};
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyMemoryError, PyValueError};
 use pyo3::prelude::*;
 
+use crate::bounds::{check_samples, check_steps, SAMPLE_HINT};
 use crate::convert::{py_error, v3, Array, Triple};
+use crate::signals::Interrupt;
+
+/// Site steps in one call of `SpinIntegrator::advance` between two looks at the pending
+/// signals (a few milliseconds).
+const CHUNK_WORK: u64 = 1 << 20;
 
 /// A spin system: lattice and Hamiltonian.
 #[pyclass(module = "liemid._liemid")]
@@ -49,6 +55,10 @@ impl Spins {
                 )))
             }
         };
+        liemid_app::spin::scenario::check_lattice_size(&size).map_err(|e| match e {
+            liemid_app::spin::scenario::SizeRefusal::Count(m) => PyValueError::new_err(format!("size: {m}")),
+            liemid_app::spin::scenario::SizeRefusal::Memory(m) => PyMemoryError::new_err(format!("size: {m}")),
+        })?;
         let lattice = Lattice::new(kind, &size, periodic).map_err(|e| PyValueError::new_err(format!("size: {e}")))?;
         let system = SpinSystem::new(
             lattice,
@@ -94,8 +104,12 @@ impl Spins {
     }
 
     /// Run from flat spins to `t_end` with step `h`, observing every `every` steps:
-    /// `(t, energy, magnetisation (flat, 3 per row), final spins (flat), seconds)`.
-    #[pyo3(signature = (spins, method, h, t_end, every, threads))]
+    /// `(t, energy, magnetisation (flat, 3 per row), final spins (flat), seconds)`. Before
+    /// the first step, the steps are held to `max_steps` (10⁹ when `None`) and the
+    /// observations to the memory available; the steps are taken in chunks of about
+    /// [`CHUNK_WORK`] site steps, between which a pending signal (Ctrl-C) stops the run with
+    /// its exception.
+    #[pyo3(signature = (spins, method, h, t_end, every, threads, max_steps=None))]
     #[allow(clippy::too_many_arguments, clippy::type_complexity)]
     fn integrate<'py>(
         &self,
@@ -106,6 +120,7 @@ impl Spins {
         t_end: f64,
         every: u64,
         threads: usize,
+        max_steps: Option<u64>,
     ) -> PyResult<(Array<'py>, Array<'py>, Array<'py>, Array<'py>, f64)> {
         let method = SpinMethod::from_key(method).ok_or_else(|| {
             let known: Vec<&str> = SpinMethod::ALL.iter().map(|m| m.key()).collect();
@@ -118,14 +133,15 @@ impl Spins {
             return Err(PyValueError::new_err("every: must be at least 1"));
         }
         let steps = liemid::step_count(0.0, t_end, h).map_err(|e| PyValueError::new_err(format!("h, t_end: {e}")))?;
+        check_steps(steps, max_steps, "t_end, step")?;
+        check_samples(steps.div_ceil(every) as f64 + 1.0, 5, SAMPLE_HINT)?;
         let mut s = self.unpack(spins.as_slice()?)?;
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .map_err(|e| PyValueError::new_err(format!("threads: {e}")))?;
+        let pool = crate::convert::pool(threads)?;
         let system = &self.system;
         let n = system.len() as f64;
-        let result = py.detach(|| {
+        let chunk = (CHUNK_WORK / system.len().max(1) as u64).max(1);
+        let mut interrupt = Interrupt::every(1);
+        let result: PyResult<_> = py.detach(|| {
             let mut integ = SpinIntegrator::new(method);
             let (mut t, mut energy, mut mag) = (Vec::new(), Vec::new(), Vec::new());
             let mut record = |s: &[Vec3], time: f64| {
@@ -138,13 +154,22 @@ impl Spins {
             let mut done = 0;
             while done < steps {
                 let k = every.min(steps - done);
-                pool.install(|| integ.advance(system, &mut s, done as f64 * h, h, k))?;
+                let mut left = k;
+                while left > 0 {
+                    let piece = left.min(chunk);
+                    let at = (done + k - left) as f64 * h;
+                    if let Err(e) = pool.install(|| integ.advance(system, &mut s, at, h, piece)) {
+                        return Ok(Err(e));
+                    }
+                    left -= piece;
+                    interrupt.step()?;
+                }
                 done += k;
                 record(&s, done as f64 * h);
             }
-            Ok::<_, liemid::Error>((t, energy, mag, start.elapsed().as_secs_f64()))
+            Ok(Ok((t, energy, mag, start.elapsed().as_secs_f64())))
         });
-        let (t, energy, mag, seconds) = result.map_err(|e| py_error(py, &e, ""))?;
+        let (t, energy, mag, seconds) = result?.map_err(|e| py_error(py, &e, ""))?;
         let flat: Vec<f64> = s.iter().flat_map(|v| v.to_array()).collect();
         Ok((
             t.into_pyarray(py),
@@ -181,12 +206,15 @@ pub fn spin_methods() -> Vec<(&'static str, u32, bool, &'static str)> {
 
 /// Spins within `max_tilt` rad of +z, seeded (as the built-in problems' starts), flat.
 #[pyfunction]
-pub fn spins_near_z<'py>(py: Python<'py>, n: usize, max_tilt: f64, seed: u64) -> Bound<'py, PyArray1<f64>> {
+pub fn spins_near_z<'py>(py: Python<'py>, n: usize, max_tilt: f64, seed: u64) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    // The spins and their flat copy, 48 bytes each.
+    liemid_app::shared::memory::check_fits(&format!("n: {} spins", liemid::error::Num(n as f64)), n as f64 * 48.0)
+        .map_err(PyMemoryError::new_err)?;
     let flat: Vec<f64> = problems::near_z(n, max_tilt, seed)
         .iter()
         .flat_map(|s| s.to_array())
         .collect();
-    flat.into_pyarray(py)
+    Ok(flat.into_pyarray(py))
 }
 
 /// Add the spin classes and functions to the module.

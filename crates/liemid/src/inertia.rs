@@ -35,7 +35,11 @@ impl Inertia {
             }
             if !m.is_finite() || m < 0.0 {
                 return Err(Error::InvalidInertia {
-                    reason: format!("principal moment I{} = {m} must be finite and positive", k + 1),
+                    reason: format!(
+                        "principal moment I{} = {} must be finite and positive",
+                        k + 1,
+                        crate::error::Num(m)
+                    ),
                 });
             }
         }
@@ -85,7 +89,8 @@ impl Inertia {
                     return Err(Error::InvalidInertia {
                         reason: format!(
                             "not symmetric: I[{i}][{j}] = {} but I[{j}][{i}] = {}",
-                            m.m[i][j], m.m[j][i]
+                            crate::error::Num(m.m[i][j]),
+                            crate::error::Num(m.m[j][i])
                         ),
                     });
                 }

@@ -1,7 +1,7 @@
 //! Runs of a beam scenario (explicit splitting or implicit Newmark) sampled at a fixed
 //! interval, and the work-precision study of the two on the right-angle cantilever.
 
-use liemid::beam::{BeamDriver, BeamMethod, BeamSystem, Drift};
+use liemid::beam::{BeamDriver, BeamMethod, BeamSystem, Drift, StepPlan};
 use serde_json::{json, Value};
 
 use crate::beam::scenario::{BeamIntegrator, BeamScenario};
@@ -126,7 +126,8 @@ impl Stepping {
 }
 
 /// Run `scenario` to `t_end` as `stepping` says. The step bound and the memory of the
-/// samples are checked before the first step. `stop` is asked between samples;
+/// samples are checked before the first step. `stop` is asked between samples, and within
+/// a sample interval every [`STOP_WORK`] element steps;
 /// `Some(reason)` ends the run with that message.
 pub fn run(
     scenario: &BeamScenario,
@@ -137,12 +138,30 @@ pub fn run(
     run_viewed(scenario, t_end, stepping, stop, None).map(|(run, _)| run)
 }
 
+/// Element steps between two questions to `stop` within a sample interval (a few
+/// milliseconds of stepping), so that a long interval can be stopped too.
+pub const STOP_WORK: u64 = 1 << 16;
+
 /// [`run`], and with `view = Some(title)` the 3-D page of the run: the deformed centre
 /// line and the nodes' section frames at every sample, and the energy (explicit methods).
 pub fn run_viewed(
     scenario: &BeamScenario,
     t_end: f64,
     stepping: Stepping,
+    stop: &mut dyn FnMut(f64) -> Option<String>,
+    view: Option<&str>,
+) -> Result<(BeamRun, Option<ViewPage>), RunFailure> {
+    run_checked(scenario, t_end, stepping, &mut |_| Ok(()), stop, view)
+}
+
+/// [`run_viewed`] with a pre-flight: `check` sees the plan (the step, the steps, the steps
+/// between samples) before the first step, for a front end's step bound or the memory its
+/// samples will take; its error is bad input ([`RunFailure::Input`]).
+pub fn run_checked(
+    scenario: &BeamScenario,
+    t_end: f64,
+    stepping: Stepping,
+    check: &mut dyn FnMut(&StepPlan) -> Result<(), String>,
     stop: &mut dyn FnMut(f64) -> Option<String>,
     view: Option<&str>,
 ) -> Result<(BeamRun, Option<ViewPage>), RunFailure> {
@@ -167,6 +186,7 @@ pub fn run_viewed(
         liemid::Error::UnstableStep { .. } => input(format!("{e} (or --force-step)")),
         e => input(e.to_string()),
     })?;
+    check(&plan).map_err(input)?;
     let (h, every, steps) = (plan.step, plan.every, plan.steps);
     // Before the first step: the step bound, and the samples kept (t, the energy and three
     // displacements per tracked node) against the memory.
@@ -240,15 +260,28 @@ pub fn run_viewed(
     record(&mut out, driver.system(), 0.0, start_totals.map(|t| t.energy));
     let mut done = 0u64;
     let (mut seconds, mut cpu_seconds) = (0.0, 0.0);
+    let piece = (STOP_WORK / driver.system().elements().max(1) as u64).max(1);
     while done < steps {
         if let Some(reason) = stop(done as f64 * h) {
             return Err(RunFailure::Numerical(reason));
         }
         let k = every.min(steps - done);
-        let (clock, cpu) = (Instant::now(), thread_seconds());
-        driver.advance(k, h).map_err(|e| RunFailure::Numerical(e.to_string()))?;
-        seconds += clock.elapsed().as_secs_f64();
-        cpu_seconds += thread_seconds() - cpu;
+        let mut left = k;
+        while left > 0 {
+            if left < k {
+                if let Some(reason) = stop((done + k - left) as f64 * h) {
+                    return Err(RunFailure::Numerical(reason));
+                }
+            }
+            let piece = left.min(piece);
+            let (clock, cpu) = (Instant::now(), thread_seconds());
+            driver
+                .advance(piece, h)
+                .map_err(|e| RunFailure::Numerical(e.to_string()))?;
+            seconds += clock.elapsed().as_secs_f64();
+            cpu_seconds += thread_seconds() - cpu;
+            left -= piece;
+        }
         done += k;
         let t = done as f64 * h;
         let energy = driver.totals().map(|totals| totals.energy);

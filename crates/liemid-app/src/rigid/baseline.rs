@@ -17,9 +17,10 @@ pub struct AdaptiveRun {
     pub evaluations: u64,
 }
 
-/// The right-hand side on `(Π, q)`.
+/// The right-hand side on `(Π, q)`, and whether the caller asks the run to stop.
 struct RigidQuaternion<'a, S: ?Sized> {
     system: &'a S,
+    stop: &'a dyn Fn() -> bool,
 }
 
 fn unpack(y: &State) -> (Vec3, Quaternion) {
@@ -39,26 +40,36 @@ impl<S: RigidBodySystem + ?Sized> System<f64, State> for RigidQuaternion<'_, S> 
         let dq = q.mul(&Quaternion::new(0.0, 0.5 * w.x, 0.5 * w.y, 0.5 * w.z));
         *dy = State::from([dpi.x, dpi.y, dpi.z, dq.w, dq.x, dq.y, dq.z]);
     }
+
+    /// Read after every accepted step: `true` ends the run there.
+    fn solout(&mut self, _t: f64, _y: &State, _dy: &State) -> bool {
+        (self.stop)()
+    }
 }
 
 type Solver<'a, S> = Dop853<f64, State, RigidQuaternion<'a, S>>;
 
 /// Integrate at relative tolerance `rtol` (absolute `rtol/1000`), keeping every accepted
-/// step; returns the solver (with its outputs) and the number of evaluations.
+/// step; returns the solver (with its outputs) and the number of evaluations. `stop` is
+/// read after every accepted step; once it returns `true` the run ends with an error.
 fn integrate<'a, S: RigidBodySystem + ?Sized>(
     system: &'a S,
     initial: RigidState,
     t_end: f64,
     rtol: f64,
+    stop: &'a dyn Fn() -> bool,
 ) -> Result<(Solver<'a, S>, u64), String> {
     let q = Quaternion::from_matrix(&initial.rotation);
     let pi = initial.pi;
     let y0 = State::from([pi.x, pi.y, pi.z, q.w, q.x, q.y, q.z]);
     let span = t_end - initial.t;
-    let mut solver = dop853!(RigidQuaternion { system }, initial.t, t_end, span, y0, rtol,);
+    let mut solver = dop853!(RigidQuaternion { system, stop }, initial.t, t_end, span, y0, rtol,);
     let stats = solver
         .integrate()
         .map_err(|e| format!("Dop853 at rtol {rtol:e}: {e}"))?;
+    if stop() {
+        return Err(format!("Dop853 at rtol {rtol:e}: stopped"));
+    }
     Ok((solver, u64::from(stats.num_eval)))
 }
 
@@ -69,7 +80,19 @@ pub fn dop853<S: RigidBodySystem + ?Sized>(
     t_end: f64,
     rtol: f64,
 ) -> Result<AdaptiveRun, String> {
-    let (solver, evaluations) = integrate(system, initial, t_end, rtol)?;
+    dop853_until(system, initial, t_end, rtol, &|| false)
+}
+
+/// [`dop853`], ended (with an error) after the first accepted step at which `stop`
+/// returns `true`.
+pub fn dop853_until<S: RigidBodySystem + ?Sized>(
+    system: &S,
+    initial: RigidState,
+    t_end: f64,
+    rtol: f64,
+    stop: &dyn Fn() -> bool,
+) -> Result<AdaptiveRun, String> {
+    let (solver, evaluations) = integrate(system, initial, t_end, rtol, stop)?;
     let y = solver.y_out().last().ok_or("Dop853 produced no output")?;
     Ok(AdaptiveRun {
         state: state_of(t_end, y),
@@ -87,7 +110,7 @@ pub fn dop853_tenths<S: RigidBodySystem + ?Sized>(
 ) -> Result<(f64, f64, f64), String> {
     let e0 = Diagnostics::of(system, &initial).energy;
     let span = t_end - initial.t;
-    let (solver, _) = integrate(system, initial, t_end, rtol)?;
+    let (solver, _) = integrate(system, initial, t_end, rtol, &|| false)?;
     let (mut max, mut first, mut last) = (0.0f64, 0.0f64, 0.0f64);
     for (t, y) in solver.x_out().iter().zip(solver.y_out()) {
         let d = Diagnostics::of(system, &state_of(*t, y));

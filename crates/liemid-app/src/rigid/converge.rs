@@ -1,7 +1,7 @@
 //! The convergence study of the paper's Figure 1: every method's momentum and attitude
 //! errors at `t_end` against a reference computed here, for a sequence of steps.
 
-use liemid::{integrate_to, RigidState, RotationIntegrator, RotationMethod, RungeKutta4Quaternion};
+use liemid::{integrate, integrate_to, RigidState, RotationIntegrator, RotationMethod, RungeKutta4Quaternion};
 use serde::Serialize;
 
 use crate::rigid::scenario::Scenario;
@@ -86,6 +86,17 @@ fn errors(state: &RigidState, reference: &RigidState) -> (f64, f64) {
 /// study of large steps still gets an accurate reference: RK4's error per step is about
 /// `(|Ω| h)⁵ / 120`), in at most 4·10⁷ steps, with a Richardson estimate of its own error.
 pub fn reference(scenario: &Scenario, t_end: f64, h_min: f64) -> Result<(RigidState, Reference), liemid::Error> {
+    reference_until(scenario, t_end, h_min, &crate::shared::progress::Silent)
+}
+
+/// [`reference`], ended with [`liemid::Error::ObserverFailed`] once `progress` is
+/// [`Progress::stopped`] (read every 1024 steps).
+pub fn reference_until(
+    scenario: &Scenario,
+    t_end: f64,
+    h_min: f64,
+    progress: &dyn Progress,
+) -> Result<(RigidState, Reference), liemid::Error> {
     use liemid::RigidBodySystem;
     let span = t_end - scenario.initial.t;
     let mut h = h_min / 64.0;
@@ -97,12 +108,20 @@ pub fn reference(scenario: &Scenario, t_end: f64, h_min: f64) -> Result<(RigidSt
         h = span / 4e7;
     }
     let run = |h: f64| {
-        integrate_to(
+        integrate(
             &mut RungeKutta4Quaternion::new(),
             &scenario.system,
             scenario.initial,
             t_end,
             h,
+            1024,
+            |_, _, _| {
+                if progress.stopped() {
+                    Err("stopped".to_string())
+                } else {
+                    Ok(())
+                }
+            },
         )
     };
     let fine = run(h)?.state;
@@ -119,7 +138,8 @@ pub fn reference(scenario: &Scenario, t_end: f64, h_min: f64) -> Result<(RigidSt
 }
 
 /// Run the study; methods run in parallel threads, results in the order given, each run
-/// reported to `progress` as it ends.
+/// reported to `progress` as it ends (and the runs left skipped once it is
+/// [`Progress::stopped`]).
 pub fn study(
     scenario: &Scenario,
     methods: &[RotationMethod],
@@ -128,7 +148,7 @@ pub fn study(
     progress: &dyn Progress,
 ) -> Result<Study, liemid::Error> {
     let h_min = steps.iter().copied().fold(f64::INFINITY, f64::min);
-    let (ref_state, reference) = reference(scenario, t_end, h_min)?;
+    let (ref_state, reference) = reference_until(scenario, t_end, h_min, progress)?;
     progress.start((methods.len() * steps.len()) as u64, "runs");
     let results: Vec<MethodErrors> = std::thread::scope(|scope| {
         let handles: Vec<_> = methods
@@ -140,6 +160,12 @@ pub fn study(
                     let mut attitude = Vec::new();
                     let mut failure = Vec::new();
                     for &h in steps {
+                        if progress.stopped() {
+                            momentum.push(None);
+                            attitude.push(None);
+                            failure.push(Some("stopped".to_string()));
+                            continue;
+                        }
                         let mut integrator = method.integrator();
                         match integrate_to(&mut integrator, &scenario.system, scenario.initial, t_end, h) {
                             Ok(run) => {

@@ -252,12 +252,28 @@ fn first_step(method: RotationMethod, rate: f64) -> f64 {
     }
 }
 
+/// The steps of the study's coarsest run to `t_end`, a lower bound of every run's: the
+/// largest first step ([`first_step`], `Ω h ≈ 64`) over the span. A front end refuses a
+/// study beyond its step bound with it before the reference is computed.
+#[must_use]
+pub fn coarsest_steps(scenario: &Scenario, t_end: f64) -> f64 {
+    let span = t_end - scenario.initial.t;
+    let rate = scenario
+        .system
+        .inertia()
+        .apply_inverse(scenario.initial.pi)
+        .norm()
+        .max(1.0 / span);
+    span * rate / 64.0
+}
+
 fn curve_fixed(
     scenario: &Scenario,
     method: RotationMethod,
     t_end: f64,
     reference: &RigidState,
     options: &Options,
+    progress: &dyn Progress,
 ) -> Curve {
     let rate = scenario
         .system
@@ -268,7 +284,7 @@ fn curve_fixed(
     let mut h = first_step(method, rate);
     let mut points = Vec::new();
     let mut note = None;
-    while points.len() < options.max_points {
+    while points.len() < options.max_points && !progress.stopped() {
         let run = timed(options.repetitions, || {
             let mut state = scenario.initial;
             advance(&mut method.integrator(), &scenario.system, &mut state, t_end, h).map_err(|e| e.to_string())?;
@@ -319,13 +335,19 @@ fn curve_fixed(
     }
 }
 
-fn curve_dop853(scenario: &Scenario, t_end: f64, reference: &RigidState, options: &Options) -> Curve {
+fn curve_dop853(
+    scenario: &Scenario,
+    t_end: f64,
+    reference: &RigidState,
+    options: &Options,
+    progress: &dyn Progress,
+) -> Curve {
     let mut points = Vec::new();
     let mut note = None;
     let mut tol = 1e-3;
-    while points.len() < options.max_points && tol >= 1e-14 {
+    while points.len() < options.max_points && tol >= 1e-14 && !progress.stopped() {
         let run = timed(options.repetitions, || {
-            baseline::dop853(&scenario.system, scenario.initial, t_end, tol)
+            baseline::dop853_until(&scenario.system, scenario.initial, t_end, tol, &|| progress.stopped())
         });
         let (run, seconds) = match run {
             Ok(r) => r,
@@ -375,12 +397,13 @@ fn curve_adaptive(
     t_end: f64,
     reference: &RigidState,
     options: &Options,
+    progress: &dyn Progress,
 ) -> Curve {
     use liemid::rigid::adaptive::{AdaptiveRun, AngularSpeed, RigidAdaptive};
     let mut eps = if method.order() > 2 { 2.0 } else { 1.0 };
     let mut points = Vec::new();
     let mut note = None;
-    while points.len() < options.max_points {
+    while points.len() < options.max_points && !progress.stopped() {
         let counting = CountingTorque::new(&scenario.system);
         let go = |system: &dyn Fn() -> Result<(RigidState, u64), String>| system();
         let run = timed(options.repetitions, || {
@@ -473,13 +496,15 @@ pub fn time_to_reach(curve: &Curve, target: f64) -> Option<f64> {
 }
 
 /// The reference at `t_end`: RK4 at a tiny step for short runs, DOP853 at rtol 1e-14 for
-/// long ones (with an error estimate from the run at 1e-13).
-fn reference(scenario: &Scenario, t_end: f64) -> Result<(RigidState, Reference), String> {
+/// long ones (with an error estimate from the run at 1e-13); ended early once `progress`
+/// is [`Progress::stopped`].
+fn reference(scenario: &Scenario, t_end: f64, progress: &dyn Progress) -> Result<(RigidState, Reference), String> {
     if t_end - scenario.initial.t <= 2.0 {
-        return crate::rigid::converge::reference(scenario, t_end, 6.25e-5).map_err(|e| e.to_string());
+        return crate::rigid::converge::reference_until(scenario, t_end, 6.25e-5, progress).map_err(|e| e.to_string());
     }
-    let fine = baseline::dop853(&scenario.system, scenario.initial, t_end, 1e-14)?;
-    let coarse = baseline::dop853(&scenario.system, scenario.initial, t_end, 1e-13)?;
+    let stop = || progress.stopped();
+    let fine = baseline::dop853_until(&scenario.system, scenario.initial, t_end, 1e-14, &stop)?;
+    let coarse = baseline::dop853_until(&scenario.system, scenario.initial, t_end, 1e-13, &stop)?;
     let (dp, dr) = errors(&coarse.state, &fine.state);
     Ok((
         fine.state,
@@ -493,16 +518,20 @@ fn reference(scenario: &Scenario, t_end: f64) -> Result<(RigidState, Reference),
     ))
 }
 
-/// Run the study, each method reported to `progress` as it ends.
+/// Run the study, each method reported to `progress` as it ends (and the runs left
+/// skipped once it is [`Progress::stopped`]).
 pub fn study(scenario: &Scenario, t_end: f64, options: &Options, progress: &dyn Progress) -> Result<Study, String> {
-    let (ref_state, reference) = reference(scenario, t_end)?;
+    let (ref_state, reference) = reference(scenario, t_end, progress)?;
     let mut methods = Vec::new();
     progress.start(options.entries.len() as u64, "methods");
     for entry in &options.entries {
+        if progress.stopped() {
+            break;
+        }
         let curve = match entry {
-            Entry::Fixed(m) => curve_fixed(scenario, *m, t_end, &ref_state, options),
-            Entry::Dop853 => curve_dop853(scenario, t_end, &ref_state, options),
-            Entry::Adaptive(m) => curve_adaptive(scenario, *m, t_end, &ref_state, options),
+            Entry::Fixed(m) => curve_fixed(scenario, *m, t_end, &ref_state, options, progress),
+            Entry::Dop853 => curve_dop853(scenario, t_end, &ref_state, options, progress),
+            Entry::Adaptive(m) => curve_adaptive(scenario, *m, t_end, &ref_state, options, progress),
         };
         methods.push(curve);
         progress.advance();

@@ -10,6 +10,12 @@ pub trait Progress: Sync {
     fn advance(&self);
     /// The study has ended.
     fn finish(&self);
+    /// Whether the caller asks the study to stop (a signal, in the Python package): read
+    /// between runs; a study asked to stop skips its remaining runs and returns early, with
+    /// a result the caller discards.
+    fn stopped(&self) -> bool {
+        false
+    }
 }
 
 /// Progress that nobody watches.

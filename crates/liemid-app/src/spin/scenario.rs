@@ -60,6 +60,34 @@ pub struct SpinScenario {
     pub inputs: Vec<PathBuf>,
 }
 
+/// Why a lattice size is refused.
+#[derive(Debug)]
+pub enum SizeRefusal {
+    /// More than 10⁸ sites.
+    Count(String),
+    /// More than the memory available.
+    Memory(String),
+}
+
+/// The sites of a lattice of `size`, refused beyond 10⁸ sites or beyond 80 % of the
+/// memory available (400 bytes a site), before anything is built; shared by the scenario
+/// files and the Python package.
+///
+/// # Errors
+/// One line: the sites and the limit, or the memory needed and the memory available.
+pub fn check_lattice_size(size: &[usize]) -> Result<f64, SizeRefusal> {
+    let sites: f64 = size.iter().map(|&n| n as f64).product();
+    if sites > 1e8 {
+        return Err(SizeRefusal::Count(format!("{sites:e} sites; at most 1e8 are accepted")));
+    }
+    // The lattice, its bonds, the spins and the integrator's buffers: about 110 bytes a site
+    // on a square lattice and 150 on a cubic one (peak resident size of 10⁶-site runs here);
+    // the reliability sweep saw 3.7 GB at 10⁷ sites with its outputs, so 400 is asked for.
+    crate::shared::memory::check_fits(&format!("a lattice of {sites:e} sites"), sites * BYTES_PER_SITE)
+        .map_err(SizeRefusal::Memory)?;
+    Ok(sites)
+}
+
 /// The method named `key`, or an error listing the spin methods.
 pub fn parse_method(key: &str) -> Result<SpinMethod, String> {
     SpinMethod::from_key(key).ok_or_else(|| {
@@ -126,15 +154,9 @@ pub fn parse(text: &str, name: &str, dir: &Path) -> Result<SpinScenario, String>
         .into_iter()
         .map(|n| n as usize)
         .collect();
-    let sites: f64 = size.iter().map(|&n| n as f64).product();
-    if sites > 1e8 {
-        return Err(lattice_section.err("size", format!("{sites:e} sites; at most 1e8 are accepted")));
-    }
-    // The lattice, its bonds, the spins and the integrator's buffers: about 110 bytes a site
-    // on a square lattice and 150 on a cubic one (peak resident size of 10⁶-site runs here);
-    // the reliability sweep saw 3.7 GB at 10⁷ sites with its outputs, so 400 is asked for.
-    crate::shared::memory::check_fits(&format!("a lattice of {sites:e} sites"), sites * BYTES_PER_SITE)
-        .map_err(|e| lattice_section.err("size", e))?;
+    check_lattice_size(&size).map_err(|e| match e {
+        SizeRefusal::Count(m) | SizeRefusal::Memory(m) => lattice_section.err("size", m),
+    })?;
     let periodic = lattice_section.boolean("periodic")?.unwrap_or(true);
     let lattice = Lattice::new(kind, &size, periodic).map_err(|e| lattice_section.err("size", e))?;
 

@@ -32,29 +32,13 @@ pub fn check_steps(steps: u64, max_steps: Option<u64>) -> Result<(), Failure> {
     liemid_app::shared::bounds::check_steps(steps, max_steps, "--max-steps").map_err(Failure::Input)
 }
 
-/// The step bound of an adaptive run, after its pre-flight: the steps at the start's pace,
-/// `(t_end − t0) z / ε` with `z` the start's step density (control), refused (exit 2) when
-/// beyond `--max-steps` (`max_steps`, [`DEFAULT_MAX_STEPS`] when not given). A run whose
-/// pace slows later is stopped at the returned bound.
-pub fn check_adaptive_steps(
-    (t0, t_end): (f64, f64),
-    control: f64,
-    eps: f64,
-    max_steps: Option<u64>,
-) -> Result<u64, Failure> {
-    let estimate = (t_end - t0) * control / eps;
-    let bound = max_steps.unwrap_or(DEFAULT_MAX_STEPS);
-    if !estimate.is_nan() && estimate <= bound as f64 {
-        return Ok(bound);
-    }
-    let limit = match max_steps {
-        Some(m) => format!("--max-steps {m}"),
-        None => format!("the default bound of {DEFAULT_MAX_STEPS} (--max-steps N to allow more)"),
-    };
-    Err(Failure::Input(format!(
-        "--adaptive {eps:e} to t = {t_end:e}: about {estimate:.1e} steps at the start's step {:.1e}, more than {limit}",
-        eps / control
-    )))
+/// The step bound of an adaptive run, after its pre-flight
+/// ([`liemid_app::shared::bounds::check_adaptive_steps`]): the steps at the start's pace,
+/// refused (exit 2) when beyond `--max-steps` (`max_steps`, [`DEFAULT_MAX_STEPS`] when not
+/// given). A run whose pace slows later is stopped at the returned bound.
+pub fn check_adaptive_steps(span: (f64, f64), control: f64, eps: f64, max_steps: Option<u64>) -> Result<u64, Failure> {
+    liemid_app::shared::bounds::check_adaptive_steps(span, control, eps, max_steps, ("--adaptive", "--max-steps"))
+        .map_err(Failure::Input)
 }
 
 /// A thread pool of `threads` (at most four per core), or of all cores.

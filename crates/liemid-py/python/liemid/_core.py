@@ -7,6 +7,9 @@ kg m²/s, torque in N m, time in s, mass in kg, lengths in m, gravity in m/s².
 from __future__ import annotations
 
 import json
+import math
+import os
+import re
 from dataclasses import dataclass, field
 from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
@@ -20,17 +23,47 @@ TorqueCallable = Callable[[FloatArray, float], ArrayLike]
 PotentialCallable = Callable[[FloatArray, float], float]
 
 
+# The checks every entry point shares: each argument is checked and converted here, with
+# errors that name it, before the compiled core sees it (which would otherwise raise
+# OverflowError for an integer beyond 64 bits, or echo a 300-digit number).
+
+_LONG_NUMBER = re.compile(r"\d{16,}")
+
+
+def _show(value: Any) -> str:
+    """`value` in an error message: one line of at most about 60 characters, arrays by
+    their shape, numbers of more than 15 digits in exponent form."""
+    if isinstance(value, np.ndarray):
+        return f"an array of shape {value.shape} ({value.dtype})"
+    if isinstance(value, (int, np.integer)) and not isinstance(value, bool) and abs(int(value)) >= 10**15:
+        v = int(value)
+        if v.bit_length() > 1000:
+            return f"an integer of about {int(v.bit_length() * math.log10(2)) + 1} digits"
+        return f"{float(v):.3e}"
+    try:
+        return _short(repr(value))
+    except (ValueError, RecursionError):
+        return f"a {type(value).__name__}"
+
+
+def _short(text: str) -> str:
+    """`text` on one line, at most about 60 characters, numbers of more than 15 digits in
+    exponent form."""
+    text = _LONG_NUMBER.sub(lambda m: f"{m.group()[0]}.{m.group()[1:4]}e{len(m.group()) - 1}", " ".join(text.split()))
+    return text if len(text) <= 60 else f"{text[:40]}... ({len(text)} characters)"
+
+
 def _array(name: str, value: ArrayLike, shape: Tuple[int, ...], *, finite: bool = True) -> FloatArray:
     """`value` as a C-contiguous float64 array of `shape`; errors name the argument."""
     try:
         a = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError) as e:
-        raise ValueError(f"{name}: cannot be read as numbers ({e})") from None
+    except (TypeError, ValueError, OverflowError) as e:
+        raise ValueError(f"{name}: cannot be read as numbers ({_short(str(e))})") from None
     if a.shape != shape:
         expected = "(" + ", ".join(str(s) for s in shape) + ("," if len(shape) == 1 else "") + ")"
         raise ValueError(f"{name}: expected shape {expected}, found {a.shape}")
     if finite and not np.all(np.isfinite(a)):
-        raise ValueError(f"{name}: must be finite, found {a.tolist()}")
+        raise ValueError(f"{name}: must be finite, found {_show(a.tolist())}")
     return np.ascontiguousarray(a)
 
 
@@ -40,13 +73,62 @@ def _vec3(name: str, value: ArrayLike) -> Tuple[float, float, float]:
 
 
 def _number(name: str, value: Any) -> float:
+    """A finite number (an int, a float, a numpy scalar, a numeric string)."""
+    if isinstance(value, np.ndarray) and value.shape != ():
+        raise ValueError(f"{name}: expected a number, found {_show(value)}")
     try:
         x = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name}: expected a number, found {value!r}") from None
+    except (TypeError, ValueError, OverflowError):
+        raise ValueError(f"{name}: expected a number, found {_show(value)}") from None
     if not np.isfinite(x):
         raise ValueError(f"{name}: must be finite, found {x}")
     return x
+
+
+def _count(name: str, value: Any, minimum: int = 0) -> int:
+    """A whole number from `minimum` to 2**64 - 1 (what the core takes): an int, a numpy
+    integer or a float with a whole value."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer, float, np.floating)):
+        raise TypeError(f"{name}: expected a whole number, found {type(value).__name__}")
+    if isinstance(value, (float, np.floating)) and not (math.isfinite(value) and float(value).is_integer()):
+        raise ValueError(f"{name}: expected a whole number, found {_show(value)}")
+    v = int(value)
+    if not minimum <= v < 2**64:
+        raise ValueError(f"{name}: expected a whole number from {minimum} to 2**64 - 1, found {_show(value)}")
+    return v
+
+
+def _text(name: str, value: Any) -> str:
+    """A string argument (a method, a problem, a kind): no other type is turned into one."""
+    if not isinstance(value, str):
+        raise TypeError(f"{name}: expected a string, found {type(value).__name__}")
+    return value
+
+
+def _names(name: str, value: Any) -> List[str]:
+    """A sequence of strings (a list of methods), not one string."""
+    if isinstance(value, (str, bytes)) or not isinstance(value, (list, tuple, np.ndarray)):
+        raise TypeError(f"{name}: expected a list of strings, found {type(value).__name__}")
+    return [_text(name, v) for v in value]
+
+
+def _path(name: str, value: Any) -> str:
+    """A file path: a string or an os.PathLike."""
+    if isinstance(value, os.PathLike):
+        value = os.fspath(value)
+    if not isinstance(value, str):
+        raise TypeError(f"{name}: expected a path (str or os.PathLike), found {type(value).__name__}")
+    return value
+
+
+def _max_steps(value: Any) -> Optional[int]:
+    """The step bound of a run: None (the default bound, 10⁹ steps) or a whole number of at
+    least 1."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"max_steps: expected a whole number of steps or None, found {type(value).__name__}")
+    return _count("max_steps", value, 1)
 
 
 class _Torque:
@@ -88,7 +170,7 @@ class Gravity(_Torque):
     def __post_init__(self) -> None:
         m = _number("mass", self.mass)
         if m < 0:
-            raise ValueError(f"mass: must be non-negative, found {m}")
+            raise ValueError(f"mass: must be non-negative, found {_show(m)}")
         object.__setattr__(self, "mass", m)
         object.__setattr__(self, "center_of_mass", _vec3("center_of_mass", self.center_of_mass))
         object.__setattr__(self, "gravity", _vec3("gravity", self.gravity))
@@ -188,7 +270,7 @@ class RigidBody:
         torque = self.torque
         if torque is not None and not isinstance(torque, _Torque):
             if not callable(torque):
-                raise ValueError(f"torque: expected Gravity, ConstantTorque, a sum of them or a callable, found {torque!r}")
+                raise ValueError(f"torque: expected Gravity, ConstantTorque, a sum of them or a callable, found {_show(torque)}")
             torque = CallableTorque(torque, self.potential)
         elif self.potential is not None:
             raise ValueError("potential: only a callable torque takes a potential (Gravity has its own)")
@@ -345,6 +427,7 @@ def integrate(
     every: int = 1,
     adaptive: Optional[float] = None,
     rho: str = "omega",
+    max_steps: Optional[int] = None,
 ) -> Solution:
     """Integrate a rigid body from ``t0`` to ``t_end`` with the fixed step ``step``, or with
     reversible adaptive steps of accuracy ``adaptive``.
@@ -391,6 +474,10 @@ def integrate(
         The step density of ``adaptive``: ``omega`` (|Ω|, default: a step turns the body by
         about ``eps`` radians) or ``torque`` ((|Ω|² + |T|/I_min)^½, two more torque
         evaluations per step).
+    max_steps : int, optional
+        The most steps the run may take (default 10⁹), checked before the first step; an
+        adaptive run's steps are estimated at the start's pace, and it stops there if the
+        pace slows (``RuntimeError``).
 
     Returns
     -------
@@ -399,23 +486,29 @@ def integrate(
     Raises
     ------
     ValueError
-        Bad input; the message names the argument.
+        Bad input; the message names the argument. A run of more than ``max_steps`` steps.
+    MemoryError
+        The samples the run would keep do not fit in the memory available (before anything
+        is allocated; the message gives both sizes): raise ``every``.
     ConvergenceError
         A step too large for the rotation rate (with ``t`` and ``h``).
+    KeyboardInterrupt
+        Ctrl-C during the run (no result is returned).
     """
     if not isinstance(body, RigidBody):
         raise ValueError(f"body: expected a liemid.RigidBody, found {type(body).__name__}")
     kind, values = _attitude(rotation, rotation_vector, quaternion)
     mkind, mvalue = _momentum(angular_velocity, angular_momentum)
     if not isinstance(every, (int, np.integer)) or isinstance(every, bool) or every < 1:
-        raise ValueError(f"every: expected a whole number of at least 1, found {every!r}")
+        raise ValueError(f"every: expected a whole number of at least 1, found {_show(every)}")
+    every = _count("every", every, 1)
     if (step is None) == (adaptive is None):
         raise ValueError("give exactly one of step (s, a fixed step) or adaptive (eps, reversible adaptive steps)")
     eps = None if adaptive is None else _number("adaptive", adaptive)
     if eps is not None and not eps > 0.0:
-        raise ValueError(f"adaptive: expected a positive accuracy eps, found {adaptive!r}")
+        raise ValueError(f"adaptive: expected a positive accuracy eps, found {_show(adaptive)}")
     if rho not in ("omega", "torque"):
-        raise ValueError(f"rho: expected 'omega' or 'torque', found {rho!r}")
+        raise ValueError(f"rho: expected 'omega' or 'torque', found {_show(rho)}")
     inertia9, gravity, constant, torque, potential = body._model
     d = _liemid.integrate(
         inertia9,
@@ -429,10 +522,11 @@ def integrate(
         _number("t0", t0),
         _number("t_end", t_end),
         0.0 if step is None else _number("step", step),
-        str(method),
-        int(every),
+        _text("method", method),
+        every,
         eps,
         rho if eps is not None else None,
+        _max_steps(max_steps),
     )
     n = len(d["t"])
     a = d.get("adaptive")
@@ -523,6 +617,7 @@ def ensemble(
     method: str = "liemid-ea",
     t0: float = 0.0,
     threads: int = 0,
+    max_steps: Optional[int] = None,
 ) -> EnsembleState:
     """Integrate N independent copies of ``body`` from N initial states, on ``threads``
     threads (0: all cores) with the GIL released; the result is bit-for-bit the same for
@@ -532,14 +627,17 @@ def ensemble(
     (N, 4) (default identity); momenta: ``angular_velocities`` or ``angular_momenta``
     (N, 3), body frame. A single row (shape (3, 3), (3,) or (4,)) is broadcast to N.
     Only built-in torques (Gravity, ConstantTorque and sums): a Python callable would
-    hold the GIL at every step.
+    hold the GIL at every step. Each body's steps are held to ``max_steps`` (default 10⁹)
+    before the first (``ValueError``); Ctrl-C stops the bodies within a few steps and raises
+    ``KeyboardInterrupt``.
     """
     if not isinstance(body, RigidBody):
         raise ValueError(f"body: expected a liemid.RigidBody, found {type(body).__name__}")
     if body.has_callable:
         raise ValueError("body: an ensemble needs a built-in torque (Gravity, ConstantTorque or sums), not a Python callable")
     if not isinstance(threads, (int, np.integer)) or threads < 0:
-        raise ValueError(f"threads: expected a whole number >= 0, found {threads!r}")
+        raise ValueError(f"threads: expected a whole number >= 0, found {_show(threads)}")
+    threads = _count("threads", threads)
     name, att, mom_name, mom = _ensemble_states(rotations, rotation_vectors, quaternions, angular_velocities, angular_momenta)
     n = att.shape[0]
     mkind = "angular_velocity" if mom_name == "angular_velocities" else "angular_momentum"
@@ -556,8 +654,9 @@ def ensemble(
         _number("t0", t0),
         _number("t_end", t_end),
         _number("step", step),
-        str(method),
-        int(threads),
+        _text("method", method),
+        threads,
+        _max_steps(max_steps),
     )
     return EnsembleState(t=float(t_end), pi=pi.reshape(n, 3), rotation=r.reshape(n, 3, 3))
 
@@ -571,13 +670,14 @@ def methods() -> List[Dict[str, Any]]:
     ]
 
 
-def _scenario_text(scenario: Optional[str]) -> Optional[str]:
+def _scenario_text(scenario: Any) -> Optional[str]:
+    """A scenario's text: given as text, or read from a ``.toml`` file (a regular file of at
+    most 16 MiB, as the command reads it: a FIFO is refused, not waited on)."""
     if scenario is None:
         return None
-    text = str(scenario)
-    if "\n" not in text and text.endswith(".toml"):
-        with open(text, encoding="utf-8") as f:
-            return f.read()
+    text = _path("scenario", scenario)
+    if isinstance(scenario, os.PathLike) or ("\n" not in text and text.endswith(".toml")):
+        return _liemid.read_input("scenario", text)
     return text
 
 
@@ -588,19 +688,24 @@ def converge(
     methods: Optional[Sequence[str]] = None,
     steps: Optional[Sequence[float]] = None,
     t_end: Optional[float] = None,
+    max_steps: Optional[int] = None,
 ) -> Dict[str, Any]:
     """The convergence study of ``liemid converge`` (the paper's Figure 1): the errors at
     ``t_end`` of every method for a sequence of steps against a reference computed with
     it (RK4 at h/64 of the smallest step, with a Richardson estimate of its own error).
     Returns the same data as the CLI's JSON. ``scenario``: a TOML file name or text
-    instead of a built-in ``problem``."""
+    instead of a built-in ``problem``. The steps of all its runs together are held to
+    ``max_steps`` (default 10⁹) before the first; Ctrl-C stops it between runs."""
+    if steps is not None and (isinstance(steps, (str, bytes)) or not isinstance(steps, (list, tuple, np.ndarray))):
+        raise TypeError(f"steps: expected a list of steps, found {type(steps).__name__}")
     text = json.loads(
         _liemid.converge(
-            problem,
+            _text("problem", problem),
             _scenario_text(scenario),
-            None if methods is None else [str(m) for m in methods],
-            None if steps is None else [float(h) for h in steps],
+            None if methods is None else _names("methods", methods),
+            None if steps is None else [_number("steps", h) for h in steps],
             None if t_end is None else _number("t_end", t_end),
+            _max_steps(max_steps),
         )
     )
     assert isinstance(text, dict)
@@ -617,20 +722,25 @@ def work_precision(
     budget: float = 0.5,
     min_error: float = 1e-11,
     max_points: int = 16,
+    max_steps: Optional[int] = None,
 ) -> Dict[str, Any]:
     """The work-precision study of ``liemid work-precision``: attitude error at ``t_end``
     against the median CPU time of ``repetitions`` runs, for every method and the DOP853
-    (``dop853``) and RK4 baselines. Returns the same data as the CLI's JSON."""
+    (``dop853``) and RK4 baselines. Returns the same data as the CLI's JSON. A study whose
+    coarsest run (a step turning the body by about 64 rad) would take more than
+    ``max_steps`` steps (default 10⁹) raises ``ValueError`` before the first run; Ctrl-C
+    stops it between runs and within its references."""
     text = json.loads(
         _liemid.work_precision(
-            problem,
+            _text("problem", problem),
             _scenario_text(scenario),
-            None if methods is None else [str(m) for m in methods],
+            None if methods is None else _names("methods", methods),
             None if t_end is None else _number("t_end", t_end),
-            int(repetitions),
+            _count("repetitions", repetitions),
             _number("budget", budget),
             _number("min_error", min_error),
-            int(max_points),
+            _count("max_points", max_points),
+            _max_steps(max_steps),
         )
     )
     assert isinstance(text, dict)

@@ -27,6 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from . import _liemid, _view
+from ._core import _count, _max_steps, _path, _text
 
 __all__ = ["BeamRun", "methods", "problems", "run"]
 
@@ -60,8 +61,7 @@ class BeamRun:
             raise ValueError("this run kept no frames: run it with beam.run(..., view=True)")
         if path is None:
             return self.page
-        Path(path).write_text(self.page, encoding="utf-8")
-        return str(path)
+        return str(_liemid.write_output("view", _path("path", path), self.page))
 
     def _repr_html_(self) -> Optional[str]:
         return None if self.page is None else _view.iframe(self.page)
@@ -88,6 +88,7 @@ def run(
     force_step: bool = False,
     view: bool = False,
     drift: Optional[str] = None,
+    max_steps: Optional[int] = None,
 ) -> BeamRun:
     """Run a benchmark (``problems()``) or a structure (``file`` path or its ``text``).
 
@@ -97,28 +98,30 @@ def run(
     ``liemid.ConvergenceError``. With ``view=True`` the run keeps its 3-D page
     (``BeamRun.view``). ``drift`` is the liemid methods' node rotation, ``"midpoint"`` or
     ``"variational"`` (default: the file's, else midpoint; ``BeamRun.drift`` is ``None``
-    for Newmark, which refuses ``"variational"``).
+    for Newmark, which refuses ``"variational"``). Once the step is known and before the
+    first, a run of more than ``max_steps`` steps (default 10⁹) raises ``ValueError``, and
+    samples that would not fit in the memory available ``MemoryError`` (raise ``sample``).
+    Ctrl-C stops the run with ``KeyboardInterrupt``.
     """
     sources = [s is not None for s in (problem, file, text)]
     if sum(sources) > 1:
         raise ValueError("give one of problem, file, text")
     if file is not None:
-        text = Path(file).read_text()
+        text = _liemid.read_input("file", _path("file", file))
     if problem is None and text is None:
         problem = "right-angle-cantilever"
-    if elements_per_member is not None and (isinstance(elements_per_member, bool) or int(elements_per_member) < 1):
-        raise ValueError(f"elements_per_member: at least 1, found {elements_per_member}")
     out = _liemid.beam_run(
-        problem,
-        text,
-        None if elements_per_member is None else int(elements_per_member),
-        method,
+        None if problem is None else _text("problem", problem),
+        None if text is None else _text("text", text),
+        None if elements_per_member is None else _count("elements_per_member", elements_per_member, 1),
+        None if method is None else _text("method", method),
         _optional_number("step", step),
         _optional_number("t_end", t_end),
         _optional_number("sample", sample),
         bool(force_step),
         bool(view),
-        None if drift is None else str(drift),
+        None if drift is None else _text("drift", drift),
+        _max_steps(max_steps),
     )
     tracked = {name: np.asarray(out["tracked"][name]).reshape(-1, 3) for name in out["names"]}
     return BeamRun(

@@ -33,6 +33,7 @@ def ensemble(
     t0: float = 0.0,
     chunk_size: int = 10_000,
     threads_per_task: int = 1,
+    max_steps: Optional[int] = None,
 ) -> EnsembleState:
     """``liemid.ensemble`` on the workers of a ``dask.distributed.Client``: the same
     arguments, plus ``chunk_size`` bodies per task and ``threads_per_task``."""
@@ -40,7 +41,7 @@ def ensemble(
     n = att.shape[0]
     if chunk_size < 1:
         raise ValueError(f"chunk_size: must be at least 1, found {chunk_size}")
-    kwargs: Dict[str, Any] = dict(t_end=t_end, step=step, method=method, t0=t0, threads=threads_per_task)
+    kwargs: Dict[str, Any] = dict(t_end=t_end, step=step, method=method, t0=t0, threads=threads_per_task, max_steps=max_steps)
     starts = range(0, n, chunk_size)
     futures = [
         client.submit(_chunk, body, att_name, att[s : s + chunk_size], mom_name, mom[s : s + chunk_size], kwargs, pure=False)

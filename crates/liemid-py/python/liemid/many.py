@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _liemid, _view
-from ._core import FloatArray, _array, _broadcast, _number, _vec3
+from ._core import FloatArray, _array, _broadcast, _count, _max_steps, _number, _text, _vec3
 
 __all__ = ["Dipoles", "Independent", "System", "Totals"]
 
@@ -65,7 +65,7 @@ class Dipoles:
             opt("cutoff", self.cutoff),
             opt("box_length", self.box_length),
             opt("switch_start", self.switch_start),
-            str(self.cutoff_form),
+            _text("cutoff_form", self.cutoff_form),
         )
 
 
@@ -116,7 +116,9 @@ class System:
         model: Union[Independent, Dipoles] = Independent(),
         rotation: str = "midpoint",
     ) -> None:
-        m = np.asarray(masses, dtype=np.float64)
+        if not isinstance(model, (Independent, Dipoles)):
+            raise TypeError(f"model: expected liemid.many.Independent or Dipoles, found {type(model).__name__}")
+        m = _masses(masses)
         if m.ndim != 1:
             raise ValueError(f"masses: expected shape (N,), found {m.shape}")
         n = m.shape[0]
@@ -141,7 +143,9 @@ class System:
         number ``density`` in a periodic box, random orientations and momenta from
         ``seed``."""
         self = cls.__new__(cls)
-        self._inner = _liemid.ManyBodies.dipolar_fluid(int(n), _number("density", density), int(seed), _number("cutoff", cutoff))
+        self._inner = _liemid.ManyBodies.dipolar_fluid(
+            _count("n", n), _number("density", density), _count("seed", seed), _number("cutoff", cutoff)
+        )
         self.rotation = rotation
         return self
 
@@ -159,9 +163,12 @@ class System:
             )
         self._inner.set_rotation(kind)
 
-    def step(self, h: float, steps: int = 1, *, threads: int = 0) -> None:
-        """Take ``steps`` steps of ``h`` (GIL released; ``threads`` 0 for all cores)."""
-        self._inner.step(_number("h", h), int(steps), int(threads))
+    def step(self, h: float, steps: int = 1, *, threads: int = 0, max_steps: Optional[int] = None) -> None:
+        """Take ``steps`` steps of ``h`` (GIL released; ``threads`` 0 for all cores). More
+        than ``max_steps`` steps (default 10⁹) raise ``ValueError`` before the first; Ctrl-C
+        stops the run with ``KeyboardInterrupt`` (the bodies are then left where it
+        stopped)."""
+        self._inner.step(_number("h", h), _count("steps", steps), _count("threads", threads), _max_steps(max_steps))
 
     def totals(self) -> Totals:
         """Energy and total momenta now."""
@@ -195,6 +202,13 @@ class System:
         x, p, r, pi = self._inner.arrays()
         n = len(self)
         return x.reshape(n, 3), p.reshape(n, 3), r.reshape(n, 3, 3), pi.reshape(n, 3)
+
+
+def _masses(masses: ArrayLike) -> FloatArray:
+    try:
+        return np.asarray(masses, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError):
+        raise ValueError(f"masses: cannot be read as numbers, found {type(masses).__name__}") from None
 
 
 def _quaternions(r: FloatArray) -> FloatArray:

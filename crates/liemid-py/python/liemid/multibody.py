@@ -31,6 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from . import _liemid, _view
+from ._core import _count, _max_steps, _path, _show, _text
 
 __all__ = ["Model", "MultibodyRun", "load", "methods", "problem", "problems"]
 
@@ -129,6 +130,7 @@ class Model:
         t_end: Optional[float] = None,
         every: int = 1,
         drift: str = "midpoint",
+        max_steps: Optional[int] = None,
     ) -> MultibodyRun:
         """Integrate from the model's start to ``t_end`` at ``step`` (defaults: the file's
         ``timestep`` or 1e-3 s; the problem's end time or 1 s), sampling every ``every``
@@ -137,12 +139,18 @@ class Model:
         joint limits are not enforced by the joint-space ones (``rk4``, ``dop853``): the
         run's ``notes`` say so, and each is also issued as a ``UserWarning``. ``drift`` is the
         liemid methods' torque-free rotation: ``"midpoint"`` (EA's) or ``"variational"``
-        (LIEMID[EAV]'s, a Lie–Poisson drift)."""
+        (LIEMID[EAV]'s, a Lie–Poisson drift). Before the first step, a run of more than
+        ``max_steps`` steps (default 10⁹) raises ``ValueError``, and samples that would not
+        fit in the memory available ``MemoryError`` (raise ``every``). Ctrl-C stops the run
+        with ``KeyboardInterrupt``."""
         h = self._core.default_step if step is None else _number("step", step)
         end = self._core.default_t_end if t_end is None else _number("t_end", t_end)
         if isinstance(every, bool) or not isinstance(every, int) or every < 1:
-            raise ValueError(f"every: a whole number of steps, at least 1, found {every!r}")
-        out = _liemid.multibody_run(self._core, str(method), h, end, every, str(drift))
+            raise ValueError(f"every: a whole number of steps, at least 1, found {_show(every)}")
+        every = _count("every", every, 1)
+        out = _liemid.multibody_run(
+            self._core, _text("method", method), h, end, every, _text("drift", drift), _max_steps(max_steps)
+        )
         notes = [str(n) for n in out["notes"]]
         for note in notes:
             warnings.warn(f"{self.name}: {note}", UserWarning, stacklevel=2)
@@ -170,12 +178,12 @@ class Model:
 def load(path: Union[str, Path]) -> Model:
     """Read an MJCF (``.xml``), URDF (``.urdf``) or scenario (``.toml``) file. A malformed
     or non-physical file raises ``ValueError`` naming the element and line."""
-    return Model(_liemid.multibody_load(str(path)))
+    return Model(_liemid.multibody_load(_path("path", path)))
 
 
 def problem(name: str) -> Model:
     """A built-in problem (see :func:`problems`)."""
-    return Model(_liemid.multibody_problem(name))
+    return Model(_liemid.multibody_problem(_text("name", name)))
 
 
 def problems() -> List[Tuple[str, str]]:

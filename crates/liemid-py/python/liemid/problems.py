@@ -28,7 +28,15 @@ class Problem:
     t_end: float
     step: float
 
-    def integrate(self, *, method: str = "liemid-ea", step: Optional[float] = None, t_end: Optional[float] = None, every: int = 1) -> Solution:
+    def integrate(
+        self,
+        *,
+        method: str = "liemid-ea",
+        step: Optional[float] = None,
+        t_end: Optional[float] = None,
+        every: int = 1,
+        max_steps: Optional[int] = None,
+    ) -> Solution:
         """``liemid.integrate`` from this problem's initial state."""
         return integrate(
             self.body,
@@ -38,6 +46,7 @@ class Problem:
             rotation=self.rotation,
             angular_momentum=self.angular_momentum,
             every=every,
+            max_steps=max_steps,
         )
 
 

@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from . import _liemid, _view
-from ._core import _array, _number
+from ._core import _array, _count, _max_steps, _number, _show, _text
 
 __all__ = ["System", "SpinRun", "integrate", "methods", "near_z", "problem"]
 
@@ -70,9 +70,11 @@ class System:
     ) -> None:
         if not isinstance(kind, str):
             raise TypeError(f"kind: expected a string, found {type(kind).__name__}")
-        sizes = [int(s) for s in size]
+        if isinstance(size, (str, bytes)) or not isinstance(size, (list, tuple, np.ndarray)):
+            raise TypeError(f"size: expected a sequence of sites along each axis, found {type(size).__name__}")
+        sizes = [_count("size", s) for s in size]
         if any(s < 1 for s in sizes):
-            raise ValueError(f"size: every axis needs at least one site, found {sizes}")
+            raise ValueError(f"size: every axis needs at least one site, found {_show(sizes)}")
         n = _array("anisotropy_axis", anisotropy_axis, (3,))
         b = _array("field", field, (3,))
         self._inner = _liemid.Spins(
@@ -86,7 +88,7 @@ class System:
             _number("mu_s", mu_s),
             _number("damping", damping),
             _number("dmi", dmi),
-            str(dmi_kind),
+            _text("dmi_kind", dmi_kind),
         )
 
     def __len__(self) -> int:
@@ -121,6 +123,10 @@ class SpinRun:
         """The final spins of the run on ``system``'s lattice as a self-contained 3-D page
         (arrows coloured by S_z) with the relative energy error along the run: written to
         ``path`` (returns it), or returned as HTML without a path."""
+        if not isinstance(system, System):
+            raise TypeError(f"system: expected liemid.spins.System, found {type(system).__name__}")
+        if len(system) != len(self.final):
+            raise ValueError(f"system: {len(system)} sites, but the run has {len(self.final)} spins")
         nx, ny, _ = system.size
         n = len(system)
         i = np.arange(n)
@@ -146,23 +152,31 @@ def integrate(
     method: str = "split",
     every: int = 10,
     threads: int = 0,
+    max_steps: Optional[int] = None,
 ) -> SpinRun:
     """Integrate from ``spins`` (N, 3) to ``t_end`` (ps) with ``step``; observe every
     ``every`` steps. ``threads`` 0 uses all cores; results are the same for any count. The
-    GIL is released while stepping."""
+    GIL is released while stepping. Before the first step, a run of more than
+    ``max_steps`` steps (default 10⁹) raises ``ValueError``, and observations that would
+    not fit in the memory available ``MemoryError``. Ctrl-C stops the run with
+    ``KeyboardInterrupt``."""
     if not isinstance(system, System):
         raise TypeError(f"system: expected liemid.spins.System, found {type(system).__name__}")
-    if int(every) < 1:
-        raise ValueError(f"every: must be at least 1, found {every}")
     t, e, m, final, seconds = system._inner.integrate(
-        system._flat(spins), str(method), _number("step", step), _number("t_end", t_end), int(every), int(threads)
+        system._flat(spins),
+        _text("method", method),
+        _number("step", step),
+        _number("t_end", t_end),
+        _count("every", every, 1),
+        _count("threads", threads),
+        _max_steps(max_steps),
     )
     return SpinRun(t, e, m.reshape(-1, 3), final.reshape(-1, 3), float(seconds))
 
 
 def problem(name: str) -> Tuple[System, FloatArray]:
     """The built-in problem ``name`` (``"square-64"``, ``"chain-64"``, ``"skyrmion"``): its system and start."""
-    inner, flat, _step, _t_end = _liemid.Spins.problem(str(name))
+    inner, flat, _step, _t_end = _liemid.Spins.problem(_text("name", name))
     system = System.__new__(System)
     system._inner = inner
     return system, flat.reshape(-1, 3)
@@ -170,7 +184,7 @@ def problem(name: str) -> Tuple[System, FloatArray]:
 
 def near_z(n: int, *, max_tilt: float = 0.3, seed: int = 1) -> FloatArray:
     """``n`` spins tilted from +z by angles uniform in ``[0, max_tilt]`` rad (seeded)."""
-    return _liemid.spins_near_z(int(n), _number("max_tilt", max_tilt), int(seed)).reshape(-1, 3)
+    return _liemid.spins_near_z(_count("n", n), _number("max_tilt", max_tilt), _count("seed", seed)).reshape(-1, 3)
 
 
 def methods() -> List[Tuple[str, int, bool, str]]:
