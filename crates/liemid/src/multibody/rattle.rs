@@ -82,7 +82,7 @@ impl Rattle {
         w.start_rows_at(system, state);
         let result = w
             .solver
-            .factor_symmetric(&system.mass, &system.inertia_matrix, &system.pairs, &w.rows0);
+            .factor_symmetric(&system.mass, system.rotational_blocks(), &system.pairs, &w.rows0);
         w.reset();
         result
     }
