@@ -15,7 +15,7 @@
 //! (`𝕁/τ` plus a non-symmetric block per body): the pivots are general 3x3 blocks,
 //! inverted once per factorization. Factor and solve cost O(bodies) and allocate nothing.
 //!
-//! Reference: docs/theory/multibody.md §8.
+//! Reference: docs/theory/multibody.md §7.
 
 use crate::linalg::{Mat3, Vec3};
 
@@ -34,7 +34,7 @@ pub(super) struct Coupling {
 
 /// `𝕁` of a system with hinge armature: per-body blocks, couplings, and its factor.
 ///
-/// Reference: docs/theory/multibody.md §8.
+/// Reference: docs/theory/multibody.md §7.
 #[derive(Clone, Debug)]
 pub(super) struct Armature {
     /// `𝕁_ii = I_i + Σ a n nᵀ`.
@@ -147,7 +147,7 @@ impl Armature {
 /// the third-order predictor `Ψ = τ 𝕁⁻¹ (P + ½ P × Ψ₀)`, `Ψ₀ = τ 𝕁⁻¹ P` (or from `psi`
 /// itself with `warm`), stops by the crate's quadratic rule on `max_i |δ_i|`.
 ///
-/// Reference: docs/theory/multibody.md §8.
+/// Reference: docs/theory/multibody.md §7.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn coupled_increments(
     arm: &Armature,

@@ -199,7 +199,7 @@ impl SymmetricTree {
     /// blocks passed to [`SymmetricTree::factor`] must then be `𝕁`'s diagonal blocks).
     /// Eliminating a coupled child `b` fills only its joint's parent block,
     /// `G'_{j,p} = G_{j,p} − (Y_bᵀ z_b)(0, n_p)ᵀ`, and lowers the parent's pivot by
-    /// `|z_b|² (0, n_p)(0, n_p)ᵀ`: the tree's pattern (docs/theory/multibody.md §8).
+    /// `|z_b|² (0, n_p)(0, n_p)ᵀ`: the tree's pattern (docs/theory/multibody.md §7).
     pub(super) fn set_armature(&mut self, coupling: &[Option<Coupling>]) {
         self.arm = coupling.to_vec();
         self.za = vec![[0.0; 6]; coupling.len()];

@@ -181,7 +181,7 @@ pub struct Simulation {
 impl Simulation {
     /// What every front end runs: `model` by `method` under the model policy of the
     /// maximal-coordinate methods. Hinge armature is kept, exactly (docs/theory/multibody.md
-    /// §8); armature on other joints is dropped ([`ModelNote::ArmatureDropped`] names them:
+    /// §7); armature on other joints is dropped ([`ModelNote::ArmatureDropped`] names them:
     /// configuration-dependent in maximal coordinates), and a
     /// start off the loop-closing joints (a keyframe written for MuJoCo's soft equalities)
     /// is projected onto them ([`ModelNote::StartProjected`] when the violation exceeded

@@ -491,7 +491,7 @@ impl Model {
     ///   joint's linear velocity is that of the child frame origin, in the parent frame.
     ///
     /// Then `c = x + R s`, `p = m v_c`, `Π = I Rᵀ ω` (plus the hinge armature's `a q̇ n_c` on
-    /// the child and `−a q̇ n_p` on the parent: `Π = 𝕁 W`, docs/theory/multibody.md §8). Loop-closing joints are not used:
+    /// the child and `−a q̇ n_p` on the parent: `Π = 𝕁 W`, docs/theory/multibody.md §7). Loop-closing joints are not used:
     /// the coordinates must satisfy them; check with
     /// [`super::MultibodySystem::constraint_violation`] and bring loop-violating velocities
     /// onto the constraints with [`super::Rattle::project_velocities`].
@@ -607,7 +607,7 @@ impl Model {
             state.pi[j] = inertia.apply(state.rotation[j].tr_mul_vec(w[j]));
         }
         // Hinge armature: `Π = 𝕁 W`, each armatured hinge adds `a q̇ n_c` to its child's
-        // momentum and `−a q̇ n_p` to its parent's (docs/theory/multibody.md §8).
+        // momentum and `−a q̇ n_p` to its parent's (docs/theory/multibody.md §7).
         for k in 0..nb {
             let a = self.joints[k].armature;
             if a == 0.0 || !matches!(self.joints[k].kind, JointKind::Hinge { .. }) {

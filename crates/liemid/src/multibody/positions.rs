@@ -151,7 +151,7 @@ impl Workspace {
 
     /// The drift with hinge armature: `c⁺` as without, the rotations by two coupled solves
     /// over the tree (`Ψ₁` from `P`, `Π_a = exp(−Ψ₁) P`, `Ψ₂` from `Π_a`, each with `h/2`),
-    /// each body's spatial momentum `R_i Π_i` kept (docs/theory/multibody.md §8).
+    /// each body's spatial momentum `R_i Π_i` kept (docs/theory/multibody.md §7).
     fn coupled_drift(
         &mut self,
         arm: &super::armature::Armature,

@@ -120,7 +120,7 @@ impl MultibodySystem {
 
     /// The energy: `Σ |p|²/2m + ½ Π·I⁻¹Π − Σ (m g + F_i)·c + Σ ½ k (q − q_ref)²` (the
     /// constant body torques have no potential); with hinge armature `½ Πᵀ 𝕁⁻¹ Π` in place
-    /// of `½ Π·I⁻¹Π`, which includes every `½ a q̇²` (docs/theory/multibody.md §8).
+    /// of `½ Π·I⁻¹Π`, which includes every `½ a q̇²` (docs/theory/multibody.md §7).
     #[must_use]
     pub fn energy(&self, state: &MultibodyState) -> f64 {
         let mut e = 0.0;

@@ -82,7 +82,7 @@ impl MultibodySystem {
     /// # Errors
     /// [`Model::validate`]'s errors; [`Error::InvalidModel`] for armature on a joint other
     /// than a tree hinge (slide, ball and free armature are configuration-dependent in
-    /// maximal coordinates, docs/theory/multibody.md §8).
+    /// maximal coordinates, docs/theory/multibody.md §7).
     pub fn new(model: &Model) -> Result<Self> {
         model.validate()?;
         let nb = model.bodies.len();
@@ -167,13 +167,13 @@ impl MultibodySystem {
     }
 
     /// The rotational body blocks of the constraint solves: `I_i`, or `𝕁_ii` with hinge
-    /// armature (docs/theory/multibody.md §8).
+    /// armature (docs/theory/multibody.md §7).
     pub(super) fn rotational_blocks(&self) -> &[Mat3] {
         self.armature.as_ref().map_or(&self.inertia_matrix, |a| &a.block)
     }
 
     /// Whether some hinge has armature: the rotations then drift as one coupled system
-    /// (docs/theory/multibody.md §8).
+    /// (docs/theory/multibody.md §7).
     #[must_use]
     pub fn has_armature(&self) -> bool {
         self.armature.is_some()

@@ -337,7 +337,7 @@ impl Workspace {
     }
 
     /// `omega ← I⁻¹ omega` per body, or `𝕁⁻¹ omega` in tree order with hinge armature
-    /// (docs/theory/multibody.md §8).
+    /// (docs/theory/multibody.md §7).
     pub(super) fn rates_in_place(&mut self, sys: &MultibodySystem) {
         match &sys.armature {
             Some(a) => a.solve(&mut self.omega),

@@ -1,4 +1,4 @@
-//! Hinge armature, exact in maximal coordinates (docs/theory/multibody.md §8): the
+//! Hinge armature, exact in maximal coordinates (docs/theory/multibody.md §7): the
 //! kinetic energy against the joint-space mass matrix, orders 2 and 4 against the
 //! joint-space reference, reversal, constraints, energy, momenta, no allocation.
 

@@ -181,7 +181,7 @@ fn validation_names_the_culprit() {
     let mut m = problems::test_chain();
     m.qpos = Some(vec![0.0; 3]);
     assert!(m.validate().unwrap_err().to_string().contains("qpos"));
-    // Armature is exact on tree hinges only (docs/theory/multibody.md §8): the ball's is
+    // Armature is exact on tree hinges only (docs/theory/multibody.md §7): the ball's is
     // refused, naming the joint.
     let mut m = problems::test_chain();
     m.joints[0].armature = 0.1;
