@@ -89,7 +89,9 @@ impl MultibodySystem {
         let nj = model.joints.len();
         for (k, j) in model.joints.iter().enumerate() {
             let hinge = matches!(j.kind, JointKind::Hinge { .. });
-            if j.armature != 0.0 && (!hinge || k >= nb || !(j.armature > 0.0) || !j.armature.is_finite()) {
+            if j.armature != 0.0
+                && (!hinge || k >= nb || j.armature.is_nan() || j.armature <= 0.0 || !j.armature.is_finite())
+            {
                 return Err(Error::InvalidModel {
                     reason: format!(
                         "joint `{}` ({k}): armature = {} is supported on tree hinges only (positive): a rotor inertia \

@@ -323,8 +323,8 @@ impl Workspace {
 
     pub(super) fn velocities(&mut self, sys: &MultibodySystem, p: &[Vec3], pi: &[Vec3]) {
         if let Some(a) = &sys.armature {
-            for i in 0..sys.mass.len() {
-                self.vel[i] = p[i] * (1.0 / sys.mass[i]);
+            for ((v, p), m) in self.vel.iter_mut().zip(p).zip(&sys.mass) {
+                *v = *p * (1.0 / m);
             }
             self.omega.copy_from_slice(pi);
             a.solve(&mut self.omega);
