@@ -39,6 +39,7 @@
 
 use crate::linalg::Mat3;
 
+use super::armature::Coupling;
 use super::blocks::{child_part, dot6_pairwise, parent_part, Blk, SingularPivot, PIVOT_TOLERANCE, V6};
 use super::constraints::JointRows;
 
@@ -79,6 +80,10 @@ const ZERO_FACTOR: BodyFactor = BodyFactor {
 pub(super) struct SymmetricTree {
     parent: Vec<Option<usize>>,
     factors: Vec<BodyFactor>,
+    /// Hinge armature's child–parent couplings (empty: none) and, per coupled body `b`,
+    /// `z_b = −a L_b⁻¹ (0, n_c)`: the coupling `𝕁_bp = −a (0, n_c)(0, n_p)ᵀ` after `L_b`.
+    arm: Vec<Option<Coupling>>,
+    za: Vec<V6>,
 }
 
 #[inline(always)]
@@ -185,6 +190,27 @@ impl SymmetricTree {
         SymmetricTree {
             parent: parents.to_vec(),
             factors: vec![ZERO_FACTOR; parents.len()],
+            arm: Vec::new(),
+            za: Vec::new(),
+        }
+    }
+
+    /// Couple the rotational parts of hinge armature's children and parents (the body
+    /// blocks passed to [`SymmetricTree::factor`] must then be `𝕁`'s diagonal blocks).
+    /// Eliminating a coupled child `b` fills only its joint's parent block,
+    /// `G'_{j,p} = G_{j,p} − (Y_bᵀ z_b)(0, n_p)ᵀ`, and lowers the parent's pivot by
+    /// `|z_b|² (0, n_p)(0, n_p)ᵀ`: the tree's pattern (docs/theory/multibody.md §7).
+    pub(super) fn set_armature(&mut self, coupling: &[Option<Coupling>]) {
+        self.arm = coupling.to_vec();
+        self.za = vec![[0.0; 6]; coupling.len()];
+    }
+
+    #[inline]
+    fn coupling(&self, b: usize) -> Option<Coupling> {
+        if self.arm.is_empty() {
+            None
+        } else {
+            self.arm[b]
         }
     }
 
@@ -255,8 +281,21 @@ impl SymmetricTree {
             invert_lower::<S>(&mut link.lj, &link.ilj);
             return Ok(());
         };
+        let arm = if self.arm.is_empty() { None } else { self.arm[b] };
+        let mut za = [0.0; 6];
+        if let Some(c) = arm {
+            za = [0.0, 0.0, 0.0, -c.a * c.n_c.x, -c.a * c.n_c.y, -c.a * c.n_c.z];
+            forward::<6>(&link.l, &link.il, &mut za);
+            self.za[b] = za;
+        }
         for k in 0..S {
             let mut v = parent_part(&rows.grad[k]);
+            if let Some(c) = arm {
+                let d = dot6_pairwise(&link.yb[k], &za);
+                v[3] -= d * c.n_p.x;
+                v[4] -= d * c.n_p.y;
+                v[5] -= d * c.n_p.z;
+            }
             for j in 0..k {
                 let f = -link.lj[k][j];
                 let yj = link.yj[j];
@@ -275,6 +314,15 @@ impl SymmetricTree {
                     acc += yj[k][r] * yj[k][c];
                 }
                 d[r][c] += acc;
+            }
+        }
+        if let Some(c) = arm {
+            let zz = dot6_pairwise(&za, &za);
+            let n = [c.n_p.x, c.n_p.y, c.n_p.z];
+            for r in 0..3 {
+                for q in 0..=r {
+                    d[3 + r][3 + q] -= zz * n[r] * n[q];
+                }
             }
         }
         Ok(())
@@ -329,6 +377,12 @@ impl SymmetricTree {
             for k in 0..S {
                 axpy6(w[k], &link.yj[k], zp);
             }
+            if let Some(c) = self.coupling(b) {
+                let f = dot6_pairwise(&self.za[b], &u);
+                zp[3] -= f * c.n_p.x;
+                zp[4] -= f * c.n_p.y;
+                zp[5] -= f * c.n_p.z;
+            }
         }
     }
 
@@ -350,6 +404,11 @@ impl SymmetricTree {
         let mut u = z[bn];
         for k in 0..S {
             axpy6(w[k], &link.yb[k], &mut u);
+        }
+        if let (Some(c), Some(p)) = (self.coupling(b), self.parent[b]) {
+            let xp = &z[body_node[p]];
+            let f = c.n_p.x * xp[3] + c.n_p.y * xp[4] + c.n_p.z * xp[5];
+            axpy6(-f, &self.za[b], &mut u);
         }
         apply_lower_t::<6>(&link.l, &mut u);
         z[bn] = u;

@@ -139,7 +139,12 @@ impl Workspace {
             let g = &sys.joints[r / 3];
             let own = |i: Option<usize>, c: Vec3, w: Vec3| {
                 i.map_or(0.0, |i| {
-                    c.norm_squared() / sys.mass[i] + w.dot(sys.inertia[i].apply_inverse(w))
+                    c.norm_squared() / sys.mass[i]
+                        + match &sys.armature {
+                            None => w.dot(sys.inertia[i].apply_inverse(w)),
+                            // The diagonal block of 𝕁 (a heuristic's scale).
+                            Some(a) => a.own_response(i, w),
+                        }
                 })
             };
             let x = hh * s.damping[r] * (own(g.parent, row.ci, row.ti) + own(Some(g.child), row.cj, row.tj));

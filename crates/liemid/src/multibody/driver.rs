@@ -11,7 +11,7 @@ use crate::error::{Error, Result};
 
 use super::joint_space::JointSpaceModel;
 use super::method::{MultibodyMethod, StepReport};
-use super::model::Model;
+use super::model::{JointKind, Model};
 use super::rattle::Rattle;
 use super::state::MultibodyState;
 use super::system::MultibodySystem;
@@ -42,11 +42,12 @@ pub struct MultibodyRun {
 
 /// What a run of a model leaves out or changes, said once before it runs (the command
 /// prints it, Python returns it).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum ModelNote {
-    /// Joint armature (a rotor inertia in joint space) has no exact form in maximal
-    /// coordinates; the maximal-coordinate methods run without it.
-    ArmatureDropped,
+    /// Armature on the joints named (slide, ball and free joints, loop-closing hinges: a
+    /// rotor inertia that is configuration-dependent in maximal coordinates); the
+    /// maximal-coordinate methods run without it there. Tree hinges keep theirs exactly.
+    ArmatureDropped(String),
     /// The joint-space reference integrates the joints free of their ranges.
     LimitsIgnored,
     /// The start violated the loop-closing joints (relative violations before the
@@ -64,16 +65,17 @@ impl ModelNote {
     /// change of the start).
     #[must_use]
     pub fn is_ignored_content(&self) -> bool {
-        matches!(self, ModelNote::ArmatureDropped | ModelNote::LimitsIgnored)
+        matches!(self, ModelNote::ArmatureDropped(_) | ModelNote::LimitsIgnored)
     }
 }
 
 impl core::fmt::Display for ModelNote {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
-            ModelNote::ArmatureDropped => {
-                f.write_str("joint armature (no exact form in maximal coordinates; --method rk4 keeps it)")
-            }
+            ModelNote::ArmatureDropped(joints) => write!(
+                f,
+                "joint armature on {joints} (exact in maximal coordinates on tree hinges only; --method rk4 keeps it)"
+            ),
             ModelNote::LimitsIgnored => {
                 f.write_str("joint limits (the joint-space reference has none; the liemid methods keep them)")
             }
@@ -178,8 +180,9 @@ pub struct Simulation {
 
 impl Simulation {
     /// What every front end runs: `model` by `method` under the model policy of the
-    /// maximal-coordinate methods. Joint armature is dropped ([`ModelNote::ArmatureDropped`]:
-    /// a rotor inertia in joint space has no exact form in maximal coordinates yet), and a
+    /// maximal-coordinate methods. Hinge armature is kept, exactly (docs/theory/multibody.md
+    /// §7); armature on other joints is dropped ([`ModelNote::ArmatureDropped`] names them:
+    /// configuration-dependent in maximal coordinates), and a
     /// start off the loop-closing joints (a keyframe written for MuJoCo's soft equalities)
     /// is projected onto them ([`ModelNote::StartProjected`] when the violation exceeded
     /// `1e-12`).
@@ -192,10 +195,20 @@ impl Simulation {
     pub fn prepare(model: &Model, method: MultibodyMethod) -> Result<Prepared> {
         let mut notes = Vec::new();
         let stripped;
-        let model = if model.joints.iter().any(|j| j.armature != 0.0) {
+        let nb = model.bodies.len();
+        let inexact =
+            |k: usize, j: &super::Joint| j.armature != 0.0 && (k >= nb || !matches!(j.kind, JointKind::Hinge { .. }));
+        let model = if model.joints.iter().enumerate().any(|(k, j)| inexact(k, j)) {
             let mut m = model.clone();
-            m.joints.iter_mut().for_each(|j| j.armature = 0.0);
-            notes.push(ModelNote::ArmatureDropped);
+            let mut named = Vec::new();
+            for (k, j) in m.joints.iter_mut().enumerate() {
+                if inexact(k, j) {
+                    let kind = if k >= nb { "loop-closing hinge" } else { j.kind.name() };
+                    named.push(format!("`{}` ({kind})", crate::error::abbreviate(&j.name)));
+                    j.armature = 0.0;
+                }
+            }
+            notes.push(ModelNote::ArmatureDropped(named.join(", ")));
             stripped = m;
             &stripped
         } else {

@@ -38,6 +38,7 @@
 //! Dynamics*, Cambridge 2004, ch. 7-8; D. Baraff, "Linear-time dynamics using Lagrange
 //! multipliers", SIGGRAPH 1996; P. Krysl, Int. J. Numer. Meth. Engng 63 (2005).
 
+mod armature;
 mod blocks;
 mod cholesky;
 pub mod constraints;

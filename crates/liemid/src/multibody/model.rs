@@ -490,7 +490,8 @@ impl Model {
     ///   centre of mass with `v_A + ω_j × (c_j − A)`, plus `R_j u q̇` for a slide; a free
     ///   joint's linear velocity is that of the child frame origin, in the parent frame.
     ///
-    /// Then `c = x + R s`, `p = m v_c`, `Π = I Rᵀ ω`. Loop-closing joints are not used:
+    /// Then `c = x + R s`, `p = m v_c`, `Π = I Rᵀ ω` (plus the hinge armature's `a q̇ n_c` on
+    /// the child and `−a q̇ n_p` on the parent: `Π = 𝕁 W`, docs/theory/multibody.md §7). Loop-closing joints are not used:
     /// the coordinates must satisfy them; check with
     /// [`super::MultibodySystem::constraint_violation`] and bring loop-violating velocities
     /// onto the constraints with [`super::Rattle::project_velocities`].
@@ -604,6 +605,22 @@ impl Model {
             let inertia = self.inertia(j)?;
             state.p[j] = vc[j] * self.bodies[j].mass;
             state.pi[j] = inertia.apply(state.rotation[j].tr_mul_vec(w[j]));
+        }
+        // Hinge armature: `Π = 𝕁 W`, each armatured hinge adds `a q̇ n_c` to its child's
+        // momentum and `−a q̇ n_p` to its parent's (docs/theory/multibody.md §7).
+        for k in 0..nb {
+            let a = self.joints[k].armature;
+            if a == 0.0 || !matches!(self.joints[k].kind, JointKind::Hinge { .. }) {
+                continue;
+            }
+            let g = super::constraints::JointGeometry::new(self, k);
+            let body_rate = |i: usize| state.rotation[i].tr_mul_vec(w[i]);
+            let wp = g.parent.map_or(Vec3::ZERO, body_rate);
+            let rate = g.u_child.dot(body_rate(g.child)) - g.u_parent.dot(wp);
+            state.pi[g.child] += g.u_child * (a * rate);
+            if let Some(p) = g.parent {
+                state.pi[p] -= g.u_parent * (a * rate);
+            }
         }
         Ok(state)
     }

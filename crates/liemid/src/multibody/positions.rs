@@ -124,6 +124,9 @@ impl Workspace {
             &mut self.p_half,
             &mut self.big_p,
         );
+        if let Some(arm) = &sys.armature {
+            return self.coupled_drift(arm, sys, state, h, warm);
+        }
         for i in 0..sys.mass.len() {
             self.c_new[i] = state.c[i] + self.p_half[i] * (h / sys.mass[i]);
             let guess = warm.then_some((self.psi1[i], self.psi2[i]));
@@ -142,6 +145,66 @@ impl Workspace {
             self.pi_a[i] = pa;
             self.r_new[i] = inc2.rotate(&inc1.rotate(&state.rotation[i]));
             self.pi_new[i] = inc2.inverse_apply(pa);
+        }
+        Ok(())
+    }
+
+    /// The drift with hinge armature: `c⁺` as without, the rotations by two coupled solves
+    /// over the tree (`Ψ₁` from `P`, `Π_a = exp(−Ψ₁) P`, `Ψ₂` from `Π_a`, each with `h/2`),
+    /// each body's spatial momentum `R_i Π_i` kept (docs/theory/multibody.md §7).
+    fn coupled_drift(
+        &mut self,
+        arm: &super::armature::Armature,
+        sys: &MultibodySystem,
+        state: &MultibodyState,
+        h: f64,
+        warm: bool,
+    ) -> Result<()> {
+        let hh = 0.5 * h;
+        let nb = sys.mass.len();
+        for i in 0..nb {
+            self.c_new[i] = state.c[i] + self.p_half[i] * (h / sys.mass[i]);
+        }
+        let fail = |e| {
+            let equation = match self.drift {
+                Drift::Midpoint => "coupled midpoint equation (M) with armature",
+                Drift::Variational => "coupled variational equation (V) with armature",
+            };
+            newton_error(self.method_name, equation, state.t, h, e)
+        };
+        super::armature::coupled_increments(
+            arm,
+            &sys.inertia,
+            self.drift,
+            &self.big_p,
+            hh,
+            warm,
+            &mut self.psi1,
+            &mut self.arm_dinv,
+            &mut self.arm_g,
+        )
+        .map_err(fail)?;
+        for i in 0..nb {
+            let inc1 = so3::Increment::new(self.psi1[i]);
+            self.pi_a[i] = inc1.inverse_apply(self.big_p[i]);
+            self.r_new[i] = inc1.rotate(&state.rotation[i]);
+        }
+        super::armature::coupled_increments(
+            arm,
+            &sys.inertia,
+            self.drift,
+            &self.pi_a,
+            hh,
+            warm,
+            &mut self.psi2,
+            &mut self.arm_dinv,
+            &mut self.arm_g,
+        )
+        .map_err(fail)?;
+        for i in 0..nb {
+            let inc2 = so3::Increment::new(self.psi2[i]);
+            self.r_new[i] = inc2.rotate(&self.r_new[i]);
+            self.pi_new[i] = inc2.inverse_apply(self.pi_a[i]);
         }
         Ok(())
     }
@@ -217,7 +280,9 @@ impl Workspace {
         let mut factored = false;
         // Whether the factored matrix is the start one `G(q) M⁻¹ G(q)ᵀ` (not the exact).
         let mut start_matrix = false;
-        let refine = !self.solver.has_loops();
+        // With armature the drift's Jacobian is not block diagonal: the plain quasi-Newton
+        // iteration only (no refinement, no exact matrix).
+        let refine = !self.solver.has_loops() && sys.armature.is_none();
         // Whether the last correction was refined (`None`: no correction yet).
         let mut refined: Option<Refine> = None;
         let mut it = 0;
@@ -266,7 +331,7 @@ impl Workspace {
                 }
                 factored = true;
                 start_matrix = true;
-            } else if r > 0.25 * prev {
+            } else if r > 0.25 * prev && sys.armature.is_none() {
                 self.drift_jacobian(sys, h);
                 self.factor(sys, Matrix::Exact)?;
                 report.factorizations += 1;

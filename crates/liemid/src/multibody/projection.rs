@@ -158,9 +158,18 @@ impl Workspace {
                 &mut self.vel,
                 &mut self.omega,
             );
-            for i in 0..sys.mass.len() {
-                state.c[i] += self.vel[i] * (1.0 / sys.mass[i]);
-                state.rotation[i] = state.rotation[i] * crate::so3::exp(sys.inertia[i].apply_inverse(self.omega[i]));
+            if let Some(a) = &sys.armature {
+                a.solve(&mut self.omega);
+                for i in 0..sys.mass.len() {
+                    state.c[i] += self.vel[i] * (1.0 / sys.mass[i]);
+                    state.rotation[i] = state.rotation[i] * crate::so3::exp(self.omega[i]);
+                }
+            } else {
+                for i in 0..sys.mass.len() {
+                    state.c[i] += self.vel[i] * (1.0 / sys.mass[i]);
+                    state.rotation[i] =
+                        state.rotation[i] * crate::so3::exp(sys.inertia[i].apply_inverse(self.omega[i]));
+                }
             }
             // Quadratic convergence down to round-off of the positions, which far from the
             // origin lies above 1e-14: stop where the decrease stalls below 1e-10.

@@ -32,8 +32,10 @@
 //! (zero rebound), so a step with a limit change loses the normal kinetic energy: the
 //! method is symmetric only away from those steps, and first order at the impact instant.
 //!
-//! **Armature** (rotor inertia added in joint space) has no exact counterpart in maximal
-//! coordinates: a model with non-zero armature is refused.
+//! **Armature** on hinges (rotor inertia added in joint space) is exact: the rotational
+//! kinetic energy becomes the constant form `½ Wᵀ 𝕁 W`, the drift one coupled solve over the
+//! tree and the constraint solves see `𝕁` in tree order (`armature.rs`,
+//! docs/theory/multibody.md §7); armature on other joints is refused.
 //!
 //! Reference: E. Hairer, C. Lubich, G. Wanner, *Geometric Numerical Integration*, 2nd ed.,
 //! Springer 2006, VII.1; B. Leimkuhler, S. Reich, *Simulating Hamiltonian Dynamics*,
@@ -82,7 +84,7 @@ impl Rattle {
         w.start_rows_at(system, state);
         let result = w
             .solver
-            .factor_symmetric(&system.mass, &system.inertia_matrix, &system.pairs, &w.rows0);
+            .factor_symmetric(&system.mass, system.rotational_blocks(), &system.pairs, &w.rows0);
         w.reset();
         result
     }

@@ -200,6 +200,13 @@ impl TreeSolver {
         }
     }
 
+    /// Couple the symmetric factorization's rotational parts along the armatured hinges
+    /// (see `cholesky.rs`); the general block LU ([`TreeSolver::factor`]) is not used with
+    /// armature.
+    pub(super) fn set_armature(&mut self, coupling: &[Option<super::armature::Coupling>]) {
+        self.sym.set_armature(coupling);
+    }
+
     /// Whether the model has loop joints (rows outside the tree, eliminated by the Schur
     /// complement): known from the structure, before any factorization.
     #[must_use]

@@ -119,13 +119,23 @@ impl MultibodySystem {
     }
 
     /// The energy: `Σ |p|²/2m + ½ Π·I⁻¹Π − Σ (m g + F_i)·c + Σ ½ k (q − q_ref)²` (the
-    /// constant body torques have no potential).
+    /// constant body torques have no potential); with hinge armature `½ Πᵀ 𝕁⁻¹ Π` in place
+    /// of `½ Π·I⁻¹Π`, which includes every `½ a q̇²` (docs/theory/multibody.md §7).
     #[must_use]
     pub fn energy(&self, state: &MultibodyState) -> f64 {
         let mut e = 0.0;
+        let rates = self.armature.as_ref().map(|a| {
+            let mut w = state.pi.clone();
+            a.solve(&mut w);
+            w
+        });
         for i in 0..self.mass.len() {
             e += 0.5 * state.p[i].norm_squared() / self.mass[i];
-            e += 0.5 * state.pi[i].dot(self.inertia[i].apply_inverse(state.pi[i]));
+            e += 0.5
+                * match &rates {
+                    None => state.pi[i].dot(self.inertia[i].apply_inverse(state.pi[i])),
+                    Some(w) => state.pi[i].dot(w[i]),
+                };
             e -= (self.gravity * self.mass[i] + self.const_force[i]).dot(state.c[i]);
         }
         for (k, g) in self.joints.iter().enumerate() {
@@ -173,9 +183,18 @@ impl MultibodySystem {
         let mut vel: f64 = 0.0;
         let mut rows = JointRows::default();
         let mut vscale: f64 = self.velocity_floor();
+        let rates = self.armature.as_ref().map(|a| {
+            let mut w = state.pi.clone();
+            a.solve(&mut w);
+            w
+        });
+        let rate_of = |i: usize| match &rates {
+            None => self.inertia[i].apply_inverse(state.pi[i]),
+            Some(w) => w[i],
+        };
         for i in 0..state.len() {
             let v = state.p[i] * (1.0 / self.mass[i]);
-            let w = self.inertia[i].apply_inverse(state.pi[i]);
+            let w = rate_of(i);
             vscale = vscale.max(v.norm() + self.length * w.norm());
         }
         for (k, g) in self.joints.iter().enumerate() {
@@ -191,10 +210,7 @@ impl MultibodySystem {
             );
             let vel_of = |i: Option<usize>| {
                 i.map_or((Vec3::ZERO, Vec3::ZERO), |i| {
-                    (
-                        state.p[i] * (1.0 / self.mass[i]),
-                        self.inertia[i].apply_inverse(state.pi[i]),
-                    )
+                    (state.p[i] * (1.0 / self.mass[i]), rate_of(i))
                 })
             };
             let (vi, wi) = vel_of(g.parent);

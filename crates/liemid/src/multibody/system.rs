@@ -10,6 +10,7 @@ use crate::error::{Error, Result};
 use crate::inertia::Inertia;
 use crate::linalg::{Mat3, Vec3};
 
+use super::armature::Armature;
 use super::constraints::{JointGeometry, JointParams};
 use super::model::{JointKind, Model};
 
@@ -46,6 +47,9 @@ pub struct MultibodySystem {
     pub(super) mass: Vec<f64>,
     pub(super) inertia: Vec<Inertia>,
     pub(super) inertia_matrix: Vec<Mat3>,
+    /// The rotational mass matrix `𝕁` with hinge armature (`None`: no armature, `𝕁` block
+    /// diagonal, the per-body path).
+    pub(super) armature: Option<Armature>,
     pub(super) com: Vec<Vec3>,
     pub(super) joints: Vec<JointGeometry>,
     pub(super) pairs: Vec<(Option<usize>, usize)>,
@@ -76,19 +80,26 @@ impl MultibodySystem {
     /// force parameters.
     ///
     /// # Errors
-    /// [`Model::validate`]'s errors; [`Error::InvalidModel`] for a joint with armature
-    /// (not representable exactly in maximal coordinates).
+    /// [`Model::validate`]'s errors; [`Error::InvalidModel`] for armature on a joint other
+    /// than a tree hinge (slide, ball and free armature are configuration-dependent in
+    /// maximal coordinates, docs/theory/multibody.md §7).
     pub fn new(model: &Model) -> Result<Self> {
         model.validate()?;
         let nb = model.bodies.len();
         let nj = model.joints.len();
         for (k, j) in model.joints.iter().enumerate() {
-            if j.armature != 0.0 {
+            let hinge = matches!(j.kind, JointKind::Hinge { .. });
+            if j.armature != 0.0
+                && (!hinge || k >= nb || j.armature.is_nan() || j.armature <= 0.0 || !j.armature.is_finite())
+            {
                 return Err(Error::InvalidModel {
                     reason: format!(
-                        "joint `{}` ({k}): armature = {} is not supported: a rotor inertia in joint space has no exact \
-                         counterpart in maximal coordinates (remove it or model the rotor as a body)",
-                        j.name, j.armature
+                        "joint `{}` ({k}): armature = {} is supported on tree hinges only (positive): a rotor inertia \
+                         on a {} joint is configuration-dependent in maximal coordinates (remove it or model the rotor \
+                         as a body)",
+                        j.name,
+                        j.armature,
+                        if hinge { "loop-closing" } else { j.kind.name() }
                     ),
                 });
             }
@@ -96,6 +107,23 @@ impl MultibodySystem {
         let inertia = (0..nb).map(|i| model.inertia(i)).collect::<Result<Vec<_>>>()?;
         let joints: Vec<JointGeometry> = (0..nj).map(|k| JointGeometry::new(model, k)).collect();
         let pairs: Vec<_> = joints.iter().map(|g| (g.parent, g.child)).collect();
+        let inertia_matrix: Vec<Mat3> = inertia.iter().map(|i| *i.matrix()).collect();
+        let hinges: Vec<_> = (0..nb)
+            .filter(|&k| model.joints[k].armature > 0.0)
+            .map(|k| {
+                let g = &joints[k];
+                (g.child, model.joints[k].armature, g.u_child, g.u_parent, g.parent)
+            })
+            .collect();
+        let armature = if hinges.is_empty() {
+            None
+        } else {
+            Some(
+                Armature::new(&inertia_matrix, &hinges).ok_or_else(|| Error::InvalidModel {
+                    reason: "the rotational mass matrix with armature is singular".to_string(),
+                })?,
+            )
+        };
         let params: Vec<_> = model
             .joints
             .iter()
@@ -123,7 +151,8 @@ impl MultibodySystem {
             body_names: model.bodies.iter().map(|b| b.name.clone()).collect(),
             joint_names: model.joints.iter().map(|j| j.name.clone()).collect(),
             mass: model.bodies.iter().map(|b| b.mass).collect(),
-            inertia_matrix: inertia.iter().map(|i| *i.matrix()).collect(),
+            inertia_matrix,
+            armature,
             inertia,
             com: model.bodies.iter().map(|b| b.com).collect(),
             has_damping: params.iter().any(|p| p.damping > 0.0),
@@ -137,6 +166,19 @@ impl MultibodySystem {
             hook: None,
             revision: 0,
         })
+    }
+
+    /// The rotational body blocks of the constraint solves: `I_i`, or `𝕁_ii` with hinge
+    /// armature (docs/theory/multibody.md §7).
+    pub(super) fn rotational_blocks(&self) -> &[Mat3] {
+        self.armature.as_ref().map_or(&self.inertia_matrix, |a| &a.block)
+    }
+
+    /// Whether some hinge has armature: the rotations then drift as one coupled system
+    /// (docs/theory/multibody.md §7).
+    #[must_use]
+    pub fn has_armature(&self) -> bool {
+        self.armature.is_some()
     }
 
     /// The model's name.

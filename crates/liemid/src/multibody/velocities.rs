@@ -81,9 +81,18 @@ impl Workspace {
     ) -> Result<()> {
         let mut limit_pass = 0;
         loop {
-            for i in 0..sys.mass.len() {
-                self.vel[i] = (self.p_half[i] + (self.force1[i] + self.damp_f[i]) * hh) * (1.0 / sys.mass[i]);
-                self.omega[i] = sys.inertia[i].apply_inverse(self.pi_new[i] + (self.torque1[i] + self.damp_t[i]) * hh);
+            if sys.armature.is_some() {
+                for i in 0..sys.mass.len() {
+                    self.vel[i] = (self.p_half[i] + (self.force1[i] + self.damp_f[i]) * hh) * (1.0 / sys.mass[i]);
+                    self.omega[i] = self.pi_new[i] + (self.torque1[i] + self.damp_t[i]) * hh;
+                }
+                self.rates_in_place(sys);
+            } else {
+                for i in 0..sys.mass.len() {
+                    self.vel[i] = (self.p_half[i] + (self.force1[i] + self.damp_f[i]) * hh) * (1.0 / sys.mass[i]);
+                    self.omega[i] =
+                        sys.inertia[i].apply_inverse(self.pi_new[i] + (self.torque1[i] + self.damp_t[i]) * hh);
+                }
             }
             if !any_rows {
                 return Ok(());
@@ -139,11 +148,19 @@ impl Workspace {
         );
         for i in 0..sys.mass.len() {
             self.vel[i] = self.vel[i] * (1.0 / sys.mass[i]);
-            self.omega[i] = sys.inertia[i].apply_inverse(self.omega[i]);
         }
+        self.rates_in_place(sys);
     }
 
     pub(super) fn velocities_of_new(&mut self, sys: &MultibodySystem) {
+        if sys.armature.is_some() {
+            for i in 0..sys.mass.len() {
+                self.vel[i] = self.p_half[i] * (1.0 / sys.mass[i]);
+            }
+            self.omega.copy_from_slice(&self.pi_new);
+            self.rates_in_place(sys);
+            return;
+        }
         for i in 0..sys.mass.len() {
             self.vel[i] = self.p_half[i] * (1.0 / sys.mass[i]);
             self.omega[i] = sys.inertia[i].apply_inverse(self.pi_new[i]);

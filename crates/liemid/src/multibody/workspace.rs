@@ -132,6 +132,10 @@ pub(super) struct Workspace {
     /// The drift's rotation per unit angular impulse over the step, `D / h` (`= I⁻¹` to
     /// leading order in `h`), from the same Jacobian.
     pub(super) drift_rate: Vec<Mat3>,
+    /// Scratch of the coupled drift with hinge armature (`armature.rs`; empty without):
+    /// the inverted pivots of Newton's Jacobian and the residual.
+    pub(super) arm_dinv: Vec<Mat3>,
+    pub(super) arm_g: Vec<Vec3>,
     /// Whether the solver holds the factorization of `G(q) M⁻¹ G(q)ᵀ` at `rows0` (the
     /// last velocity solve's, kept for the next position solve).
     pub(super) factor_rows0: bool,
@@ -205,13 +209,29 @@ impl Workspace {
             dampers: DamperScratch::new(3 * nj, nb),
             vel: z3.clone(),
             omega: z3,
-            solver: TreeSolver::new(&parents, &tree_rows, &loops),
+            solver: {
+                let mut solver = TreeSolver::new(&parents, &tree_rows, &loops);
+                if let Some(a) = &sys.armature {
+                    solver.set_armature(&a.coupling);
+                }
+                solver
+            },
             backup: MultibodyState::zeros(nb),
             psi1: vec![Vec3::ZERO; nb],
             psi2: vec![Vec3::ZERO; nb],
             pi_a: vec![Vec3::ZERO; nb],
             effective: vec![Mat3::IDENTITY; nb],
             drift_rate: vec![Mat3::IDENTITY; nb],
+            arm_dinv: if sys.armature.is_some() {
+                vec![Mat3::ZERO; nb]
+            } else {
+                Vec::new()
+            },
+            arm_g: if sys.armature.is_some() {
+                vec![Vec3::ZERO; nb]
+            } else {
+                Vec::new()
+            },
             factor_rows0: false,
             profiling: false,
             solver_time: std::time::Duration::ZERO,
@@ -302,9 +322,30 @@ impl Workspace {
     }
 
     pub(super) fn velocities(&mut self, sys: &MultibodySystem, p: &[Vec3], pi: &[Vec3]) {
+        if let Some(a) = &sys.armature {
+            for ((v, p), m) in self.vel.iter_mut().zip(p).zip(&sys.mass) {
+                *v = *p * (1.0 / m);
+            }
+            self.omega.copy_from_slice(pi);
+            a.solve(&mut self.omega);
+            return;
+        }
         for i in 0..sys.mass.len() {
             self.vel[i] = p[i] * (1.0 / sys.mass[i]);
             self.omega[i] = sys.inertia[i].apply_inverse(pi[i]);
+        }
+    }
+
+    /// `omega ← I⁻¹ omega` per body, or `𝕁⁻¹ omega` in tree order with hinge armature
+    /// (docs/theory/multibody.md §7).
+    pub(super) fn rates_in_place(&mut self, sys: &MultibodySystem) {
+        match &sys.armature {
+            Some(a) => a.solve(&mut self.omega),
+            None => {
+                for i in 0..sys.mass.len() {
+                    self.omega[i] = sys.inertia[i].apply_inverse(self.omega[i]);
+                }
+            }
         }
     }
 
@@ -312,13 +353,10 @@ impl Workspace {
     pub(super) fn factor(&mut self, sys: &MultibodySystem, matrix: Matrix) -> Result<()> {
         let start = self.profiling.then(std::time::Instant::now);
         self.factor_rows0 = false;
+        let blocks = sys.rotational_blocks();
         let result = match matrix {
-            Matrix::Start => self
-                .solver
-                .factor_symmetric(&sys.mass, &sys.inertia_matrix, &sys.pairs, &self.rows0),
-            Matrix::End => self
-                .solver
-                .factor_symmetric(&sys.mass, &sys.inertia_matrix, &sys.pairs, &self.rows1),
+            Matrix::Start => self.solver.factor_symmetric(&sys.mass, blocks, &sys.pairs, &self.rows0),
+            Matrix::End => self.solver.factor_symmetric(&sys.mass, blocks, &sys.pairs, &self.rows1),
             Matrix::Exact => self
                 .solver
                 .factor(&sys.mass, &self.effective, &sys.pairs, &self.rows1, &self.rows0),

@@ -181,12 +181,17 @@ fn validation_names_the_culprit() {
     let mut m = problems::test_chain();
     m.qpos = Some(vec![0.0; 3]);
     assert!(m.validate().unwrap_err().to_string().contains("qpos"));
+    // Armature is exact on tree hinges only (docs/theory/multibody.md §7): the ball's is
+    // refused, naming the joint.
     let mut m = problems::test_chain();
     m.joints[0].armature = 0.1;
-    assert!(matches!(
-        Simulation::new(&m, MultibodyMethod::Liemid),
-        Err(Error::InvalidModel { .. })
-    ));
+    assert!(Simulation::new(&m, MultibodyMethod::Liemid).is_ok());
+    m.joints[2].armature = 0.1;
+    let e = Simulation::new(&m, MultibodyMethod::Liemid).unwrap_err();
+    assert!(
+        matches!(e, Error::InvalidModel { .. }) && e.to_string().contains("ball"),
+        "{e}"
+    );
 }
 
 // ---------------------------------------------------------------------------------------
