@@ -234,6 +234,10 @@ def make_pages(liemid: Path, work: Path) -> List[Tuple[str, Path]]:
         "spins": ["spins", str(ex / "spins_square.toml"), "--out", str(work / "spins.csv")],
         "beam": ["beam", "--t-end", "10"],
         "multibody": ["multibody", "--problem", "chain-10", "--t-end", "2", "--every", "20"],
+        # The model's own shapes and a floor (MJCF geoms; the arm's meshes are not read, so
+        # its collision capsules and boxes of inertia stand in).
+        "multibody-humanoid": ["multibody", str(ex / "multibody" / "humanoid_scene.xml"), "--t-end", "1"],
+        "multibody-arm": ["multibody", str(ex / "multibody" / "arm_scene.xml"), "--t-end", "1"],
     }
     pages = []
     for name, args in runs.items():

@@ -245,14 +245,91 @@
       };
     }
 
+    // A model's shape (MuJoCo's conventions: capsules and cylinders along z, planes normal
+    // to z) as a three.js object.
+    function shapeObject(sh) {
+      const [a, b, c] = sh.size;
+      const [r, gc, bl, alpha] = sh.rgba;
+      const material = new THREE.MeshStandardMaterial({ color: new THREE.Color(r, gc, bl), roughness: 0.6, transparent: alpha < 1, opacity: alpha });
+      const alongZ = (geometry) => geometry.rotateX(Math.PI / 2);
+      let object;
+      if (sh.kind === 'plane') {
+        const extent = a > 0 ? 2 * Math.max(a, b) : 20;
+        object = new THREE.Group();
+        const floor = new THREE.Mesh(new THREE.PlaneGeometry(a > 0 ? 2 * a : extent, b > 0 ? 2 * b : extent), material);
+        material.side = THREE.DoubleSide;
+        material.transparent = true;
+        material.opacity = Math.min(alpha, 0.85);
+        object.add(floor);
+        const grid = new THREE.GridHelper(extent, Math.max(2, Math.round(extent / 0.5)), 0x8a93a3, 0x4a5263);
+        grid.rotateX(Math.PI / 2);
+        grid.position.z = 1e-3 * extent;
+        object.add(grid);
+      } else if (sh.kind === 'sphere') object = new THREE.Mesh(new THREE.SphereGeometry(a, 24, 16), material);
+      else if (sh.kind === 'capsule') object = new THREE.Mesh(alongZ(new THREE.CapsuleGeometry(a, 2 * b, 8, 16)), material);
+      else if (sh.kind === 'cylinder') object = new THREE.Mesh(alongZ(new THREE.CylinderGeometry(a, a, 2 * b, 24)), material);
+      else if (sh.kind === 'box') object = new THREE.Mesh(new THREE.BoxGeometry(2 * a, 2 * b, 2 * c), material);
+      else {
+        object = new THREE.Mesh(new THREE.SphereGeometry(1, 24, 16), material);
+        object.scale.set(a, b, c);
+      }
+      object.position.set(...sh.position);
+      object.quaternion.set(sh.quaternion[1], sh.quaternion[2], sh.quaternion[3], sh.quaternion[0]);
+      return object;
+    }
+
+    // A checkbox in the panel that shows or hides `objects`.
+    function toggle(text, objects, on) {
+      const label = document.createElement('label');
+      const box = document.createElement('input');
+      box.type = 'checkbox';
+      box.checked = on;
+      const set = () => objects.forEach((o) => { o.visible = box.checked; });
+      box.onchange = set;
+      set();
+      label.append(box, ' ' + text);
+      $('panel').appendChild(label);
+      return box;
+    }
+
     function articulated() {
-      const n = stat.length / 3, joints = sc.joints;
+      const n = stat.length / 3, joints = sc.joints, shapes = sc.shapes || [];
       const mesh = new THREE.InstancedMesh(new THREE.BoxGeometry(2, 2, 2), new THREE.MeshStandardMaterial({ color: 0x7f9cc4, roughness: 0.55 }), n);
       mesh.frustumCulled = false;
       scene.add(mesh);
       const lines = new THREE.BufferGeometry();
       lines.setAttribute('position', new THREE.BufferAttribute(new Float32Array(6 * joints.length), 3));
-      scene.add(new THREE.LineSegments(lines, new THREE.LineBasicMaterial({ color: 0xf2c744 })));
+      const jointLines = new THREE.LineSegments(lines, new THREE.LineBasicMaterial({ color: 0xf2c744 }));
+      scene.add(jointLines);
+      // The model's shapes: one group per body, moved with its centre of mass; the world's
+      // shapes (a floor) stay.
+      const groups = [];
+      for (let j = 0; j < n; j++) {
+        const group = new THREE.Group();
+        group.matrixAutoUpdate = false;
+        scene.add(group);
+        groups.push(group);
+      }
+      const drawn = new Array(n).fill(false);
+      shapes.forEach((sh) => {
+        const object = shapeObject(sh);
+        if (sh.body === null || sh.body === undefined) scene.add(object);
+        else {
+          groups[sh.body].add(object);
+          drawn[sh.body] = true;
+        }
+      });
+      // A body the file draws nothing of (its meshes are not read) keeps its box of inertia;
+      // the others' boxes and the joints are shown on request.
+      let allBoxes = true;
+      if (shapes.length) {
+        const boxes = toggle('boxes of inertia of every body', [], false);
+        allBoxes = false;
+        boxes.addEventListener('change', () => { allBoxes = boxes.checked; shown = -1; });
+        toggle('joints', [jointLines], false);
+        toggle("the model's shapes", groups, true);
+        document.body.dataset.shapes = String(shapes.length);
+      }
       const box = new THREE.Box3();
       for (let j = 0; j < n; j++) box.expandByPoint(tmpV.set(frames[7 * j], frames[7 * j + 1], frames[7 * j + 2]));
       let ext = 0;
@@ -266,13 +343,16 @@
       return {
         radius: Math.max(0.8 * box.getSize(new THREE.Vector3()).length(), 4 * ext, 1),
         centre: box.getCenter(new THREE.Vector3()),
+        zUp: true,
         update(i) {
           const f = frames.subarray(P * i, P * i + P);
           for (let j = 0; j < n; j++) {
             const k = 7 * j;
             pos.set(f[k], f[k + 1], f[k + 2]);
-            scale.set(stat[3 * j], stat[3 * j + 1], stat[3 * j + 2]);
+            if (allBoxes || !drawn[j]) scale.set(stat[3 * j], stat[3 * j + 1], stat[3 * j + 2]);
+            else scale.set(0, 0, 0);
             mesh.setMatrixAt(j, tmpM.compose(pos, quat(f, k + 3), scale));
+            groups[j].matrix.compose(pos, quat(f, k + 3), one);
           }
           mesh.instanceMatrix.needsUpdate = true;
           const p = lines.attributes.position.array;
@@ -288,8 +368,14 @@
     // Camera and size.
     const r = view.radius;
     const flat = sc.kind === 'spins' && stat.every((v, k) => k % 3 !== 2 || v === 0);
-    camera.up.set(0, flat ? 0 : 1, flat ? 1 : 0);
-    camera.position.copy(view.centre).add(flat ? new THREE.Vector3(0, -0.9 * r, 2.0 * r) : new THREE.Vector3(1.5 * r, 1.0 * r, 1.9 * r));
+    if (view.zUp) {
+      // Model files (MJCF, URDF) put z up.
+      camera.up.set(0, 0, 1);
+      camera.position.copy(view.centre).add(new THREE.Vector3(1.6 * r, -1.4 * r, 0.9 * r));
+    } else {
+      camera.up.set(0, flat ? 0 : 1, flat ? 1 : 0);
+      camera.position.copy(view.centre).add(flat ? new THREE.Vector3(0, -0.9 * r, 2.0 * r) : new THREE.Vector3(1.5 * r, 1.0 * r, 1.9 * r));
+    }
     camera.near = 0.01 * r;
     camera.far = 100 * r;
     controls.target.copy(view.centre);

@@ -94,6 +94,8 @@ pub struct MultibodyScenario {
     pub every: Option<u64>,
     /// The files the run reads (never written).
     pub inputs: Vec<PathBuf>,
+    /// The shapes the model file draws (for the `--view` page).
+    pub shapes: Vec<liemid::multibody::Shape>,
 }
 
 impl MultibodyScenario {
@@ -108,6 +110,7 @@ impl MultibodyScenario {
             out: None,
             every: None,
             inputs: Vec::new(),
+            shapes: Vec::new(),
         }
     }
 
@@ -161,6 +164,7 @@ pub fn load(path: &Path) -> Result<MultibodyScenario, String> {
             let mut sc = MultibodyScenario::of(path.display().to_string(), loaded.model, loaded.ignored);
             // Every file read (the included ones too) is an input no output may replace.
             sc.inputs.extend(loaded.files);
+            sc.shapes = loaded.shapes;
             sc
         }
         "toml" => return read_toml(path),

@@ -1,12 +1,16 @@
-//! The `--view` page of a multibody run: each body a box of its inertia's proportions about
-//! its centre of mass, each joint a line between its anchors on the two bodies.
+//! The `--view` page of a multibody run: each body drawn with the shapes its model file
+//! gives it (MJCF geoms of MuJoCo's default groups 0-2, URDF visuals; the collision geoms of
+//! a body whose meshes are not read), the world's shapes (a floor), and on request each body
+//! a box of its inertia's proportions about its centre of mass (always, for a body without
+//! shapes) and each joint a line between its anchors on the two bodies.
 
 use liemid::multibody::Link;
 use liemid::so3::Quaternion;
 use liemid::Vec3;
 
 use super::scenario::MultibodyScenario;
-use crate::shared::view::{Joint, Scene, ViewPage};
+use crate::shared::view::{Joint, Scene, ViewPage, ViewShape};
+use liemid::multibody::ShapeKind;
 
 /// Half the edges of the uniform box with body `i`'s mass and the diagonal of its inertia
 /// (`I_xx = m (b² + c²) / 3` for half-edges `a, b, c`), at least `floor`.
@@ -50,10 +54,49 @@ pub fn page(sc: &MultibodyScenario) -> ViewPage {
             }
         })
         .collect();
+    // MuJoCo's default groups (0-2); a body with none of those drawn (its visual meshes are
+    // not read) shows its other shapes (collision geoms, group 3), else its box of inertia.
+    let mut shown_body = vec![false; model.bodies.len()];
+    for s in sc.shapes.iter().filter(|s| s.shown_by_default()) {
+        if let Some(b) = s.body {
+            shown_body[b] = true;
+        }
+    }
+    let shapes = sc
+        .shapes
+        .iter()
+        .filter(|s| s.shown_by_default() || s.body.is_some_and(|b| !shown_body[b]))
+        .map(|s| {
+            let (kind, size) = match s.kind {
+                ShapeKind::Plane { half } => ("plane", [half[0], half[1], 0.0]),
+                ShapeKind::Sphere { radius } => ("sphere", [radius, 0.0, 0.0]),
+                ShapeKind::Capsule { radius, half_length } => ("capsule", [radius, half_length, 0.0]),
+                ShapeKind::Cylinder { radius, half_length } => ("cylinder", [radius, half_length, 0.0]),
+                ShapeKind::Box { half } => ("box", half),
+                ShapeKind::Ellipsoid { radii } => ("ellipsoid", radii),
+            };
+            // Body shapes are posed from the body's frame origin; the page moves the centre
+            // of mass.
+            let position = match s.body {
+                Some(b) => s.position - model.bodies[b].com,
+                None => s.position,
+            };
+            let q = Quaternion::from_matrix(&s.rotation);
+            ViewShape {
+                body: s.body,
+                kind: kind.to_string(),
+                size: size.map(|v| v as f32),
+                position: f32s(position),
+                quaternion: [q.w, q.x, q.y, q.z].map(|v| v as f32),
+                rgba: s.rgba,
+            }
+        })
+        .collect();
     ViewPage::new(
         Scene::Articulated {
             half_extents: boxes,
             joints,
+            shapes,
         },
         &sc.name,
     )

@@ -75,6 +75,25 @@ pub struct Joint {
     pub child_anchor: [f32; 3],
 }
 
+/// A shape of an articulated system as the model file draws it (MJCF geom, URDF visual),
+/// in MuJoCo's conventions (capsules and cylinders along z, a plane's normal z).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ViewShape {
+    /// The body it moves with, `None` for the world.
+    pub body: Option<usize>,
+    /// `plane`, `sphere`, `capsule`, `cylinder`, `box` or `ellipsoid`.
+    pub kind: String,
+    /// Plane: half-extents (0: unbounded) and 0; sphere: radius; capsule and cylinder: radius
+    /// and half-length; box: half-edges; ellipsoid: semi-axes.
+    pub size: [f32; 3],
+    /// Its origin in the body's centre-of-mass frame (or the world).
+    pub position: [f32; 3],
+    /// Its attitude in the body's frame (or the world), `w, x, y, z`.
+    pub quaternion: [f32; 4],
+    /// Colour and opacity.
+    pub rgba: [f32; 4],
+}
+
 /// What a page draws, and the layout of one frame.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
@@ -119,6 +138,10 @@ pub enum Scene {
         half_extents: Vec<[f32; 3]>,
         /// The joints.
         joints: Vec<Joint>,
+        /// The shapes the model file draws (MuJoCo's default groups 0-2); the boxes of
+        /// inertia are then hidden unless asked for.
+        #[serde(default)]
+        shapes: Vec<ViewShape>,
     },
 }
 
@@ -151,10 +174,21 @@ impl Scene {
                 elements.len()
             ),
             Scene::Spins { sites } => format!("{} spins as arrows coloured by S_z (blue -1, red +1)", sites.len()),
-            Scene::Articulated { half_extents, joints } => format!(
+            Scene::Articulated {
+                half_extents,
+                joints,
+                shapes,
+            } if shapes.is_empty() => format!(
                 "{} bodies as boxes and {} joints as lines",
                 half_extents.len(),
                 joints.len()
+            ),
+            Scene::Articulated {
+                half_extents, shapes, ..
+            } => format!(
+                "{} bodies drawn with the model's {} shapes (the boxes of inertia and the joints on request)",
+                half_extents.len(),
+                shapes.len()
             ),
         }
     }

@@ -566,3 +566,47 @@ fn a_long_attribute_is_abbreviated_in_the_error() {
         "{e}"
     );
 }
+
+/// The shapes a file draws: the scene's floor on the world with its material's colour, the
+/// humanoid's capsules and spheres on their bodies (posed in the body's frame: a `fromto`
+/// capsule centred between its ends and turned along them), a geom's own `rgba` before its
+/// material's, `group`, and meshes noted as not drawn.
+#[test]
+fn the_shapes_of_a_scene_are_read_with_their_poses_and_colours() {
+    use liemid::multibody::ShapeKind;
+    let l = mjcf::load(&example("humanoid_scene.xml")).unwrap();
+    let floor: Vec<_> = l.shapes.iter().filter(|s| s.body.is_none()).collect();
+    assert_eq!(floor.len(), 1);
+    assert_eq!(floor[0].kind, ShapeKind::Plane { half: [0.0, 0.0] });
+    assert_eq!(floor[0].rgba, [0.25, 0.3, 0.38, 1.0]);
+    assert!(l.shapes.iter().filter(|s| s.body.is_some()).count() >= l.model.bodies.len());
+    let text = r#"<mujoco><asset><material name="m" rgba="0 1 0 1"/></asset><worldbody>
+        <body name="b" pos="0 0 1"><joint type="ball"/><inertial pos="0 0 0" mass="1" diaginertia="1 1 1"/>
+          <geom type="capsule" fromto="0 0 0 0.4 0 0" size="0.05" material="m" rgba="1 0 0 0.5" group="3"/>
+          <geom type="mesh" mesh="x"/>
+        </body></worldbody></mujoco>"#;
+    let l = mjcf::parse(text, "shapes.xml").unwrap();
+    assert_eq!(l.shapes.len(), 1, "{:?}", l.shapes);
+    let s = &l.shapes[0];
+    assert_eq!(s.body, Some(0));
+    assert_eq!(
+        s.kind,
+        ShapeKind::Capsule {
+            radius: 0.05,
+            half_length: 0.2
+        }
+    );
+    close_v(s.position, Vec3::new(0.2, 0.0, 0.0), 1e-15);
+    close_v(s.rotation * Vec3::new(0.0, 0.0, 1.0), Vec3::new(1.0, 0.0, 0.0), 1e-15);
+    assert_eq!(
+        (s.rgba, s.group, s.shown_by_default()),
+        ([1.0, 0.0, 0.0, 0.5], 3, false)
+    );
+    assert!(l
+        .ignored
+        .iter()
+        .any(|k| k == "mesh geoms (not drawn: the files are not read)"));
+    let bad = text.replace("rgba=\"1 0 0 0.5\"", "rgba=\"2 0 0 1\"");
+    let e = mjcf::parse(&bad, "shapes.xml").unwrap_err().to_string();
+    assert!(e.contains("rgba: each component must lie in [0, 1]"), "{e}");
+}
