@@ -83,7 +83,7 @@ pub fn dop853<S: RigidBodySystem + ?Sized>(
     dop853_until(system, initial, t_end, rtol, &|| false)
 }
 
-/// [`dop853`], ended (with an error) after the first accepted step at which `stop`
+/// [`dop853()`], ended (with an error) after the first accepted step at which `stop`
 /// returns `true`.
 pub fn dop853_until<S: RigidBodySystem + ?Sized>(
     system: &S,

@@ -89,7 +89,7 @@ pub fn reference(scenario: &Scenario, t_end: f64, h_min: f64) -> Result<(RigidSt
     reference_until(scenario, t_end, h_min, &crate::shared::progress::Silent)
 }
 
-/// [`reference`], ended with [`liemid::Error::ObserverFailed`] once `progress` is
+/// [`reference()`], ended with [`liemid::Error::ObserverFailed`] once `progress` is
 /// [`Progress::stopped`] (read every 1024 steps).
 pub fn reference_until(
     scenario: &Scenario,

@@ -253,7 +253,7 @@ fn first_step(method: RotationMethod, rate: f64) -> f64 {
 }
 
 /// The steps of the study's coarsest run to `t_end`, a lower bound of every run's: the
-/// largest first step ([`first_step`], `Ω h ≈ 64`) over the span. A front end refuses a
+/// largest first step (`first_step`, `Ω h ≈ 64`) over the span. A front end refuses a
 /// study beyond its step bound with it before the reference is computed.
 #[must_use]
 pub fn coarsest_steps(scenario: &Scenario, t_end: f64) -> f64 {
