@@ -305,10 +305,18 @@ mod message_tests {
             iterations: 3,
         };
         let text = e(2.5e-12).to_string();
-        assert!(text.contains("residual 2.500e-12 after 3 iterations") && text.contains("t = 1e300"), "{text}");
-        assert!(e(f64::NAN).to_string().contains("(the residual became non-finite after 3 iterations)"));
+        assert!(
+            text.contains("residual 2.500e-12 after 3 iterations") && text.contains("t = 1e300"),
+            "{text}"
+        );
+        assert!(e(f64::NAN)
+            .to_string()
+            .contains("(the residual became non-finite after 3 iterations)"));
         let zero = e(0.0).to_string();
-        assert!(zero.contains("(after 3 iterations)") && !zero.contains("0.000e0"), "{zero}");
+        assert!(
+            zero.contains("(after 3 iterations)") && !zero.contains("0.000e0"),
+            "{zero}"
+        );
     }
 
     /// Whatever a model file's message quotes is abbreviated.

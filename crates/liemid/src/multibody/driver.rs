@@ -49,6 +49,14 @@ pub enum ModelNote {
     ArmatureDropped,
     /// The joint-space reference integrates the joints free of their ranges.
     LimitsIgnored,
+    /// Actuators with a viscous part (`kv`, a velocity bias) and a force clamp
+    /// (`forcerange`, the joint's `actuatorfrcrange`): the maximal-coordinate methods
+    /// hold the viscous part implicitly as a joint damper outside the clamp, so the
+    /// force is MuJoCo's while the clamp is not reached.
+    ActuatorDampingUnclamped {
+        /// How many actuators.
+        actuators: usize,
+    },
     /// The start violated the loop-closing joints (relative violations before the
     /// projection) and was projected onto them.
     StartProjected {
@@ -77,6 +85,12 @@ impl core::fmt::Display for ModelNote {
             ModelNote::LimitsIgnored => {
                 f.write_str("joint limits (the joint-space reference has none; the liemid methods keep them)")
             }
+            ModelNote::ActuatorDampingUnclamped { actuators } => write!(
+                f,
+                "the force clamp of {actuators} actuator(s) with a viscous part (kv): the liemid methods hold kv \
+                 as an implicit joint damper outside the clamp (exact while the clamp is not reached; --method rk4 \
+                 clamps the whole force)"
+            ),
             ModelNote::StartProjected { position, velocity } => write!(
                 f,
                 "the start violated the loop-closing joints (relative position {position:.1e}, velocity \
@@ -201,6 +215,16 @@ impl Simulation {
         } else {
             model
         };
+        let unclamped = model
+            .actuators
+            .iter()
+            .filter(|a| {
+                a.bias[2] != 0.0 && (a.force_range.is_some() || model.joints[a.joint].actuator_force_range.is_some())
+            })
+            .count();
+        if unclamped > 0 {
+            notes.push(ModelNote::ActuatorDampingUnclamped { actuators: unclamped });
+        }
         let mut simulation = Simulation::new(model, method)?;
         let (state, position, velocity) = simulation.initial_state_on_loops(model)?;
         let energy = simulation.system.energy(&state);
@@ -240,6 +264,14 @@ impl Simulation {
         let system = MultibodySystem::new(model)?;
         let integrator = Rattle::new(&system, method);
         Ok(Simulation { system, integrator })
+    }
+
+    /// Set the control held over the next steps ([`MultibodySystem::set_ctrl`]).
+    ///
+    /// # Errors
+    /// [`MultibodySystem::set_ctrl`]'s errors.
+    pub fn set_ctrl(&mut self, ctrl: &[f64]) -> Result<()> {
+        self.system.set_ctrl(ctrl)
     }
 
     /// One step ([`Rattle::step`]).

@@ -67,7 +67,7 @@ pub use driver::{joint_space_notes, JointSpaceRun, ModelNote, MultibodyRun, Prep
 pub use ensemble::MultibodyEnsemble;
 pub use joint_space::JointSpaceModel;
 pub use method::{Drift, LimitState, MultibodyMethod, StepReport};
-pub use model::{Body, Joint, JointKind, Link, Model};
+pub use model::{Actuator, Body, Joint, JointKind, Link, Model};
 pub use rattle::Rattle;
 pub use state::MultibodyState;
 pub use system::{ForceHook, MultibodySystem};

@@ -12,6 +12,7 @@ mod thread_counting;
 #[global_allocator]
 static GLOBAL: thread_counting::Counting = thread_counting::Counting;
 
+mod actuators;
 mod ball_spring;
 mod dampers;
 mod equality;
