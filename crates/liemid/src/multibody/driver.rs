@@ -293,6 +293,66 @@ impl Simulation {
         self.integrator.integrate(&self.system, state, t_end, h, observer)
     }
 
+    /// Integrate to `t_end` as [`Rattle::integrate`], the control set before every step:
+    /// `control(system, state, ctrl)` writes the control held over the step from
+    /// `state.t` into `ctrl` (which holds the previous step's; one buffer for the run),
+    /// then [`MultibodySystem::set_ctrl`] checks it (its length, finite values) — the
+    /// control of a Python callback, a table ([`super::control::ControlTable`], held) or a
+    /// constant. `observer(k, system, state, report)` after every step.
+    ///
+    /// # Errors
+    /// [`Rattle::integrate`]'s; [`Error::ObserverFailed`] when `control` returns an error;
+    /// [`Error::InvalidModel`] naming the actuator of a control that is not finite.
+    ///
+    /// Reference: docs/theory/multibody.md §8.
+    pub fn integrate_controlled<C, O>(
+        &mut self,
+        state: &mut MultibodyState,
+        t_end: f64,
+        h: f64,
+        mut control: C,
+        mut observer: O,
+    ) -> Result<MultibodyRun>
+    where
+        C: FnMut(&MultibodySystem, &MultibodyState, &mut [f64]) -> core::result::Result<(), String>,
+        O: FnMut(u64, &MultibodySystem, &MultibodyState, &StepReport) -> core::result::Result<(), String>,
+    {
+        let t0 = state.t;
+        let n = crate::rigid::driver::step_count(t0, t_end, h)?;
+        let e0 = self.system.energy(state);
+        let (p0, l0) = (self.system.linear_momentum(state), self.system.angular_momentum(state));
+        let mut run = MultibodyRun::default();
+        let mut ctrl = self.system.ctrl.clone();
+        for k in 1..=n {
+            control(&self.system, state, &mut ctrl).map_err(|reason| Error::ObserverFailed { t: state.t, reason })?;
+            self.system.set_ctrl(&ctrl)?;
+            let t_next = if k == n { t_end } else { t0 + k as f64 * h };
+            let report = self.integrator.step(&self.system, state, t_next - state.t)?;
+            self.integrator.work.set_time(state, t_next);
+            run.steps = k;
+            run.max_position_violation = run.max_position_violation.max(report.position_violation);
+            run.max_velocity_violation = run.max_velocity_violation.max(report.velocity_violation);
+            run.max_iterations = run.max_iterations.max(report.iterations);
+            run.total_iterations += u64::from(report.iterations);
+            let energy = self.system.energy(state);
+            if !energy.is_finite() {
+                return Err(Error::NonFiniteResult {
+                    method: self.integrator.work.method_name,
+                    t: state.t,
+                    h,
+                });
+            }
+            let de = (energy - e0).abs();
+            run.max_energy_error = run.max_energy_error.max(if e0 != 0.0 { de / e0.abs() } else { de });
+            let dp = (self.system.linear_momentum(state) - p0).norm();
+            run.max_linear_momentum_change = run.max_linear_momentum_change.max(dp);
+            let dl = (self.system.angular_momentum(state) - l0).norm();
+            run.max_angular_momentum_change = run.max_angular_momentum_change.max(dl);
+            observer(k, &self.system, state, &report).map_err(|reason| Error::ObserverFailed { t: state.t, reason })?;
+        }
+        Ok(run)
+    }
+
     /// The constraint violations of `state` with the integrator's active limits
     /// ([`Rattle::constraint_violation`]).
     #[must_use]
@@ -336,6 +396,54 @@ pub struct JointSpaceRun {
 }
 
 impl JointSpaceModel {
+    /// [`Self::integrate_rk4`] with the control set before every step:
+    /// `control(t, q, v, ctrl)` writes the control held over the step from `t` into `ctrl`
+    /// (one buffer for the run), checked by [`JointSpaceModel::set_ctrl`].
+    ///
+    /// # Errors
+    /// [`Self::integrate_rk4`]'s; [`Error::ObserverFailed`] when `control` fails;
+    /// [`Error::InvalidModel`] naming the actuator of a control that is not finite.
+    ///
+    /// Reference: docs/theory/multibody.md §8.
+    pub fn integrate_rk4_controlled<C, O>(
+        &mut self,
+        q: &mut [f64],
+        v: &mut [f64],
+        (t0, t_end, h): (f64, f64, f64),
+        mut control: C,
+        mut observer: O,
+    ) -> Result<JointSpaceRun>
+    where
+        C: FnMut(f64, &[f64], &[f64], &mut [f64]) -> core::result::Result<(), String>,
+        O: FnMut(u64, f64, &[f64], &[f64]) -> core::result::Result<(), String>,
+    {
+        let n = crate::rigid::driver::step_count(t0, t_end, h)?;
+        let e0 = self.energy(q, v)?;
+        let mut run = JointSpaceRun::default();
+        let mut t = t0;
+        let mut ctrl = self.ctrl().to_vec();
+        for k in 1..=n {
+            control(t, q, v, &mut ctrl).map_err(|reason| Error::ObserverFailed { t, reason })?;
+            self.set_ctrl(&ctrl)?;
+            let t_next = if k == n { t_end } else { t0 + k as f64 * h };
+            self.rk4_step(q, v, t_next - t)?;
+            t = t_next;
+            if !q.iter().chain(v.iter()).all(|x| x.is_finite()) {
+                return Err(Error::NonFiniteResult {
+                    method: "RK4 (joint coordinates)",
+                    t,
+                    h,
+                });
+            }
+            run.steps = k;
+            let de = (self.energy(q, v).unwrap_or(f64::NAN) - e0).abs();
+            let relative = if e0 != 0.0 { de / e0.abs() } else { de };
+            run.max_energy_error = run.max_energy_error.max(relative);
+            observer(k, t, q, v).map_err(|reason| Error::ObserverFailed { t, reason })?;
+        }
+        Ok(run)
+    }
+
     /// Integrate `(q, v)` from `t0` to `t_end` by classical RK4 ([`JointSpaceModel::rk4_step`])
     /// with step `h` (the last step lands on `t_end`), calling `observer(k, t, q, v)` after
     /// every step; returns the steps and the largest energy error. The reference the

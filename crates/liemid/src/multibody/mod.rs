@@ -41,6 +41,7 @@
 mod blocks;
 mod cholesky;
 pub mod constraints;
+pub mod control;
 mod dampers;
 pub mod driver;
 pub mod ensemble;
@@ -63,6 +64,7 @@ mod workspace;
 mod xml;
 
 pub use constraints::{JointGeometry, JointRows, Row};
+pub use control::ControlTable;
 pub use driver::{joint_space_notes, JointSpaceRun, ModelNote, MultibodyRun, Prepared, Simulation};
 pub use ensemble::MultibodyEnsemble;
 pub use joint_space::JointSpaceModel;

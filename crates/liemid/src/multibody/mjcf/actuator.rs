@@ -24,6 +24,7 @@ impl<'a, 'i> State<'a, 'i> {
     pub(super) fn read_actuators(&mut self, sections: &[Node<'a, 'i>], model: &mut Model) -> Result<Vec<bool>> {
         let cx = self.cx;
         let mut kept = Vec::new();
+        let mut damp_ratios = Vec::new();
         for section in sections {
             for node in section.children().filter(Node::is_element) {
                 let tag = node.tag_name().name();
@@ -121,11 +122,15 @@ impl<'a, 'i> State<'a, 'i> {
                         if kv < 0.0 {
                             return Err(cx.err(node, format!("actuator `{name}`: negative kv {kv}")));
                         }
-                        if num("dampratio", 0.0)? != 0.0 {
+                        let ratio = num("dampratio", 0.0)?;
+                        if ratio < 0.0 || (ratio > 0.0 && e.node.attribute("kv").is_some()) {
                             return Err(cx.err(
                                 node,
-                                format!("actuator `{name}`: dampratio is not supported (give the damping as kv)"),
+                                format!("actuator `{name}`: dampratio {ratio} must be >= 0 and not given with kv"),
                             ));
+                        }
+                        if ratio > 0.0 {
+                            damp_ratios.push((model.actuators.len(), ratio));
                         }
                         ([kp, 0.0, 0.0], [0.0, -kp, -kv])
                     }
@@ -221,6 +226,9 @@ impl<'a, 'i> State<'a, 'i> {
                 kept.push(true);
             }
         }
+        if !damp_ratios.is_empty() {
+            set_damp_ratios(model, &damp_ratios).map_err(|e| cx.err(sections[0], e.to_string()))?;
+        }
         Ok(kept)
     }
 
@@ -232,4 +240,34 @@ impl<'a, 'i> State<'a, 'i> {
         model.ctrl = Some(u.iter().zip(kept).filter(|(_, k)| **k).map(|(x, _)| *x).collect());
         Ok(())
     }
+}
+
+/// A position actuator's `dampratio` ζ as its `kv`, as MuJoCo computes it: the critical
+/// damping of the actuator's own coordinate `L = gear · q` at the reference pose (MuJoCo's
+/// `qpos0`), `kv = 2 ζ √(kp · M₀ / gear²)`, `M₀` the joint's diagonal entry of the
+/// joint-space mass matrix there (with its armature, MuJoCo's `dof_M0`).
+///
+/// Reference: docs/theory/multibody.md §8; MuJoCo documentation, XML reference,
+/// "actuator/position" (dampratio).
+fn set_damp_ratios(model: &mut Model, ratios: &[(usize, f64)]) -> Result<()> {
+    let mut tree = model.clone();
+    tree.joints.truncate(tree.bodies.len());
+    tree.joints.iter_mut().for_each(|j| j.frictionloss = 0.0);
+    tree.actuators.clear();
+    tree.ctrl = None;
+    tree.qpos = None;
+    tree.qvel = None;
+    let mut js = crate::multibody::JointSpaceModel::new(&tree)?;
+    let nv = js.nv();
+    let mut m = vec![0.0; nv * nv];
+    let q0 = js.qpos0().to_vec();
+    js.mass_matrix(&q0, &mut m)?;
+    for &(a, ratio) in ratios {
+        let act = &model.actuators[a];
+        let iv: usize = model.joints.iter().take(act.joint).map(|j| j.kind.nv()).sum();
+        let inertia = m[iv * nv + iv] / (act.gear * act.gear);
+        let kv = 2.0 * ratio * (act.gain[0] * inertia).sqrt();
+        model.actuators[a].bias[2] = -kv;
+    }
+    Ok(())
 }
