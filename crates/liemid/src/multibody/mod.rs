@@ -46,6 +46,7 @@ mod dampers;
 pub mod driver;
 pub mod ensemble;
 mod forces;
+mod friction;
 pub mod joint_space;
 pub mod method;
 pub mod mjcf;

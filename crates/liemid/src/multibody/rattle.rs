@@ -261,8 +261,15 @@ impl Workspace {
         if sys.has_damping {
             self.start_dampers(sys, state, t, hh, report)?;
         }
+        if sys.has_friction {
+            if !sys.has_damping {
+                self.damp_f.iter_mut().for_each(|v| *v = Vec3::ZERO);
+                self.damp_t.iter_mut().for_each(|v| *v = Vec3::ZERO);
+            }
+            self.start_friction(sys, (&state.c, &state.rotation), (&state.p, &state.pi), t, hh, report)?;
+        }
         for i in 0..nb {
-            let (df, dt) = if sys.has_damping {
+            let (df, dt) = if sys.has_damping || sys.has_friction {
                 (self.damp_f[i], self.damp_t[i])
             } else {
                 (Vec3::ZERO, Vec3::ZERO)

@@ -53,6 +53,8 @@ pub struct MultibodySystem {
     pub(super) gravity: Vec3,
     pub(super) length: f64,
     pub(super) has_damping: bool,
+    /// Whether a joint has dry friction (`frictionloss`).
+    pub(super) has_friction: bool,
     pub(super) const_force: Vec<Vec3>,
     pub(super) const_torque: Vec<Vec3>,
     pub(super) hook: Option<Box<dyn ForceHook>>,
@@ -165,6 +167,7 @@ impl MultibodySystem {
             inertia,
             com: model.bodies.iter().map(|b| b.com).collect(),
             has_damping: params.iter().any(|p| p.damping > 0.0),
+            has_friction: params.iter().any(|p| p.frictionloss > 0.0),
             params,
             pairs,
             joints,

@@ -17,6 +17,7 @@ mod ball_spring;
 mod dampers;
 mod equality;
 mod files;
+mod friction;
 mod include;
 mod joint_space;
 mod merged;
