@@ -233,6 +233,7 @@ fn multibody_run<'py>(
                 notes: said,
             } = Simulation::prepare(&sc.model, m).map_err(|e| py_error(py, &e, &sc.name))?;
             sim.integrator.set_drift(drift);
+            sim.check_step(&state, step).map_err(|e| py_error(py, &e, &sc.name))?;
             notes = said;
             let joints = sc.model.joints.len();
             let system = &sim.system;
@@ -400,6 +401,9 @@ pub struct MultibodySimulator {
     sim: Simulation,
     state: MultibodyState,
     step: f64,
+    /// The start's time and the steps taken since.
+    t0: f64,
+    steps: u64,
     joints: usize,
     name: String,
     notes: Vec<String>,
@@ -411,9 +415,15 @@ impl MultibodySimulator {
     #[pyo3(signature = (n = 1))]
     fn step(&mut self, py: Python<'_>, n: u64) -> PyResult<()> {
         let (sim, state, h) = (&mut self.sim, &mut self.state, self.step);
+        let (t0, done) = (self.t0, &mut self.steps);
+        // The times as the library's driver takes them (t₀ + k h), so that n steps here
+        // are the bits of run().
         let r = py.detach(|| -> liemid::Result<()> {
             for _ in 0..n {
-                sim.step(state, h)?;
+                let t_next = t0 + (*done + 1) as f64 * h;
+                sim.step(state, t_next - state.t)?;
+                sim.integrator.set_time(state, t_next);
+                *done += 1;
             }
             Ok(())
         });
@@ -517,8 +527,11 @@ fn multibody_simulator(
         notes,
     } = Simulation::prepare(&sc.model, m).map_err(|e| py_error(py, &e, &sc.name))?;
     sim.integrator.set_drift(drift);
+    sim.check_step(&state, step).map_err(|e| py_error(py, &e, &sc.name))?;
     Ok(MultibodySimulator {
         sim,
+        t0: state.t,
+        steps: 0,
         state,
         step,
         joints: sc.model.joints.len(),

@@ -362,6 +362,9 @@ fn run_maximal(
         mut state,
         ..
     } = prepared;
+    // The rows the method cannot hold at this step are refused before the first step.
+    sim.check_step(&state, h)
+        .map_err(|e| Failure::Input(format!("{}: {e}", sc.name)))?;
     let bodies = state.len();
     let joints = sc.model.joints.len();
     sink.observe(&mut Maximal {

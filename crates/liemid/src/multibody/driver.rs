@@ -290,7 +290,18 @@ impl Simulation {
     where
         O: FnMut(u64, &MultibodyState, &StepReport) -> core::result::Result<(), String>,
     {
+        self.check_step(state, h)?;
         self.integrator.integrate(&self.system, state, t_end, h, observer)
+    }
+
+    /// Refuse a step `h` at which the method cannot hold a damper or actuator row, naming
+    /// the joint and the largest step that holds it ([`Rattle::check_step`]); the
+    /// integrator is not touched.
+    ///
+    /// # Errors
+    /// [`Rattle::check_step`]'s.
+    pub fn check_step(&self, state: &MultibodyState, h: f64) -> Result<()> {
+        self.integrator.check_step(&self.system, state, h)
     }
 
     /// Integrate to `t_end` as [`Rattle::integrate`], the control set before every step:
@@ -322,6 +333,7 @@ impl Simulation {
         let e0 = self.system.energy(state);
         let (p0, l0) = (self.system.linear_momentum(state), self.system.angular_momentum(state));
         let mut run = MultibodyRun::default();
+        self.check_step(state, h)?;
         let mut ctrl = self.system.ctrl.clone();
         for k in 1..=n {
             control(&self.system, state, &mut ctrl).map_err(|reason| Error::ObserverFailed { t: state.t, reason })?;

@@ -240,6 +240,18 @@ impl Workspace {
         }
     }
 
+    /// The velocities (in `vel`, `omega`) of the momenta `lin`, `ang` projected on the
+    /// start rows, factored (the response of a unit impulse, for the step check).
+    pub(super) fn project_response(
+        &mut self,
+        sys: &MultibodySystem,
+        lin: &mut [Vec3],
+        ang: &mut [Vec3],
+        any_rows: bool,
+    ) {
+        self.project(sys, lin, ang, 1.0, any_rows, true);
+    }
+
     /// The friction rows' rates at the velocities in `vel`, `omega`.
     fn friction_rates(&self, sys: &MultibodySystem, grad: &[Option<Row>], joints: &[usize], rates: &mut [f64]) {
         for ((out, row), &k) in rates.iter_mut().zip(grad).zip(joints) {

@@ -58,6 +58,7 @@ mod projection;
 pub mod rattle;
 pub mod solver;
 pub mod state;
+mod step_check;
 pub mod system;
 pub mod urdf;
 mod velocities;

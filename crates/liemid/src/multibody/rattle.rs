@@ -32,6 +32,11 @@
 //! (zero rebound), so a step with a limit change loses the normal kinetic energy: the
 //! method is symmetric only away from those steps, and first order at the impact instant.
 //!
+//! **Actuators** act as springs (their position part, a force of the configuration) and
+//! dampers (their `kv`, held by the implicit damper half-kicks); **joint friction**
+//! (`frictionloss`) is a bounded force chosen in both half-kicks (`friction.rs`), so a
+//! joint sticks exactly when the other forces are smaller (docs/theory/multibody.md §8).
+//!
 //! **Armature** (rotor inertia added in joint space) has no exact counterpart in maximal
 //! coordinates: a model with non-zero armature is refused.
 //!

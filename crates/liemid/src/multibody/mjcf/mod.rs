@@ -10,8 +10,9 @@
 //! childclass>`, `<inertial pos quat… mass diaginertia|fullinertia>`, geoms for mass when
 //! a body has no inertial (sphere, capsule, cylinder, box, ellipsoid; `size`, `fromto`,
 //! `mass` or `density`, default 1000), `<joint type=hinge|slide|ball|free axis pos range
-//! limited ref springref stiffness damping armature>`, `<freejoint>` and the first
-//! `<keyframe><key qpos qvel>`.
+//! limited ref springref stiffness damping armature frictionloss actuatorfrcrange>`,
+//! `<freejoint>`, `<actuator>` (`motor`, `position`, `velocity`, `general` on hinges and
+//! slides, see [`mod@actuator`]) and the first `<keyframe><key qpos qvel ctrl>`.
 //!
 //! Decisions:
 //! - A body without a joint is welded to its parent (a `Weld` joint); if it has no mass
@@ -31,8 +32,7 @@
 //!   no exact form on the merged joint and are refused, naming the body and the joint; so
 //!   is any other combination (a hinge and a slide on one axis, a ball or a free joint with
 //!   others, four hinges, parallel axes, different anchors), naming the body and its
-//!   joints. Actuators are not simulated (listed in [`Loaded::ignored`]), on merged joints
-//!   as on any other.
+//!   joints. Actuators on merged hinges are refused, naming the actuator and the joint.
 //! - Hinge and slide `ref`: MuJoCo's `qpos0 = ref`, i.e. the body pose in the file is the
 //!   pose at joint value `ref`. The model's reference is the body pose in the file at joint
 //!   coordinate 0, so the model's coordinate is MuJoCo's `qpos − ref`: `range`,
@@ -46,7 +46,7 @@
 //!   other equalities are listed as ignored.
 //! - `<include file>` is expanded as MuJoCo does (see [`mod@include`]); `<frame>`,
 //!   `<composite>`, `<flexcomp>`, `<replicate>` and `<attach>` are refused (they add or move
-//!   bodies); actuators, tendons, sensors, joint and tendon equalities, contacts,
+//!   bodies); tendons, sensors, joint and tendon equalities, contacts,
 //!   geom contact and visual properties, sites, cameras, lights, assets and the like are
 //!   listed in [`Loaded::ignored`].
 
@@ -63,7 +63,7 @@ use super::xml::{
 use crate::error::Result;
 use crate::linalg::{Mat3, Vec3};
 
-mod actuator;
+pub mod actuator;
 mod equality;
 mod geom;
 pub mod include;
