@@ -169,3 +169,51 @@ fn bad_actuator_input_is_refused_naming_it() {
         loaded.ignored
     );
 }
+
+#[test]
+fn rows_the_method_cannot_hold_are_refused_before_the_first_step() {
+    // A servo of kp = 1e6 on I = 0.26 (ω = 1961 rad/s): liemid (Verlet's ω h < 2) holds it
+    // below h = 1.02e-3 and is refused above, naming the joint and the largest step.
+    let model = arm(
+        "<position joint=\"shoulder\" kp=\"1e6\"/>",
+        "qpos=\"0.1\" ctrl=\"0.1\"",
+        "",
+    );
+    let prepared = Simulation::prepare(&model, MultibodyMethod::Liemid).unwrap();
+    let (mut sim, mut s) = (prepared.simulation, prepared.state);
+    let start = s.clone();
+    let err = sim
+        .integrate(&mut s, 0.1, 2e-3, |_, _, _| Ok(()))
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("`shoulder`") && err.contains("largest step"), "{err}");
+    assert_eq!(s.c, start.c, "refused before the first step");
+    let largest: f64 = err
+        .split("holds it is about ")
+        .nth(1)
+        .unwrap()
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    let omega = (1e6f64 / 0.26).sqrt();
+    assert!(largest < 2.0 / omega && largest > 0.95 * 2.0 / omega, "{largest}");
+    sim.integrate(&mut s, 0.1, 0.9 * largest, |_, _, _| Ok(())).unwrap();
+    // A stiff damper (kv = 500, x = h d / (2 I) ≈ 1 at h = 1e-3) with liemid4: the negative
+    // sub-step has no solution; refused, and liemid holds it.
+    let model = arm("<velocity joint=\"shoulder\" kv=\"500\"/>", "ctrl=\"0\"", "");
+    let prepared = Simulation::prepare(&model, MultibodyMethod::Liemid4).unwrap();
+    let (mut sim, mut s) = (prepared.simulation, prepared.state);
+    let err = sim
+        .integrate(&mut s, 0.1, 1e-2, |_, _, _| Ok(()))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("`shoulder`") && err.to_lowercase().contains("liemid4"),
+        "{err}"
+    );
+    let prepared = Simulation::prepare(&model, MultibodyMethod::Liemid).unwrap();
+    let (mut sim, mut s) = (prepared.simulation, prepared.state);
+    sim.integrate(&mut s, 0.1, 1e-2, |_, _, _| Ok(())).unwrap();
+}
