@@ -16,7 +16,9 @@
 //! half-kick, are smaller than its friction; slipping, it feels `∓f_k` in each kick, so a
 //! constant force beyond the friction accelerates it at exactly `(τ − f)/I` (kick-drift-
 //! kick is exact under a constant force). `K` is symmetric positive definite for `h > 0`
-//! (semi-definite in general); the problem is solved by projected Gauss–Seidel on the
+//! (semi-definite in general; negative in a composition's negative sub-step, where the
+//! same rule, stuck or `σ = −f sign r`, holds); the problem is solved by projected
+//! Gauss–Seidel (each row's own solution, the others held) on the
 //! dense `K` over the friction rows (one column per row, a projected response each), to
 //! 8 ulps of the rates; a solve that does not converge in `50 n + 50` sweeps is an error.
 //! This is the one-row case of contact (docs/theory/multibody.md §8): a contact's normal
@@ -167,7 +169,16 @@ impl Workspace {
                     if kmm == 0.0 {
                         continue;
                     }
-                    let next = (s.sigma[m] - s.rates[m] / kmm).clamp(-s.bound[m], s.bound[m]);
+                    // Row m alone, the others held: r_m(σ) = ρ + K_mm σ; stuck if the root
+                    // is within the bound, else σ = −f sign ρ (the same as the clamp of the
+                    // root when K_mm > 0; also right in a negative sub-step, K_mm < 0).
+                    let rho = s.rates[m] - kmm * s.sigma[m];
+                    let root = -rho / kmm;
+                    let next = if root.abs() <= s.bound[m] {
+                        root
+                    } else {
+                        -s.bound[m] * rho.signum()
+                    };
                     let d = next - s.sigma[m];
                     if d != 0.0 {
                         s.sigma[m] = next;

@@ -83,3 +83,30 @@ fn a_pendulum_held_by_friction_stays_and_a_pushed_one_stops() {
     let err = JointSpaceModel::new(&model).unwrap_err().to_string();
     assert!(err.contains("`pin`") && err.contains("frictionloss"), "{err}");
 }
+
+#[test]
+fn actuated_friction_steps_allocate_nothing() {
+    use crate::thread_counting::allocations;
+    // A two-link arm with servos (kp, kv), a clamp, friction on both joints, a control set
+    // between steps.
+    let text = "<mujoco><compiler angle=\"radian\"/><worldbody><body name=\"a\">\
+         <joint name=\"j1\" axis=\"0 1 0\" frictionloss=\"0.3\" damping=\"0.2\"/>\
+         <inertial pos=\"0.5 0 0\" mass=\"1\" diaginertia=\"0.01 0.01 0.01\"/>\
+         <body name=\"b\" pos=\"1 0 0\"><joint name=\"j2\" axis=\"0 1 0\" frictionloss=\"0.1\"/>\
+         <inertial pos=\"0.5 0 0\" mass=\"1\" diaginertia=\"0.01 0.01 0.01\"/></body></body></worldbody>\
+         <actuator><position joint=\"j1\" kp=\"50\" kv=\"2\" forcerange=\"-20 20\"/>\
+         <motor joint=\"j2\"/></actuator></mujoco>";
+    let model = mjcf::parse(text, "arm2.xml").unwrap().model;
+    for method in [MultibodyMethod::Liemid, MultibodyMethod::Liemid4] {
+        let prepared = Simulation::prepare(&model, method).unwrap();
+        let (mut sim, mut s) = (prepared.simulation, prepared.state);
+        sim.step(&mut s, 1e-3).unwrap();
+        let u = [[0.3, 0.5], [0.2, -0.5]];
+        let before = allocations();
+        for k in 0..100 {
+            sim.set_ctrl(&u[k % 2]).unwrap();
+            sim.step(&mut s, 1e-3).unwrap();
+        }
+        assert_eq!(allocations() - before, 0, "{} allocates", method.name());
+    }
+}
