@@ -6,8 +6,9 @@
 //! default classes (every shortcut of a `<default>` sets the class's one actuator
 //! default, as in MuJoCo). The first keyframe's `ctrl` is the start's control (as
 //! `mj_resetDataKeyframe`). Anything else (tendon, site or body transmissions, activation
-//! dynamics, muscles, cylinders, dampers, adhesion, plugins) is listed as not simulated
-//! and left out, together with its keyframe control.
+//! dynamics, muscles, cylinders, dampers, adhesion, plugins, and actuators on hinges merged
+//! into a universal or ball joint) is listed as not simulated and left out, together with
+//! its keyframe control.
 //!
 //! Reference: docs/theory/multibody.md §8; MuJoCo documentation, XML reference,
 //! "actuator".
@@ -77,17 +78,16 @@ impl<'a, 'i> State<'a, 'i> {
                     let merged = model
                         .joints
                         .iter()
-                        .find(|j| j.name.split('+').any(|h| h == target) && j.name.contains('+'));
+                        .any(|j| j.name.contains('+') && j.name.split('+').any(|h| h == target));
+                    if merged {
+                        // One hinge of a universal or ball joint has no coordinate of its own.
+                        self.ignored.note("actuators on merged hinges (not simulated)");
+                        kept.push(false);
+                        continue;
+                    }
                     return Err(cx.err(
                         node,
-                        match merged {
-                            Some(m) => format!(
-                                "actuator `{name}` drives hinge `{target}`, merged into joint `{}`: actuators on \
-                                 merged hinges are not simulated",
-                                m.name
-                            ),
-                            None => format!("actuator `{name}` names joint `{target}`, which the model does not have"),
-                        },
+                        format!("actuator `{name}` names joint `{target}`, which the model does not have"),
                     ));
                 };
                 let num = |attr: &str, default: f64| -> Result<f64> {

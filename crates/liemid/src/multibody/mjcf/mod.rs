@@ -32,7 +32,8 @@
 //!   no exact form on the merged joint and are refused, naming the body and the joint; so
 //!   is any other combination (a hinge and a slide on one axis, a ball or a free joint with
 //!   others, four hinges, parallel axes, different anchors), naming the body and its
-//!   joints. Actuators on merged hinges are refused, naming the actuator and the joint.
+//!   joints. Actuators on merged hinges are listed as not simulated (the merged joint has no
+//!   coordinate per hinge).
 //! - Hinge and slide `ref`: MuJoCo's `qpos0 = ref`, i.e. the body pose in the file is the
 //!   pose at joint value `ref`. The model's reference is the body pose in the file at joint
 //!   coordinate 0, so the model's coordinate is MuJoCo's `qpos − ref`: `range`,
