@@ -244,8 +244,9 @@ impl<'a, 'i> State<'a, 'i> {
 
 /// A position actuator's `dampratio` ζ as its `kv`, as MuJoCo computes it: the critical
 /// damping of the actuator's own coordinate `L = gear · q` at the reference pose (MuJoCo's
-/// `qpos0`), `kv = 2 ζ √(kp · M₀ / gear²)`, `M₀` the joint's diagonal entry of the
-/// joint-space mass matrix there (with its armature, MuJoCo's `dof_M0`).
+/// `qpos0`), `kv = 2 ζ √(kp · m)`, `m = 1 / (gear² (M⁻¹)ᵢᵢ)` the effective inertia of the
+/// joint with the others free (`(M⁻¹)ᵢᵢ` MuJoCo's `dof_invweight0`, checked against MuJoCo
+/// 4.0's `actuator_biasprm` on a six-axis arm).
 ///
 /// Reference: docs/theory/multibody.md §8; MuJoCo documentation, XML reference,
 /// "actuator/position" (dampratio).
@@ -262,10 +263,36 @@ fn set_damp_ratios(model: &mut Model, ratios: &[(usize, f64)]) -> Result<()> {
     let mut m = vec![0.0; nv * nv];
     let q0 = js.qpos0().to_vec();
     js.mass_matrix(&q0, &mut m)?;
+    // M⁻¹ by Gauss–Jordan elimination (M symmetric positive definite, nv small).
+    let mut inv = vec![0.0; nv * nv];
+    for i in 0..nv {
+        inv[i * nv + i] = 1.0;
+    }
+    for c in 0..nv {
+        let p = m[c * nv + c];
+        if !(p > 0.0) {
+            return Err(crate::error::Error::InvalidModel {
+                reason: "dampratio: the joint-space mass matrix at the reference pose is singular".into(),
+            });
+        }
+        for k in 0..nv {
+            m[c * nv + k] /= p;
+            inv[c * nv + k] /= p;
+        }
+        for r in 0..nv {
+            let f = m[r * nv + c];
+            if r != c && f != 0.0 {
+                for k in 0..nv {
+                    m[r * nv + k] -= f * m[c * nv + k];
+                    inv[r * nv + k] -= f * inv[c * nv + k];
+                }
+            }
+        }
+    }
     for &(a, ratio) in ratios {
         let act = &model.actuators[a];
         let iv: usize = model.joints.iter().take(act.joint).map(|j| j.kind.nv()).sum();
-        let inertia = m[iv * nv + iv] / (act.gear * act.gear);
+        let inertia = 1.0 / (inv[iv * nv + iv] * act.gear * act.gear);
         let kv = 2.0 * ratio * (act.gain[0] * inertia).sqrt();
         model.actuators[a].bias[2] = -kv;
     }
