@@ -133,7 +133,7 @@ impl Rattle {
             let (vi, wi) = g.parent.map_or((Vec3::ZERO, Vec3::ZERO), |p| (w.vel[p], w.omega[p]));
             let a = row.rate(vi, wi, w.vel[g.child], w.omega[g.child]);
             let (stiffness, damping) = system.row_coefficients(k);
-            if !(a > 0.0) || holds(method, h.abs(), a, stiffness, damping) {
+            if a.is_nan() || a <= 0.0 || holds(method, h.abs(), a, stiffness, damping) {
                 continue;
             }
             let mut largest = h.abs();

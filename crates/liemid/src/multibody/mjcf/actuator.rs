@@ -165,7 +165,7 @@ impl<'a, 'i> State<'a, 'i> {
                     let r = e.get(range).map(|v| cx.array_of::<2>(node, range, v)).transpose()?;
                     if self.limited(node, e.get(limited), r.is_some(), range)? {
                         let [lo, hi] = r.ok_or_else(|| cx.err(node, format!("{limited} without {range}")))?;
-                        if !(lo <= hi) {
+                        if lo.is_nan() || hi.is_nan() || lo > hi {
                             return Err(cx.err(
                                 node,
                                 format!("actuator `{name}`: {range} ({lo}, {hi}) is upside down (lower <= upper)"),
@@ -270,7 +270,7 @@ fn set_damp_ratios(model: &mut Model, ratios: &[(usize, f64)]) -> Result<()> {
     }
     for c in 0..nv {
         let p = m[c * nv + c];
-        if !(p > 0.0) {
+        if p.is_nan() || p <= 0.0 {
             return Err(crate::error::Error::InvalidModel {
                 reason: "dampratio: the joint-space mass matrix at the reference pose is singular".into(),
             });

@@ -691,7 +691,7 @@ impl<'a, 'i> State<'a, 'i> {
             "actuatorfrcrange",
         )? {
             let [lo, hi] = frc_range.ok_or_else(|| cx.err(node, "actuatorfrclimited without actuatorfrcrange"))?;
-            if !(lo <= hi) {
+            if lo.is_nan() || hi.is_nan() || lo > hi {
                 return Err(cx.err(
                     node,
                     format!("actuatorfrcrange lower bound {lo} above upper bound {hi}"),
