@@ -12,6 +12,12 @@ Reference: MuJoCo's RK4 at h = 1e-5 to t = 0.5. Printed: the largest distance be
 two codes' body frame origins (xpos) at t = 0.5, for liemid at h = 1e-4 and 5e-5 (order 2)
 and liemid4 at 1e-4.
 
+A third case replaces the servos by motors driven by a PD controller tracking a sine on
+every joint, from Python: liemid's `run(control=f)` and MuJoCo's own loop (`d.ctrl` set
+from the same `f(t, qpos, qvel)` before each `mj_step`), both at h = 1e-4 (the control held
+over each step in both) to t = 2; printed: the largest body-position difference (when the
+liemid Python package is importable).
+
 Run:  python benchmarks/vs_mujoco_actuators.py      (LIEMID_BIN to point at the binary)
 Peers: pip install mujoco==4.0.0 numpy (in a venv of your own).
 """
@@ -19,6 +25,7 @@ Peers: pip install mujoco==4.0.0 numpy (in a venv of your own).
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 import tempfile
@@ -97,6 +104,44 @@ def main() -> None:
                 got = liemid_run(binary, path, method, h)
                 err = max(float(np.linalg.norm(got[b] - ref[b])) for b in ref)
                 print(f"  {method:8s} h = {h:.0e}: largest body-position difference {err:.2e} m")
+    print("PD tracking a sine, motors, MuJoCo RK4 in its own loop at the same step:")
+    pd_case()
+
+
+def pd(t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """PD tracking q_ref = 0.3 sin(2 t + k) on joint k."""
+    k = np.arange(6)
+    ref, dref = 0.3 * np.sin(2 * t + k), 0.6 * np.cos(2 * t + k)
+    return np.array(KP) * (ref - q) + 0.1 * np.array(KP) * (dref - v)
+
+
+def pd_case() -> None:
+    try:
+        from liemid import multibody
+    except ImportError:
+        print("PD case: skipped, the liemid Python package is not importable")
+        return
+    h, t_end = 1e-4, 2.0
+    text = arm("").replace("<position", "<motor").replace(' kp="', ' gear="1" data-kp="')
+    # The motors carry no kp: strip the attribute left by the substitution.
+    text = re.sub(r' data-kp="[^"]*"', "", text)
+    m = mujoco.MjModel.from_xml_string(text)
+    m.opt.integrator = mujoco.mjtIntegrator.mjINT_RK4
+    m.opt.timestep = h
+    d = mujoco.MjData(m)
+    mujoco.mj_resetDataKeyframe(m, d, 0)
+    for _ in range(round(t_end / h)):
+        d.ctrl[:] = pd(d.time, d.qpos.copy(), d.qvel.copy())
+        mujoco.mj_step(m, d)
+    mujoco.mj_kinematics(m, d)
+    ref = np.array([d.xpos[i] for i in range(1, m.nbody)])
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "arm6_motors.xml"
+        path.write_text(text)
+        for method in ["liemid", "liemid4", "rk4"]:
+            run = multibody.load(path).run(method, step=h, t_end=t_end, every=10**9, control=pd)
+            err = float(np.max(np.linalg.norm(run.xpos[-1] - ref, axis=1)))
+            print(f"  PD callback, {method:8s} h = {h:.0e} to t = {t_end}: largest body-position difference {err:.2e} m")
 
 
 if __name__ == "__main__":
