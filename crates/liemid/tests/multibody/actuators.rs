@@ -217,3 +217,24 @@ fn rows_the_method_cannot_hold_are_refused_before_the_first_step() {
     let (mut sim, mut s) = (prepared.simulation, prepared.state);
     sim.integrate(&mut s, 0.1, 1e-2, |_, _, _| Ok(())).unwrap();
 }
+
+#[test]
+fn a_servo_with_kv_and_a_clamp_is_noted() {
+    let model = arm(
+        "<position joint=\"shoulder\" kp=\"50\" kv=\"5\" forcerange=\"-3 3\"/>",
+        "ctrl=\"0.5\"",
+        "",
+    );
+    let prepared = Simulation::prepare(&model, MultibodyMethod::Liemid).unwrap();
+    assert!(
+        prepared
+            .notes
+            .contains(&liemid::multibody::ModelNote::ActuatorDampingUnclamped { actuators: 1 }),
+        "{:?}",
+        prepared.notes
+    );
+    // Without the clamp, no note.
+    let model = arm("<position joint=\"shoulder\" kp=\"50\" kv=\"5\"/>", "ctrl=\"0.5\"", "");
+    let prepared = Simulation::prepare(&model, MultibodyMethod::Liemid).unwrap();
+    assert!(prepared.notes.is_empty(), "{:?}", prepared.notes);
+}
