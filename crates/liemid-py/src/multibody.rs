@@ -158,8 +158,13 @@ impl Samples {
 /// the last); returns a dict of flat arrays and the run's maxima. Before the first step,
 /// the steps are held to `max_steps` (10⁹ when `None`) and the samples to the memory
 /// available; a pending signal (Ctrl-C) stops the run with its exception.
+///
+/// `control`: `None` (the keyframe's ctrl, else 0), a sequence of one float per actuator
+/// (constant), or a callable `f(t, qpos, qvel) -> ctrl` called once per step with the time
+/// and the hinge and slide coordinates and rates (the joints of `joint_names`; a hinge's
+/// coordinate is MuJoCo's qpos minus its `ref`); its control is held over the step.
 #[pyfunction]
-#[pyo3(signature = (model, method, step, t_end, every, drift = "midpoint", max_steps = None))]
+#[pyo3(signature = (model, method, step, t_end, every, drift = "midpoint", max_steps = None, control = None))]
 #[allow(clippy::too_many_arguments)]
 fn multibody_run<'py>(
     py: Python<'py>,
@@ -170,6 +175,7 @@ fn multibody_run<'py>(
     every: u64,
     drift: &str,
     max_steps: Option<u64>,
+    control: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let method = Method::from_key(method).map_err(|e| PyValueError::new_err(format!("method: {e}")))?;
     let drift = Drift::from_key(drift).ok_or_else(|| {
@@ -200,7 +206,30 @@ fn multibody_run<'py>(
     let n = liemid::rigid::driver::step_count(0.0, t_end, step)
         .map_err(|e| PyValueError::new_err(format!("step, t_end: {e}")))?;
     check_steps(n, max_steps, "t_end, step")?;
-    let sc = &model.scenario;
+    let mut callback = None;
+    let constant;
+    let sc = match control {
+        Some(c) if c.is_callable() => {
+            callback = Some(c);
+            &model.scenario
+        }
+        Some(c) => {
+            let u: Vec<f64> = c
+                .extract()
+                .map_err(|_| PyValueError::new_err("control: a callable f(t, qpos, qvel) or one float per actuator"))?;
+            let mut sc = model.scenario.clone();
+            sc.model.ctrl = Some(u);
+            sc.model
+                .validate_actuators()
+                .map_err(|e| PyValueError::new_err(format!("control: {e}")))?;
+            constant = sc;
+            &constant
+        }
+        None => &model.scenario,
+    };
+    // A callback's own exception, raised again after the run stops.
+    let mut raised: Option<PyErr> = None;
+    let kinds: Vec<JointKind> = sc.model.joints.iter().map(|j| j.kind).collect();
     let bodies = sc.model.bodies.len();
     let coordinates = sc.model.joints.iter().filter(|j| j.kind.axis().is_some()).count();
     check_samples((n / every) as f64 + 2.0, 2 + 7 * bodies + coordinates, SAMPLE_HINT)?;
@@ -219,22 +248,43 @@ fn multibody_run<'py>(
                 notes: said,
             } = Simulation::prepare(&sc.model, m).map_err(|e| py_error(py, &e, &sc.name))?;
             sim.integrator.set_drift(drift);
+            sim.check_step(&state, step).map_err(|e| py_error(py, &e, &sc.name))?;
             notes = said;
             let joints = sc.model.joints.len();
             let system = &sim.system;
             samples.push_maximal(system, &state, joints);
-            let run = py.detach(|| {
-                sim.integrator.integrate(system, &mut state, t_end, step, |k, state, _| {
-                    if k % every == 0 || k == n {
-                        samples.push_maximal(system, state, joints);
-                    }
-                    interrupt.step().map_err(|e| {
-                        stopped = Some(e);
-                        "stopped".to_string()
+            let run = match &callback {
+                None => py.detach(|| {
+                    sim.integrator.integrate(system, &mut state, t_end, step, |k, state, _| {
+                        if k % every == 0 || k == n {
+                            samples.push_maximal(system, state, joints);
+                        }
+                        interrupt.step().map_err(|e| {
+                            stopped = Some(e);
+                            "stopped".to_string()
+                        })
                     })
-                })
-            });
-            if let Some(e) = stopped {
+                }),
+                Some(f) => sim.integrate_controlled(
+                    &mut state,
+                    t_end,
+                    step,
+                    |system, state, u| {
+                        let (q, v) = maximal_coordinates(system, state, joints);
+                        call_control(py, f, state.t, q, v, u, &mut raised)
+                    },
+                    |k, system, state, _| {
+                        if k % every == 0 || k == n {
+                            samples.push_maximal(system, state, joints);
+                        }
+                        interrupt.step().map_err(|e| {
+                            stopped = Some(e);
+                            "stopped".to_string()
+                        })
+                    },
+                ),
+            };
+            if let Some(e) = raised.take().or(stopped.take()) {
                 return Err(e);
             }
             let run = run.map_err(|e| py_error(py, &e, &sc.name))?;
@@ -245,27 +295,37 @@ fn multibody_run<'py>(
             notes = joint_space_notes(&sc.model);
             let mut js = JointSpaceModel::new(&sc.model).map_err(|e| py_error(py, &e, &sc.name))?;
             let mut seen = JointSpaceModel::new(&sc.model).map_err(|e| py_error(py, &e, &sc.name))?;
-            let kinds: Vec<JointKind> = sc.model.joints.iter().map(|j| j.kind).collect();
             let (mut q, mut v) = (js.initial_q().to_vec(), js.initial_v().to_vec());
             samples
                 .push_joint_space(&mut seen, &kinds, 0.0, &q, &v)
                 .map_err(|e| py_error(py, &e, &sc.name))?;
-            let run = py.detach(|| {
-                js.integrate_rk4(&mut q, &mut v, (0.0, t_end, step), |k, t, q, v| {
-                    if k % every == 0 || k == n {
-                        let mut unit = q.to_vec();
-                        seen.normalize_quaternions(&mut unit).map_err(|e| e.to_string())?;
-                        samples
-                            .push_joint_space(&mut seen, &kinds, t, &unit, v)
-                            .map_err(|e| e.to_string())?;
-                    }
-                    interrupt.step().map_err(|e| {
-                        stopped = Some(e);
-                        "stopped".to_string()
-                    })
+            let mut observer = |k: u64, t: f64, q: &[f64], v: &[f64]| -> Result<(), String> {
+                if k % every == 0 || k == n {
+                    let mut unit = q.to_vec();
+                    seen.normalize_quaternions(&mut unit).map_err(|e| e.to_string())?;
+                    samples
+                        .push_joint_space(&mut seen, &kinds, t, &unit, v)
+                        .map_err(|e| e.to_string())?;
+                }
+                interrupt.step().map_err(|e| {
+                    stopped = Some(e);
+                    "stopped".to_string()
                 })
-            });
-            if let Some(e) = stopped {
+            };
+            let run = match &callback {
+                None => py.detach(|| js.integrate_rk4(&mut q, &mut v, (0.0, t_end, step), &mut observer)),
+                Some(f) => js.integrate_rk4_controlled(
+                    &mut q,
+                    &mut v,
+                    (0.0, t_end, step),
+                    |t, q, v, u| {
+                        let (qq, vv) = joint_space_coordinates(&kinds, q, v);
+                        call_control(py, f, t, qq, vv, u, &mut raised)
+                    },
+                    &mut observer,
+                ),
+            };
+            if let Some(e) = raised.take().or(stopped.take()) {
                 return Err(e);
             }
             run.map_err(|e| py_error(py, &e, &sc.name))?;
@@ -298,6 +358,210 @@ fn multibody_run<'py>(
     d.set_item("max_velocity_constraint_violation", max_vel)?;
     d.set_item("notes", notes.iter().map(ToString::to_string).collect::<Vec<_>>())?;
     Ok(d)
+}
+
+/// The hinge and slide coordinates and rates of a maximal-coordinate state, in joint order.
+fn maximal_coordinates(system: &MultibodySystem, state: &MultibodyState, joints: usize) -> (Vec<f64>, Vec<f64>) {
+    let q = (0..joints).filter_map(|k| system.joint_coordinate(state, k)).collect();
+    let v = (0..joints).filter_map(|k| system.joint_rate(state, k)).collect();
+    (q, v)
+}
+
+/// The hinge and slide coordinates and rates of a joint-space state (MuJoCo's layout).
+fn joint_space_coordinates(kinds: &[JointKind], q: &[f64], v: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    let (mut qq, mut vv) = (Vec::new(), Vec::new());
+    let (mut iq, mut iv) = (0, 0);
+    for kind in kinds {
+        if kind.axis().is_some() {
+            qq.push(q[iq]);
+            vv.push(v[iv]);
+        }
+        iq += kind.nq();
+        iv += kind.nv();
+    }
+    (qq, vv)
+}
+
+/// Call the control callback `f(t, qpos, qvel)` and copy its control into `u`; a Python
+/// exception is kept in `raised` (raised again by the caller) and stops the run.
+fn call_control(
+    py: Python<'_>,
+    f: &Bound<'_, PyAny>,
+    t: f64,
+    q: Vec<f64>,
+    v: Vec<f64>,
+    u: &mut [f64],
+    raised: &mut Option<PyErr>,
+) -> Result<(), String> {
+    let out = f
+        .call1((t, q.into_pyarray(py), v.into_pyarray(py)))
+        .and_then(|r| r.extract::<Vec<f64>>());
+    match out {
+        Ok(c) if c.len() == u.len() => {
+            u.copy_from_slice(&c);
+            Ok(())
+        }
+        Ok(c) => {
+            let msg = format!(
+                "control: the callback returned {} values at t = {t}, the model has {} actuators",
+                c.len(),
+                u.len()
+            );
+            *raised = Some(PyValueError::new_err(msg.clone()));
+            Err(msg)
+        }
+        Err(e) => {
+            let msg = e.to_string();
+            *raised = Some(e);
+            Err(msg)
+        }
+    }
+}
+
+/// A model stepped by the caller (MuJoCo's `mj_step` loop): set `ctrl`, `step(n)`, read the
+/// state. The liemid methods only.
+#[pyclass(module = "liemid._liemid")]
+pub struct MultibodySimulator {
+    sim: Simulation,
+    state: MultibodyState,
+    step: f64,
+    /// The start's time and the steps taken since.
+    t0: f64,
+    steps: u64,
+    joints: usize,
+    name: String,
+    notes: Vec<String>,
+}
+
+#[pymethods]
+impl MultibodySimulator {
+    /// Take `n` steps, the control held.
+    #[pyo3(signature = (n = 1))]
+    fn step(&mut self, py: Python<'_>, n: u64) -> PyResult<()> {
+        let (sim, state, h) = (&mut self.sim, &mut self.state, self.step);
+        let (t0, done) = (self.t0, &mut self.steps);
+        // The times as the library's driver takes them (t₀ + k h), so that n steps here
+        // are the bits of run().
+        let r = py.detach(|| -> liemid::Result<()> {
+            for _ in 0..n {
+                let t_next = t0 + (*done + 1) as f64 * h;
+                sim.step(state, t_next - state.t)?;
+                sim.integrator.set_time(state, t_next);
+                *done += 1;
+            }
+            Ok(())
+        });
+        r.map_err(|e| py_error(py, &e, &self.name))
+    }
+    /// The control, one value per actuator.
+    #[getter]
+    fn get_ctrl<'py>(&self, py: Python<'py>) -> Bound<'py, numpy::PyArray1<f64>> {
+        self.sim.system.ctrl().to_vec().into_pyarray(py)
+    }
+    #[setter]
+    fn set_ctrl(&mut self, ctrl: Vec<f64>) -> PyResult<()> {
+        self.sim
+            .set_ctrl(&ctrl)
+            .map_err(|e| PyValueError::new_err(format!("ctrl: {e}")))
+    }
+    /// The actuators' names (the order of `ctrl`).
+    #[getter]
+    fn actuators(&self) -> Vec<String> {
+        self.sim.system.actuator_names().to_vec()
+    }
+    /// The time (s).
+    #[getter]
+    fn time(&self) -> f64 {
+        self.state.t
+    }
+    /// The step (s).
+    #[getter]
+    fn timestep(&self) -> f64 {
+        self.step
+    }
+    /// The hinge and slide coordinates, in joint order.
+    #[getter]
+    fn qpos<'py>(&self, py: Python<'py>) -> Bound<'py, numpy::PyArray1<f64>> {
+        maximal_coordinates(&self.sim.system, &self.state, self.joints)
+            .0
+            .into_pyarray(py)
+    }
+    /// The hinge and slide rates, in joint order.
+    #[getter]
+    fn qvel<'py>(&self, py: Python<'py>) -> Bound<'py, numpy::PyArray1<f64>> {
+        maximal_coordinates(&self.sim.system, &self.state, self.joints)
+            .1
+            .into_pyarray(py)
+    }
+    /// Each body frame's origin, flat (bodies · 3).
+    #[getter]
+    fn xpos<'py>(&self, py: Python<'py>) -> Bound<'py, numpy::PyArray1<f64>> {
+        let mut out = Vec::with_capacity(3 * self.state.len());
+        for i in 0..self.state.len() {
+            let x = self.sim.system.frame_origin(&self.state, i);
+            out.extend([x.x, x.y, x.z]);
+        }
+        out.into_pyarray(py)
+    }
+    /// Each body's attitude quaternion (w, x, y, z), flat (bodies · 4).
+    #[getter]
+    fn xquat<'py>(&self, py: Python<'py>) -> Bound<'py, numpy::PyArray1<f64>> {
+        let mut out = Vec::with_capacity(4 * self.state.len());
+        for i in 0..self.state.len() {
+            out.extend(self.sim.system.quaternion(&self.state, i));
+        }
+        out.into_pyarray(py)
+    }
+    /// What the model policy left out or changed.
+    #[getter]
+    fn notes(&self) -> Vec<String> {
+        self.notes.clone()
+    }
+}
+
+/// A simulator of `model` by a liemid `method` at `step`, from the model's start.
+#[pyfunction]
+#[pyo3(signature = (model, method, step, drift = "midpoint"))]
+fn multibody_simulator(
+    py: Python<'_>,
+    model: &MultibodyModel,
+    method: &str,
+    step: f64,
+    drift: &str,
+) -> PyResult<MultibodySimulator> {
+    let Method::Liemid(m) = Method::from_key(method).map_err(|e| PyValueError::new_err(format!("method: {e}")))? else {
+        return Err(PyValueError::new_err(
+            "method: the simulator steps the liemid methods (liemid, liemid4, liemid6, liemid8); rk4 runs through run()",
+        ));
+    };
+    let drift = Drift::from_key(drift).ok_or_else(|| {
+        PyValueError::new_err(format!(
+            "drift: unknown drift \"{drift}\" (known: midpoint, variational)"
+        ))
+    })?;
+    if !(step.is_finite() && step > 0.0) {
+        return Err(PyValueError::new_err(format!(
+            "step: must be a positive number, found {step}"
+        )));
+    }
+    let sc = &model.scenario;
+    let Prepared {
+        simulation: mut sim,
+        state,
+        notes,
+    } = Simulation::prepare(&sc.model, m).map_err(|e| py_error(py, &e, &sc.name))?;
+    sim.integrator.set_drift(drift);
+    sim.check_step(&state, step).map_err(|e| py_error(py, &e, &sc.name))?;
+    Ok(MultibodySimulator {
+        sim,
+        t0: state.t,
+        steps: 0,
+        state,
+        step,
+        joints: sc.model.joints.len(),
+        name: sc.name.clone(),
+        notes: notes.iter().map(ToString::to_string).collect(),
+    })
 }
 
 /// The 3-D page of a run of `model`: `times` (n), `xpos` (n·bodies·3), `xquat`
@@ -352,6 +616,8 @@ fn multibody_view(
 
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<MultibodyModel>()?;
+    m.add_class::<MultibodySimulator>()?;
+    m.add_function(wrap_pyfunction!(multibody_simulator, m)?)?;
     m.add_function(wrap_pyfunction!(multibody_load, m)?)?;
     m.add_function(wrap_pyfunction!(multibody_problem, m)?)?;
     m.add_function(wrap_pyfunction!(multibody_problems, m)?)?;

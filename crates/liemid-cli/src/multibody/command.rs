@@ -70,6 +70,38 @@ pub struct MultibodyArgs {
     /// dop853's relative tolerance (absolute: rtol / 1000) [default: 1e-12].
     #[arg(long)]
     pub rtol: Option<f64>,
+    /// A constant control, one value per actuator in the model's order, comma-separated
+    /// (replaces the keyframe's ctrl).
+    #[arg(
+        long,
+        allow_hyphen_values = true,
+        value_name = "U1,U2,...",
+        conflicts_with = "ctrl_file"
+    )]
+    pub ctrl: Option<String>,
+    /// Controls over time: CSV with a header `t,<actuator>,...` naming every actuator, then
+    /// rows of increasing t; each row is held from its time until the next (piecewise
+    /// constant, sampled at each step's start; before the first row, the first row).
+    #[arg(long, value_name = "CSV")]
+    pub ctrl_file: Option<PathBuf>,
+}
+
+/// The most bytes of a `--ctrl-file` table.
+const MAX_CTRL_FILE_BYTES: u64 = 256 << 20;
+
+/// `--ctrl`'s values.
+fn parse_ctrl(text: &str) -> Result<Vec<f64>, Failure> {
+    text.split(',')
+        .enumerate()
+        .map(|(k, x)| {
+            x.trim().parse::<f64>().map_err(|_| {
+                Failure::Input(format!(
+                    "--ctrl: value {k} `{}` is not a number (one value per actuator, comma-separated)",
+                    x.trim().chars().take(40).collect::<String>()
+                ))
+            })
+        })
+        .collect()
 }
 
 /// Run `liemid multibody`.
@@ -100,7 +132,12 @@ pub fn multibody(args: &MultibodyArgs) -> CmdResult {
     }
     let every = args.every.or(sc.every).unwrap_or(10);
     let out = args.out.clone().or_else(|| sc.out.take());
-    let inputs: Vec<&Path> = sc.inputs.iter().map(PathBuf::as_path).collect();
+    let inputs: Vec<&Path> = sc
+        .inputs
+        .iter()
+        .map(PathBuf::as_path)
+        .chain(args.ctrl_file.as_deref())
+        .collect();
     let mut plan = OutputPlan::new(&inputs);
     if let Some(p) = out.as_deref().filter(|p| *p != Path::new("-")) {
         plan.add("--out", p).map_err(input)?;
@@ -125,6 +162,31 @@ pub fn multibody(args: &MultibodyArgs) -> CmdResult {
             "--rtol sets dop853's tolerance; this run's method has a fixed step (--step)".into(),
         ));
     }
+    if let Some(text) = &args.ctrl {
+        sc.model.ctrl = Some(parse_ctrl(text)?);
+        sc.model
+            .validate_actuators()
+            .map_err(|e| input(format!("--ctrl: {e}")))?;
+    }
+    let table = match &args.ctrl_file {
+        None => None,
+        Some(path) => {
+            if method == Method::Dop853 {
+                return Err(input(
+                    "--ctrl-file: a held control jumps at the table's times, which dop853's step control does not \
+                     see; take --method rk4 or a liemid method"
+                        .into(),
+                ));
+            }
+            let text = liemid_app::shared::input::read_text(path, MAX_CTRL_FILE_BYTES).map_err(input)?;
+            let names: Vec<String> = sc.model.actuators.iter().map(|a| a.name.clone()).collect();
+            let table =
+                liemid::multibody::ControlTable::parse(&text, &format!("--ctrl-file {}", path.display()), &names)
+                    .map_err(|e| input(e.to_string()))?;
+            sc.model.ctrl = Some(table.at(0.0).to_vec());
+            Some(table)
+        }
+    };
     // The model policy of the run (the library's, as Python's): what is left out, and the
     // start projected onto loop-closing joints.
     if args.drift.is_some() && !matches!(method, Method::Liemid(_)) {
@@ -163,8 +225,10 @@ pub fn multibody(args: &MultibodyArgs) -> CmdResult {
     }
     let sink = Sink::new(&sc, out.as_deref(), args.view.is_some())?;
     let (summary, sink) = match (method, prepared) {
-        (Method::Liemid(m), Some(prepared)) => run_maximal(&sc, m, prepared, (step, t_end, n), every, sink)?,
-        (Method::Rk4, _) => super::joint_run::rk4(&sc, (step, t_end, every, n), sink)?,
+        (Method::Liemid(m), Some(prepared)) => {
+            run_maximal(&sc, m, prepared, (step, t_end, n), every, table.as_ref(), sink)?
+        }
+        (Method::Rk4, _) => super::joint_run::rk4(&sc, (step, t_end, every, n), table.as_ref(), sink)?,
         (_, _) => super::joint_run::dop853(&sc, rtol, t_end, (every, args.max_steps), sink)?,
     };
     let quiet = args.json.as_deref() == Some("-") || out.as_deref() == Some(Path::new("-"));
@@ -290,6 +354,7 @@ fn run_maximal(
     prepared: Prepared,
     (h, t_end, n): (f64, f64, u64),
     every: u64,
+    table: Option<&liemid::multibody::ControlTable>,
     mut sink: Sink,
 ) -> Result<(serde_json::Value, Sink), Failure> {
     let Prepared {
@@ -297,11 +362,13 @@ fn run_maximal(
         mut state,
         ..
     } = prepared;
+    // The rows the method cannot hold at this step are refused before the first step.
+    sim.check_step(&state, h)
+        .map_err(|e| Failure::Input(format!("{}: {e}", sc.name)))?;
     let bodies = state.len();
     let joints = sc.model.joints.len();
-    let system = &sim.system;
     sink.observe(&mut Maximal {
-        system,
+        system: &sim.system,
         state: &state,
         joints,
     })?;
@@ -310,7 +377,7 @@ fn run_maximal(
     let started = Instant::now();
     // The observer's own outcome: a failed write or a signal ends the run through it.
     let mut stop: Option<Halt> = None;
-    let outcome = sim.integrator.integrate(system, &mut state, t_end, h, |k, state, _| {
+    let observer = |k: u64, system: &MultibodySystem, state: &MultibodyState| -> Result<(), String> {
         if k % every == 0 || k == n {
             let observed = sink.observe(&mut Maximal { system, state, joints });
             if let Err(failure) = observed {
@@ -326,8 +393,31 @@ fn run_maximal(
             }
             _ => Ok(()),
         }
-    });
+    };
+    let outcome = match table {
+        None => {
+            let mut observer = observer;
+            let system = &sim.system;
+            sim.integrator
+                .integrate(system, &mut state, t_end, h, |k, state, _| observer(k, system, state))
+        }
+        // A table's control, held over each step from its start (docs/theory/multibody.md §8).
+        Some(table) => {
+            let mut observer = observer;
+            sim.integrate_controlled(
+                &mut state,
+                t_end,
+                h,
+                |_, state, u| {
+                    u.copy_from_slice(table.at(state.t));
+                    Ok(())
+                },
+                |k, system, state, _| observer(k, system, state),
+            )
+        }
+    };
     bar.finish_and_clear();
+    let system = &sim.system;
     let run = match (outcome, stop) {
         (Ok(run), _) => run,
         (Err(_), Some(Halt::Output(failure))) => return Err(failure),

@@ -145,6 +145,7 @@ fn with(mut base: serde_json::Value, extra: serde_json::Value) -> serde_json::Va
 pub(super) fn rk4(
     sc: &MultibodyScenario,
     (h, t_end, every, n): (f64, f64, u64, u64),
+    table: Option<&liemid::multibody::ControlTable>,
     mut sink: Sink,
 ) -> Result<(serde_json::Value, Sink), Failure> {
     let mut model = model_of(sc)?;
@@ -157,7 +158,7 @@ pub(super) fn rk4(
     // The stepping model and a second one for the observations (the driver borrows the first).
     let mut seen = model_of(sc)?;
     let mut stop: Option<Halt> = None;
-    let outcome = model.integrate_rk4(&mut q, &mut v, (0.0, t_end, h), |k, t, q, v| {
+    let observer = |k: u64, t: f64, q: &[f64], v: &[f64]| -> Result<(), String> {
         if k % every == 0 || k == n {
             if let Err(failure) = observe(&mut sink, sc, &mut seen, t, q, v) {
                 stop = Some(Halt::Output(failure));
@@ -172,7 +173,21 @@ pub(super) fn rk4(
             }
             _ => Ok(()),
         }
-    });
+    };
+    // A table's control, held over each step from its start (docs/theory/multibody.md §8).
+    let outcome = match table {
+        None => model.integrate_rk4(&mut q, &mut v, (0.0, t_end, h), observer),
+        Some(table) => model.integrate_rk4_controlled(
+            &mut q,
+            &mut v,
+            (0.0, t_end, h),
+            |t, _, _, u| {
+                u.copy_from_slice(table.at(t));
+                Ok(())
+            },
+            observer,
+        ),
+    };
     bar.finish_and_clear();
     let max_energy = match (outcome, stop) {
         (Ok(run), _) => run.max_energy_error,

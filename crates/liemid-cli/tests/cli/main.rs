@@ -15,6 +15,7 @@ mod free_flow_vs_dop853;
 mod many;
 mod messages;
 mod multibody;
+mod multibody_control;
 mod multibody_merged;
 mod reliability;
 mod rigid;

@@ -25,7 +25,7 @@ from __future__ import annotations
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, List, Optional, Tuple, Union
+from typing import Any, Callable, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 from numpy.typing import NDArray
@@ -33,9 +33,13 @@ from numpy.typing import NDArray
 from . import _liemid, _view
 from ._core import _count, _max_steps, _path, _show, _text
 
-__all__ = ["Model", "MultibodyRun", "load", "methods", "problem", "problems"]
+__all__ = ["Model", "MultibodyRun", "Simulator", "load", "methods", "problem", "problems"]
 
 FloatArray = NDArray[np.float64]
+
+#: A control: one float per actuator (constant), or ``f(t, qpos, qvel) -> ctrl`` called
+#: once per step (its control held over the step).
+Control = Union[Sequence[float], FloatArray, Callable[[float, FloatArray, FloatArray], Any]]
 
 _METHODS = [("liemid", 2), ("liemid4", 4), ("liemid6", 6), ("liemid8", 8), ("rk4", 4)]
 
@@ -131,6 +135,7 @@ class Model:
         every: int = 1,
         drift: str = "midpoint",
         max_steps: Optional[int] = None,
+        control: Optional[Control] = None,
     ) -> MultibodyRun:
         """Integrate from the model's start to ``t_end`` at ``step`` (defaults: the file's
         ``timestep`` or 1e-3 s; the problem's end time or 1 s), sampling every ``every``
@@ -139,7 +144,12 @@ class Model:
         joint limits are not enforced by the joint-space ones (``rk4``, ``dop853``): the
         run's ``notes`` say so, and each is also issued as a ``UserWarning``. ``drift`` is the
         liemid methods' torque-free rotation: ``"midpoint"`` (EA's) or ``"variational"``
-        (LIEMID[EAV]'s, a Lie–Poisson drift). Before the first step, a run of more than
+        (LIEMID[EAV]'s, a Lie–Poisson drift). ``control``: ``None`` (the keyframe's ``ctrl``,
+        else 0), one float per actuator (constant), or a callable ``f(t, qpos, qvel)``
+        returning one float per actuator, called once per step with the hinge and slide
+        coordinates and rates (the joints of ``joint_names``), its control held over the
+        step (as MuJoCo's ``d.ctrl`` between ``mj_step`` calls); an exception it raises
+        stops the run and is raised again. Before the first step, a run of more than
         ``max_steps`` steps (default 10⁹) raises ``ValueError``, and samples that would not
         fit in the memory available ``MemoryError`` (raise ``every``). Ctrl-C stops the run
         with ``KeyboardInterrupt``."""
@@ -148,8 +158,11 @@ class Model:
         if isinstance(every, bool) or not isinstance(every, int) or every < 1:
             raise ValueError(f"every: a whole number of steps, at least 1, found {_show(every)}")
         every = _count("every", every, 1)
+        ctl: Any = control
+        if control is not None and not callable(control):
+            ctl = [float(x) for x in np.asarray(control, dtype=np.float64).ravel()]
         out = _liemid.multibody_run(
-            self._core, _text("method", method), h, end, every, _text("drift", drift), _max_steps(max_steps)
+            self._core, _text("method", method), h, end, every, _text("drift", drift), _max_steps(max_steps), ctl
         )
         notes = [str(n) for n in out["notes"]]
         for note in notes:
@@ -171,8 +184,77 @@ class Model:
             model=self._core,
         )
 
+    def simulator(self, method: str = "liemid", step: Optional[float] = None, drift: str = "midpoint") -> Simulator:
+        """A simulator stepped by the caller from the model's start (MuJoCo's ``mj_step``
+        loop): set ``sim.ctrl``, call ``sim.step(n)``, read ``sim.qpos``, ``sim.qvel``,
+        ``sim.xpos``, ``sim.xquat``, ``sim.time``. The liemid methods only."""
+        h = self._core.default_step if step is None else _number("step", step)
+        core = _liemid.multibody_simulator(self._core, str(method), h, str(drift))
+        for note in core.notes:
+            warnings.warn(f"{self.name}: {note}", UserWarning, stacklevel=2)
+        return Simulator(core)
+
     def __repr__(self) -> str:
         return f"liemid.multibody.Model({self.name!r}: {len(self.bodies)} bodies, {len(self.joints)} joints)"
+
+
+class Simulator:
+    """A model stepped by the caller: ``ctrl`` (one value per actuator, named by
+    ``actuators``; held until set again), ``step(n)``, and the state: ``time``, ``qpos`` and
+    ``qvel`` (the hinge and slide coordinates and rates in joint order), ``xpos``
+    (bodies, 3) and ``xquat`` (bodies, 4) as MuJoCo names them. Arrays are copies."""
+
+    def __init__(self, core: _liemid.MultibodySimulator) -> None:
+        self._core = core
+
+    def step(self, n: int = 1) -> None:
+        """Take ``n`` steps with the current control."""
+        if isinstance(n, bool) or not isinstance(n, int) or n < 0:
+            raise ValueError(f"n: a whole number of steps, found {n!r}")
+        self._core.step(n)
+
+    @property
+    def ctrl(self) -> FloatArray:
+        return np.asarray(self._core.ctrl)
+
+    @ctrl.setter
+    def ctrl(self, value: Union[Sequence[float], FloatArray]) -> None:
+        self._core.ctrl = [float(x) for x in np.asarray(value, dtype=np.float64).ravel()]
+
+    @property
+    def actuators(self) -> List[str]:
+        return list(self._core.actuators)
+
+    @property
+    def time(self) -> float:
+        return float(self._core.time)
+
+    @property
+    def timestep(self) -> float:
+        return float(self._core.timestep)
+
+    @property
+    def qpos(self) -> FloatArray:
+        return np.asarray(self._core.qpos)
+
+    @property
+    def qvel(self) -> FloatArray:
+        return np.asarray(self._core.qvel)
+
+    @property
+    def xpos(self) -> FloatArray:
+        return np.asarray(self._core.xpos).reshape(-1, 3)
+
+    @property
+    def xquat(self) -> FloatArray:
+        return np.asarray(self._core.xquat).reshape(-1, 4)
+
+    @property
+    def notes(self) -> List[str]:
+        return list(self._core.notes)
+
+    def __repr__(self) -> str:
+        return f"liemid.multibody.Simulator(t = {self.time}, {len(self.actuators)} actuators)"
 
 
 def load(path: Union[str, Path]) -> Model:

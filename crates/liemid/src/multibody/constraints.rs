@@ -301,6 +301,8 @@ pub(crate) struct JointParams {
     pub stiffness: f64,
     pub spring_ref: f64,
     pub damping: f64,
+    /// Dry friction of a hinge or slide (0 otherwise).
+    pub frictionloss: f64,
     pub range: Option<(f64, f64)>,
 }
 

@@ -50,6 +50,14 @@ pub enum ModelNote {
     ArmatureDropped(String),
     /// The joint-space reference integrates the joints free of their ranges.
     LimitsIgnored,
+    /// Actuators with a viscous part (`kv`, a velocity bias) and a force clamp
+    /// (`forcerange`, the joint's `actuatorfrcrange`): the maximal-coordinate methods
+    /// hold the viscous part implicitly as a joint damper outside the clamp, so the
+    /// force is MuJoCo's while the clamp is not reached.
+    ActuatorDampingUnclamped {
+        /// How many actuators.
+        actuators: usize,
+    },
     /// The start violated the loop-closing joints (relative violations before the
     /// projection) and was projected onto them.
     StartProjected {
@@ -79,6 +87,12 @@ impl core::fmt::Display for ModelNote {
             ModelNote::LimitsIgnored => {
                 f.write_str("joint limits (the joint-space reference has none; the liemid methods keep them)")
             }
+            ModelNote::ActuatorDampingUnclamped { actuators } => write!(
+                f,
+                "the force clamp of {actuators} actuator(s) with a viscous part (kv): the liemid methods hold kv \
+                 as an implicit joint damper outside the clamp (exact while the clamp is not reached; --method rk4 \
+                 clamps the whole force)"
+            ),
             ModelNote::StartProjected { position, velocity } => write!(
                 f,
                 "the start violated the loop-closing joints (relative position {position:.1e}, velocity \
@@ -214,6 +228,16 @@ impl Simulation {
         } else {
             model
         };
+        let unclamped = model
+            .actuators
+            .iter()
+            .filter(|a| {
+                a.bias[2] != 0.0 && (a.force_range.is_some() || model.joints[a.joint].actuator_force_range.is_some())
+            })
+            .count();
+        if unclamped > 0 {
+            notes.push(ModelNote::ActuatorDampingUnclamped { actuators: unclamped });
+        }
         let mut simulation = Simulation::new(model, method)?;
         let (state, position, velocity) = simulation.initial_state_on_loops(model)?;
         let energy = simulation.system.energy(&state);
@@ -255,6 +279,14 @@ impl Simulation {
         Ok(Simulation { system, integrator })
     }
 
+    /// Set the control held over the next steps ([`MultibodySystem::set_ctrl`]).
+    ///
+    /// # Errors
+    /// [`MultibodySystem::set_ctrl`]'s errors.
+    pub fn set_ctrl(&mut self, ctrl: &[f64]) -> Result<()> {
+        self.system.set_ctrl(ctrl)
+    }
+
     /// One step ([`Rattle::step`]).
     ///
     /// # Errors
@@ -271,7 +303,79 @@ impl Simulation {
     where
         O: FnMut(u64, &MultibodyState, &StepReport) -> core::result::Result<(), String>,
     {
+        self.check_step(state, h)?;
         self.integrator.integrate(&self.system, state, t_end, h, observer)
+    }
+
+    /// Refuse a step `h` at which the method cannot hold a damper or actuator row, naming
+    /// the joint and the largest step that holds it ([`Rattle::check_step`]); the
+    /// integrator is not touched.
+    ///
+    /// # Errors
+    /// [`Rattle::check_step`]'s.
+    pub fn check_step(&self, state: &MultibodyState, h: f64) -> Result<()> {
+        self.integrator.check_step(&self.system, state, h)
+    }
+
+    /// Integrate to `t_end` as [`Rattle::integrate`], the control set before every step:
+    /// `control(system, state, ctrl)` writes the control held over the step from
+    /// `state.t` into `ctrl` (which holds the previous step's; one buffer for the run),
+    /// then [`MultibodySystem::set_ctrl`] checks it (its length, finite values) — the
+    /// control of a Python callback, a table ([`super::control::ControlTable`], held) or a
+    /// constant. `observer(k, system, state, report)` after every step.
+    ///
+    /// # Errors
+    /// [`Rattle::integrate`]'s; [`Error::ObserverFailed`] when `control` returns an error;
+    /// [`Error::InvalidModel`] naming the actuator of a control that is not finite.
+    ///
+    /// Reference: docs/theory/multibody.md §8.
+    pub fn integrate_controlled<C, O>(
+        &mut self,
+        state: &mut MultibodyState,
+        t_end: f64,
+        h: f64,
+        mut control: C,
+        mut observer: O,
+    ) -> Result<MultibodyRun>
+    where
+        C: FnMut(&MultibodySystem, &MultibodyState, &mut [f64]) -> core::result::Result<(), String>,
+        O: FnMut(u64, &MultibodySystem, &MultibodyState, &StepReport) -> core::result::Result<(), String>,
+    {
+        let t0 = state.t;
+        let n = crate::rigid::driver::step_count(t0, t_end, h)?;
+        let e0 = self.system.energy(state);
+        let (p0, l0) = (self.system.linear_momentum(state), self.system.angular_momentum(state));
+        let mut run = MultibodyRun::default();
+        self.check_step(state, h)?;
+        let mut ctrl = self.system.ctrl.clone();
+        for k in 1..=n {
+            control(&self.system, state, &mut ctrl).map_err(|reason| Error::ObserverFailed { t: state.t, reason })?;
+            self.system.set_ctrl(&ctrl)?;
+            let t_next = if k == n { t_end } else { t0 + k as f64 * h };
+            let report = self.integrator.step(&self.system, state, t_next - state.t)?;
+            self.integrator.work.set_time(state, t_next);
+            run.steps = k;
+            run.max_position_violation = run.max_position_violation.max(report.position_violation);
+            run.max_velocity_violation = run.max_velocity_violation.max(report.velocity_violation);
+            run.max_iterations = run.max_iterations.max(report.iterations);
+            run.total_iterations += u64::from(report.iterations);
+            let energy = self.system.energy(state);
+            if !energy.is_finite() {
+                return Err(Error::NonFiniteResult {
+                    method: self.integrator.work.method_name,
+                    t: state.t,
+                    h,
+                });
+            }
+            let de = (energy - e0).abs();
+            run.max_energy_error = run.max_energy_error.max(if e0 != 0.0 { de / e0.abs() } else { de });
+            let dp = (self.system.linear_momentum(state) - p0).norm();
+            run.max_linear_momentum_change = run.max_linear_momentum_change.max(dp);
+            let dl = (self.system.angular_momentum(state) - l0).norm();
+            run.max_angular_momentum_change = run.max_angular_momentum_change.max(dl);
+            observer(k, &self.system, state, &report).map_err(|reason| Error::ObserverFailed { t: state.t, reason })?;
+        }
+        Ok(run)
     }
 
     /// The constraint violations of `state` with the integrator's active limits
@@ -317,6 +421,54 @@ pub struct JointSpaceRun {
 }
 
 impl JointSpaceModel {
+    /// [`Self::integrate_rk4`] with the control set before every step:
+    /// `control(t, q, v, ctrl)` writes the control held over the step from `t` into `ctrl`
+    /// (one buffer for the run), checked by [`JointSpaceModel::set_ctrl`].
+    ///
+    /// # Errors
+    /// [`Self::integrate_rk4`]'s; [`Error::ObserverFailed`] when `control` fails;
+    /// [`Error::InvalidModel`] naming the actuator of a control that is not finite.
+    ///
+    /// Reference: docs/theory/multibody.md §8.
+    pub fn integrate_rk4_controlled<C, O>(
+        &mut self,
+        q: &mut [f64],
+        v: &mut [f64],
+        (t0, t_end, h): (f64, f64, f64),
+        mut control: C,
+        mut observer: O,
+    ) -> Result<JointSpaceRun>
+    where
+        C: FnMut(f64, &[f64], &[f64], &mut [f64]) -> core::result::Result<(), String>,
+        O: FnMut(u64, f64, &[f64], &[f64]) -> core::result::Result<(), String>,
+    {
+        let n = crate::rigid::driver::step_count(t0, t_end, h)?;
+        let e0 = self.energy(q, v)?;
+        let mut run = JointSpaceRun::default();
+        let mut t = t0;
+        let mut ctrl = self.ctrl().to_vec();
+        for k in 1..=n {
+            control(t, q, v, &mut ctrl).map_err(|reason| Error::ObserverFailed { t, reason })?;
+            self.set_ctrl(&ctrl)?;
+            let t_next = if k == n { t_end } else { t0 + k as f64 * h };
+            self.rk4_step(q, v, t_next - t)?;
+            t = t_next;
+            if !q.iter().chain(v.iter()).all(|x| x.is_finite()) {
+                return Err(Error::NonFiniteResult {
+                    method: "RK4 (joint coordinates)",
+                    t,
+                    h,
+                });
+            }
+            run.steps = k;
+            let de = (self.energy(q, v).unwrap_or(f64::NAN) - e0).abs();
+            let relative = if e0 != 0.0 { de / e0.abs() } else { de };
+            run.max_energy_error = run.max_energy_error.max(relative);
+            observer(k, t, q, v).map_err(|reason| Error::ObserverFailed { t, reason })?;
+        }
+        Ok(run)
+    }
+
     /// Integrate `(q, v)` from `t0` to `t_end` by classical RK4 ([`JointSpaceModel::rk4_step`])
     /// with step `h` (the last step lands on `t_end`), calling `observer(k, t, q, v)` after
     /// every step; returns the steps and the largest energy error. The reference the

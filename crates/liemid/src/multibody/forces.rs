@@ -44,6 +44,26 @@ impl MultibodySystem {
                 apply(g, &grad, -par.stiffness * (q - par.spring_ref), force, torque);
             }
         }
+        // Actuators (docs/theory/multibody.md §8): the control clamped, the force at the
+        // coordinate without its viscous part (held by the dampers), clamped, times the
+        // gear, summed on the joint and clamped by its actuatorfrcrange.
+        for (k, acts) in &self.actuated {
+            let g = &self.joints[*k];
+            let (pi, pj) = pose(g, c, r);
+            let Some((q, grad)) = g.coordinate(pi, pj) else {
+                continue;
+            };
+            let mut total = 0.0;
+            for a in acts.clone() {
+                let act = &self.actuators[a];
+                let u = act.clamp_ctrl(self.ctrl[self.actuator_order[a]]);
+                total += act.gear * act.force(u, q, 0.0);
+            }
+            if let Some((lo, hi)) = self.joint_force_range[*k] {
+                total = total.clamp(lo, hi);
+            }
+            apply(g, &grad, total, force, torque);
+        }
         if let Some(hook) = self.hook.as_ref() {
             hook.add(t, c, r, force, torque);
         }

@@ -103,6 +103,75 @@ pub struct Joint {
     pub damping: f64,
     /// MJCF `armature` (kg m² or kg); 0 when absent.
     pub armature: f64,
+    /// Dry friction (MJCF `frictionloss`, N m or N) of a hinge or slide: the joint sticks
+    /// while the other generalized forces on it stay below it (docs/theory/multibody.md §8).
+    pub frictionloss: f64,
+    /// MJCF `actuatorfrcrange`: the clamp of the summed actuator force on this joint (after
+    /// each actuator's own clamp and gear), `None` when unlimited.
+    pub actuator_force_range: Option<(f64, f64)>,
+}
+
+/// An actuator on a hinge or slide joint, as MuJoCo defines it with a joint transmission:
+/// length `L = gear · qpos`, velocity `V = gear · q̇`, the control clamped to `ctrl_range`,
+/// the scalar force `f = (g₀ + g₁ L + g₂ V) u + b₀ + b₁ L + b₂ V` clamped to `force_range`,
+/// and the generalized force `gear · f` on the joint (MJCF `motor`: gain 1; `position`:
+/// gain `kp`, bias `(0, −kp, −kv)`; `velocity`: gain `kv`, bias `(0, 0, −kv)`; `general`
+/// with fixed or affine gain and bias, no activation dynamics).
+///
+/// Reference: docs/theory/multibody.md §8.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Actuator {
+    /// The name from the file (generated when it gives none).
+    pub name: String,
+    /// The joint it drives (an index into `Model::joints`, a tree hinge or slide).
+    pub joint: usize,
+    /// The transmission's gear (MJCF `gear`, first component).
+    pub gear: f64,
+    /// `(g₀, g₁, g₂)`: the gain `g₀ + g₁ L + g₂ V`.
+    pub gain: [f64; 3],
+    /// `(b₀, b₁, b₂)`: the bias `b₀ + b₁ L + b₂ V`.
+    pub bias: [f64; 3],
+    /// The control's clamp (MJCF `ctrlrange` when limited), `None` when unlimited.
+    pub ctrl_range: Option<(f64, f64)>,
+    /// The force's clamp (MJCF `forcerange` when limited), `None` when unlimited.
+    pub force_range: Option<(f64, f64)>,
+    /// MuJoCo's `qpos` minus the model's coordinate of the joint (its `ref`), so that
+    /// `L = gear · (q + length_offset)`.
+    pub length_offset: f64,
+}
+
+impl Actuator {
+    /// The control clamped to `ctrl_range`.
+    #[must_use]
+    pub fn clamp_ctrl(&self, u: f64) -> f64 {
+        match self.ctrl_range {
+            Some((lo, hi)) => u.clamp(lo, hi),
+            None => u,
+        }
+    }
+
+    /// The scalar force (before the gear) at the model coordinate `q` and rate `qdot`,
+    /// with the control `u` already clamped, clamped to `force_range` (MuJoCo's order).
+    #[must_use]
+    pub fn force(&self, u: f64, q: f64, qdot: f64) -> f64 {
+        let l = self.gear * (q + self.length_offset);
+        let v = self.gear * qdot;
+        let f = (self.gain[0] + self.gain[1] * l + self.gain[2] * v) * u
+            + self.bias[0]
+            + self.bias[1] * l
+            + self.bias[2] * v;
+        match self.force_range {
+            Some((lo, hi)) => f.clamp(lo, hi),
+            None => f,
+        }
+    }
+
+    /// The actuator's viscous part as a joint damping, `−gear² b₂` (N m s/rad or N s/m),
+    /// the coefficient of `−q̇` in `gear · f` when no clamp acts.
+    #[must_use]
+    pub fn damping(&self) -> f64 {
+        -self.gear * self.gear * self.bias[2]
+    }
 }
 
 /// A whole model: bodies, joints, gravity and the starting joint coordinates.
@@ -123,6 +192,10 @@ pub struct Model {
     pub qpos: Option<Vec<f64>>,
     /// Starting joint velocities (free 6, ball 3, hinge 1, slide 1); `None`: at rest.
     pub qvel: Option<Vec<f64>>,
+    /// Actuators (MJCF `<actuator>` on hinge and slide joints), in file order.
+    pub actuators: Vec<Actuator>,
+    /// The starting control, one value per actuator (MJCF keyframe `ctrl`); `None`: zero.
+    pub ctrl: Option<Vec<f64>>,
 }
 
 use crate::error::{Error, Result};
@@ -421,7 +494,28 @@ impl Model {
             if !j.spring_ref.is_finite() {
                 return Err(invalid(format!("{name}: spring_ref = {} is not finite", j.spring_ref)));
             }
+            if !(j.frictionloss.is_finite() && j.frictionloss >= 0.0) {
+                return Err(invalid(format!(
+                    "{name}: frictionloss = {} must be finite and >= 0",
+                    j.frictionloss
+                )));
+            }
+            let one_dof = matches!(j.kind, JointKind::Hinge { .. } | JointKind::Slide { .. });
+            if j.frictionloss > 0.0 && !(one_dof && k < nb) {
+                return Err(invalid(format!(
+                    "{name}: frictionloss on a {} joint is not simulated (hinge and slide tree joints only)",
+                    j.kind.name()
+                )));
+            }
+            if let Some((lo, hi)) = j.actuator_force_range {
+                if lo.is_nan() || hi.is_nan() || lo > hi {
+                    return Err(invalid(format!(
+                        "{name}: actuatorfrcrange ({lo}, {hi}) is upside down or NaN (lower <= upper)"
+                    )));
+                }
+            }
         }
+        self.validate_actuators()?;
         if let Some(q) = &self.qpos {
             if q.len() != self.nq() {
                 return Err(invalid(format!(
@@ -444,6 +538,72 @@ impl Model {
             }
             if let Some(k) = v.iter().position(|x| !x.is_finite()) {
                 return Err(invalid(format!("qvel[{k}] = {} is not finite", v[k])));
+            }
+        }
+        Ok(())
+    }
+
+    /// Check the actuators and the starting control: each drives a tree hinge or slide, its
+    /// gear, gain and bias finite, its ranges ordered (`lower <= upper`), no anti-damping
+    /// bias (`b₂ > 0`); `ctrl` one finite value per actuator. Errors name the actuator.
+    ///
+    /// # Errors
+    /// [`Error::InvalidModel`] with the reason.
+    pub fn validate_actuators(&self) -> Result<()> {
+        let nb = self.bodies.len();
+        for (a, act) in self.actuators.iter().enumerate() {
+            let name = format!("actuator `{}` ({a})", act.name);
+            let Some(j) = self.joints.get(act.joint).filter(|_| act.joint < nb) else {
+                return Err(invalid(format!(
+                    "{name}: joint index {} is not a tree joint of the model",
+                    act.joint
+                )));
+            };
+            if !matches!(j.kind, JointKind::Hinge { .. } | JointKind::Slide { .. }) {
+                return Err(invalid(format!(
+                    "{name}: drives joint `{}`, a {} joint (hinge and slide joints only)",
+                    j.name,
+                    j.kind.name()
+                )));
+            }
+            let finite = act.gear.is_finite()
+                && act.length_offset.is_finite()
+                && act.gain.iter().chain(&act.bias).all(|x| x.is_finite());
+            if !finite {
+                return Err(invalid(format!(
+                    "{name}: gear {}, gain {:?} and bias {:?} must be finite",
+                    act.gear, act.gain, act.bias
+                )));
+            }
+            if act.bias[2] > 0.0 {
+                return Err(invalid(format!(
+                    "{name}: velocity bias {} > 0 is anti-damping (a negative kv)",
+                    act.bias[2]
+                )));
+            }
+            for (what, r) in [("ctrlrange", act.ctrl_range), ("forcerange", act.force_range)] {
+                if let Some((lo, hi)) = r {
+                    if lo.is_nan() || hi.is_nan() || lo > hi {
+                        return Err(invalid(format!(
+                            "{name}: {what} ({lo}, {hi}) is upside down or NaN (lower <= upper)"
+                        )));
+                    }
+                }
+            }
+        }
+        if let Some(u) = &self.ctrl {
+            if u.len() != self.actuators.len() {
+                return Err(invalid(format!(
+                    "ctrl has {} entries, the model has {} actuators",
+                    u.len(),
+                    self.actuators.len()
+                )));
+            }
+            if let Some(k) = u.iter().position(|x| !x.is_finite()) {
+                return Err(invalid(format!(
+                    "ctrl[{k}] (actuator `{}`) = {} is not finite",
+                    self.actuators[k].name, u[k]
+                )));
             }
         }
         Ok(())

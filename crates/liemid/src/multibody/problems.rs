@@ -69,6 +69,8 @@ fn joint(
         spring_ref: 0.0,
         damping: 0.0,
         armature: 0.0,
+        frictionloss: 0.0,
+        actuator_force_range: None,
     }
 }
 
@@ -119,6 +121,8 @@ pub fn double_pendulum() -> Model {
         timestep: Some(1e-3),
         qpos: Some(vec![1.0, 0.5]),
         qvel: None,
+        actuators: Vec::new(),
+        ctrl: None,
     }
 }
 
@@ -177,6 +181,8 @@ pub fn chain(n: usize) -> Model {
         timestep: Some(1e-4),
         qpos: Some(qpos),
         qvel: None,
+        actuators: Vec::new(),
+        ctrl: None,
     }
 }
 
@@ -248,6 +254,8 @@ pub fn spacecraft() -> Model {
         timestep: Some(1e-3),
         qpos: Some(vec![0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0]),
         qvel: Some(vec![0.0, 0.0, 0.0, w.x, w.y, w.z, 0.0, 0.0]),
+        actuators: Vec::new(),
+        ctrl: None,
     }
 }
 
@@ -314,6 +322,8 @@ pub fn closed_loop() -> Model {
         timestep: Some(1e-3),
         qpos: None,
         qvel: None,
+        actuators: Vec::new(),
+        ctrl: None,
     }
 }
 
@@ -388,6 +398,8 @@ pub fn test_chain() -> Model {
         timestep: Some(1e-4),
         qpos: Some(qpos),
         qvel: None,
+        actuators: Vec::new(),
+        ctrl: None,
     }
 }
 
@@ -421,5 +433,7 @@ pub fn fast_top_ball() -> Model {
         timestep: Some(1e-4),
         qpos: Some(qpos),
         qvel: Some(vec![0.0, 0.0, spin]),
+        actuators: Vec::new(),
+        ctrl: None,
     }
 }

@@ -37,6 +37,11 @@
 //! tree and the constraint solves see `𝕁` in tree order (`armature.rs`,
 //! docs/theory/multibody.md §7); armature on other joints is refused.
 //!
+//! **Actuators** act as springs (their position part, a force of the configuration) and
+//! dampers (their `kv`, held by the implicit damper half-kicks); **joint friction**
+//! (`frictionloss`) is a bounded force chosen in both half-kicks (`friction.rs`), so a
+//! joint sticks exactly when the other forces are smaller (docs/theory/multibody.md §8).
+//!
 //! Reference: E. Hairer, C. Lubich, G. Wanner, *Geometric Numerical Integration*, 2nd ed.,
 //! Springer 2006, VII.1; B. Leimkuhler, S. Reich, *Simulating Hamiltonian Dynamics*,
 //! Cambridge 2004, ch. 7-8; P. Krysl, Int. J. Numer. Meth. Engng 63 (2005) (LIEMID\[EA\]).
@@ -263,8 +268,15 @@ impl Workspace {
         if sys.has_damping {
             self.start_dampers(sys, state, t, hh, report)?;
         }
+        if sys.has_friction {
+            if !sys.has_damping {
+                self.damp_f.iter_mut().for_each(|v| *v = Vec3::ZERO);
+                self.damp_t.iter_mut().for_each(|v| *v = Vec3::ZERO);
+            }
+            self.start_friction(sys, (&state.c, &state.rotation), (&state.p, &state.pi), t, hh, report)?;
+        }
         for i in 0..nb {
-            let (df, dt) = if sys.has_damping {
+            let (df, dt) = if sys.has_damping || sys.has_friction {
                 (self.damp_f[i], self.damp_t[i])
             } else {
                 (Vec3::ZERO, Vec3::ZERO)

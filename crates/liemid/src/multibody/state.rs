@@ -118,6 +118,26 @@ impl MultibodySystem {
         g.coordinate(pi, pj).map(|(q, _)| q)
     }
 
+    /// The rate of joint `k` (hinge rad/s, slide m/s): the coordinate's gradient applied
+    /// to the bodies' velocities `v = p/m`, `Ω = I⁻¹ Π`; `None` for other kinds.
+    #[must_use]
+    pub fn joint_rate(&self, state: &MultibodyState, k: usize) -> Option<f64> {
+        let g = self.joints.get(k)?;
+        let (pi, pj) = pose(g, &state.c, &state.rotation);
+        let (_, row) = g.coordinate(pi, pj)?;
+        let vel = |i: usize| {
+            (
+                state.p[i] * (1.0 / self.mass[i]),
+                self.inertia[i].apply_inverse(state.pi[i]),
+            )
+        };
+        let (vi, wi) = g
+            .parent
+            .map_or((crate::linalg::Vec3::ZERO, crate::linalg::Vec3::ZERO), vel);
+        let (vj, wj) = vel(g.child);
+        Some(row.rate(vi, wi, vj, wj))
+    }
+
     /// The energy: `Σ |p|²/2m + ½ Π·I⁻¹Π − Σ (m g + F_i)·c + Σ ½ k (q − q_ref)²` (the
     /// constant body torques have no potential); with hinge armature `½ Πᵀ 𝕁⁻¹ Π` in place
     /// of `½ Π·I⁻¹Π`, which includes every `½ a q̇²` (docs/theory/multibody.md §7).

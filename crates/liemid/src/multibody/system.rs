@@ -57,9 +57,21 @@ pub struct MultibodySystem {
     pub(super) gravity: Vec3,
     pub(super) length: f64,
     pub(super) has_damping: bool,
+    /// Whether a joint has dry friction (`frictionloss`).
+    pub(super) has_friction: bool,
     pub(super) const_force: Vec<Vec3>,
     pub(super) const_torque: Vec<Vec3>,
     pub(super) hook: Option<Box<dyn ForceHook>>,
+    /// The actuators, grouped by joint (`actuated`: the joint and the range of its
+    /// actuators in `actuators`, in joint order), and the current control (one value per
+    /// actuator, in the model's order; `actuator_order` maps a group position to it).
+    pub(super) actuators: Vec<super::model::Actuator>,
+    pub(super) actuator_order: Vec<usize>,
+    pub(super) actuated: Vec<(usize, core::ops::Range<usize>)>,
+    pub(super) actuator_names: Vec<String>,
+    pub(super) ctrl: Vec<f64>,
+    /// The summed actuator force clamp per joint (`actuatorfrcrange`).
+    pub(super) joint_force_range: Vec<Option<(f64, f64)>>,
     /// Counts the edits of the forces ([`Self::set_body_load`], [`Self::set_force_hook`]),
     /// so that an integrator's cached start forces are known to be stale.
     pub(super) revision: u64,
@@ -85,6 +97,17 @@ impl MultibodySystem {
     /// maximal coordinates, docs/theory/multibody.md §7).
     pub fn new(model: &Model) -> Result<Self> {
         model.validate()?;
+        for (a, act) in model.actuators.iter().enumerate() {
+            if act.gain[2] != 0.0 {
+                return Err(Error::InvalidModel {
+                    reason: format!(
+                        "actuator `{}` ({a}): a gain that depends on the velocity (gainprm[2] = {}) is not simulated \
+                         by the maximal-coordinate methods (--method rk4 has it)",
+                        act.name, act.gain[2]
+                    ),
+                });
+            }
+        }
         let nb = model.bodies.len();
         let nj = model.joints.len();
         for (k, j) in model.joints.iter().enumerate() {
@@ -141,10 +164,27 @@ impl MultibodySystem {
                     } else {
                         0.0
                     },
+                    frictionloss: if one_dof { j.frictionloss } else { 0.0 },
                     range: if one_dof { j.range } else { None },
                 }
             })
             .collect();
+        let mut params: Vec<JointParams> = params;
+        // An actuator's viscous bias `b₂ V` is a damper `−gear² b₂ q̇` on its joint, held
+        // implicitly with the joint's own (docs/theory/multibody.md §8).
+        for act in &model.actuators {
+            params[act.joint].damping += act.damping();
+        }
+        let mut actuator_order: Vec<usize> = (0..model.actuators.len()).collect();
+        actuator_order.sort_by_key(|&a| model.actuators[a].joint);
+        let actuators: Vec<_> = actuator_order.iter().map(|&a| model.actuators[a].clone()).collect();
+        let mut actuated: Vec<(usize, core::ops::Range<usize>)> = Vec::new();
+        for (k, act) in actuators.iter().enumerate() {
+            match actuated.last_mut() {
+                Some((j, r)) if *j == act.joint => r.end = k + 1,
+                _ => actuated.push((act.joint, k..k + 1)),
+            }
+        }
         let z3 = vec![Vec3::ZERO; nb];
         Ok(MultibodySystem {
             name: model.name.clone(),
@@ -156,6 +196,7 @@ impl MultibodySystem {
             inertia,
             com: model.bodies.iter().map(|b| b.com).collect(),
             has_damping: params.iter().any(|p| p.damping > 0.0),
+            has_friction: params.iter().any(|p| p.frictionloss > 0.0),
             params,
             pairs,
             joints,
@@ -164,6 +205,12 @@ impl MultibodySystem {
             const_force: z3.clone(),
             const_torque: z3,
             hook: None,
+            actuator_names: model.actuators.iter().map(|a| a.name.clone()).collect(),
+            ctrl: model.ctrl.clone().unwrap_or_else(|| vec![0.0; model.actuators.len()]),
+            actuators,
+            actuator_order,
+            actuated,
+            joint_force_range: model.joints.iter().map(|j| j.actuator_force_range).collect(),
             revision: 0,
         })
     }
@@ -241,9 +288,66 @@ impl MultibodySystem {
         Ok(())
     }
 
+    /// Number of actuators.
+    #[must_use]
+    pub fn actuator_count(&self) -> usize {
+        self.ctrl.len()
+    }
+
+    /// The actuators' names, in the model's order (the order of `ctrl`).
+    #[must_use]
+    pub fn actuator_names(&self) -> &[String] {
+        &self.actuator_names
+    }
+
+    /// The current control, one value per actuator in the model's order.
+    #[must_use]
+    pub fn ctrl(&self) -> &[f64] {
+        &self.ctrl
+    }
+
+    /// Set the control (held over the following steps until set again; MuJoCo's
+    /// `d.ctrl`). Each value is clamped to its actuator's `ctrlrange` when the forces are
+    /// evaluated. An unchanged control keeps the integrator's cached start forces.
+    ///
+    /// # Errors
+    /// [`Error::InvalidModel`] naming the actuator for a length other than
+    /// [`Self::actuator_count`] or a value that is not finite (MuJoCo zeroes every control
+    /// on a NaN; here it is refused).
+    pub fn set_ctrl(&mut self, ctrl: &[f64]) -> Result<()> {
+        check_ctrl(&self.actuator_names, ctrl)?;
+        if ctrl != self.ctrl.as_slice() {
+            self.ctrl.copy_from_slice(ctrl);
+            self.revision += 1;
+        }
+        Ok(())
+    }
+
     /// Install a force hook (replacing any earlier one).
     pub fn set_force_hook(&mut self, hook: Box<dyn ForceHook>) {
         self.hook = Some(hook);
         self.revision += 1;
     }
+}
+
+/// Check a control vector against the actuators' names: the length, every value finite.
+///
+/// # Errors
+/// [`Error::InvalidModel`] naming the actuator.
+pub fn check_ctrl(names: &[String], ctrl: &[f64]) -> Result<()> {
+    if ctrl.len() != names.len() {
+        return Err(Error::InvalidModel {
+            reason: format!(
+                "ctrl has {} values, the model has {} actuators",
+                ctrl.len(),
+                names.len()
+            ),
+        });
+    }
+    if let Some(k) = ctrl.iter().position(|x| !x.is_finite()) {
+        return Err(Error::InvalidModel {
+            reason: format!("ctrl[{k}] (actuator `{}`) = {} is not finite", names[k], ctrl[k]),
+        });
+    }
+    Ok(())
 }

@@ -38,6 +38,12 @@ impl Workspace {
         } else {
             self.velocity_pass(sys, hh, any_rows, report)?;
         }
+        if sys.has_friction {
+            // The friction rows after the other forces (`friction.rs`), then the μ-kick
+            // with them.
+            self.end_friction(sys, t, hh, any_rows)?;
+            self.velocity_pass(sys, hh, any_rows, report)?;
+        }
         // Apply the end kick into p_half / pi_new.
         for i in 0..nb {
             self.p_half[i] += (self.force1[i] + self.damp_f[i]) * hh;

@@ -119,6 +119,8 @@ pub(super) struct Workspace {
     pub(super) damp_t: Vec<Vec3>,
     /// Scratch of the implicit damper solve (`dampers.rs`).
     pub(super) dampers: DamperScratch,
+    /// The joint friction rows' scratch (`friction.rs`).
+    pub(super) friction: super::friction::FrictionScratch,
     pub(super) vel: Vec<Vec3>,
     pub(super) omega: Vec<Vec3>,
     pub(super) solver: TreeSolver,
@@ -207,6 +209,7 @@ impl Workspace {
             damp_f: z3.clone(),
             damp_t: z3.clone(),
             dampers: DamperScratch::new(3 * nj, nb),
+            friction: super::friction::FrictionScratch::new(sys),
             vel: z3.clone(),
             omega: z3,
             solver: {

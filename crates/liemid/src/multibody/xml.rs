@@ -473,6 +473,9 @@ pub(crate) struct RawBody {
     pub spring_ref: f64,
     pub damping: f64,
     pub armature: f64,
+    /// Dry friction and the summed actuator force clamp of the joint.
+    pub frictionloss: f64,
+    pub actuator_force_range: Option<(f64, f64)>,
     pub merge: Merge,
     /// The shapes drawn with the body, posed in its frame (`body` not yet set).
     pub shapes: Vec<super::shapes::Shape>,
@@ -638,6 +641,8 @@ pub(crate) fn build(mut raw: Vec<RawBody>) -> Result<Built> {
             spring_ref: b.spring_ref,
             damping: b.damping,
             armature: b.armature,
+            frictionloss: b.frictionloss,
+            actuator_force_range: b.actuator_force_range,
         });
     }
     Ok(Built {

@@ -259,9 +259,20 @@ fn menagerie_style_arm() {
     close(q[1], 0.5, 0.0);
     close(q[2], -0.5, 1e-15);
     assert_eq!(m.qvel, None);
+    // Actuators: two position servos of class "arm" (kp 100, dampratio 1: kv = 2 √(kp M₀)
+    // at the reference pose) and a motor on the wrist, whose length is MuJoCo's qpos (the
+    // model's coordinate + ref); the keyframe's ctrl.
+    let names: Vec<&str> = m.actuators.iter().map(|a| a.name.as_str()).collect();
+    assert_eq!(names, ["actuator1", "actuator2", "actuator3"]);
+    assert_eq!((m.actuators[0].gain[0], m.actuators[0].bias[1]), (100.0, -100.0));
+    assert!(m.actuators[0].bias[2] < 0.0 && m.actuators[1].bias[2] < 0.0);
     assert_eq!(
-        l.ignored.iter().filter(|s| *s == "actuator").count(),
-        1,
+        (m.actuators[2].ctrl_range, m.actuators[2].length_offset),
+        (Some((-5.0, 5.0)), 0.2)
+    );
+    assert_eq!(m.ctrl, Some(vec![0.0, 0.5, 0.0]));
+    assert!(
+        !l.ignored.iter().any(|s| s.contains("actuator") || s.contains("ctrl")),
         "{:?}",
         l.ignored
     );
@@ -273,7 +284,6 @@ fn menagerie_style_arm() {
         "camera",
         "geom contacts",
         "option integrator",
-        "key ctrl",
     ] {
         assert!(l.ignored.iter().any(|s| s == kind), "{kind} not in {:?}", l.ignored);
     }

@@ -56,6 +56,8 @@ fn joint(bodies: &[Body], name: &str, kind: JointKind, parent: Link, child: usiz
         spring_ref: 0.0,
         damping: 0.0,
         armature: 0.0,
+        frictionloss: 0.0,
+        actuator_force_range: None,
     }
 }
 
@@ -68,6 +70,8 @@ fn model(name: &str, bodies: Vec<Body>, joints: Vec<Joint>, gravity: Vec3) -> Mo
         timestep: None,
         qpos: None,
         qvel: None,
+        actuators: Vec::new(),
+        ctrl: None,
     }
 }
 

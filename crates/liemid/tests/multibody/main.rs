@@ -12,11 +12,13 @@ mod thread_counting;
 #[global_allocator]
 static GLOBAL: thread_counting::Counting = thread_counting::Counting;
 
+mod actuators;
 mod armature;
 mod ball_spring;
 mod dampers;
 mod equality;
 mod files;
+mod friction;
 mod include;
 mod joint_space;
 mod merged;

@@ -73,6 +73,10 @@ impl JointSpaceModel {
         }
         self.kinematics(q)?;
         self.velocities(v)?;
+        let actuated = !self.actuators.is_empty();
+        if actuated {
+            self.actuator_forces(q, v);
+        }
         let w = &mut self.w;
         let nb = self.nodes.len();
         for (i, n) in self.nodes.iter().enumerate() {
@@ -101,6 +105,9 @@ impl JointSpaceModel {
             // (A free joint's six velocities carry no passive force.)
             for (u, f) in w.uu[i].iter_mut().zip(Self::passive(n, q, v)).take(nd) {
                 *u += f;
+            }
+            if actuated && nd == 1 {
+                w.uu[i][0] += w.qfrc[n.iv];
             }
             if nd > 0 {
                 w.dinv[i] = invert_small(&d, nd).ok_or_else(|| {
@@ -192,6 +199,10 @@ impl JointSpaceModel {
         }
         self.kinematics(q)?;
         self.velocities(v)?;
+        let actuated = !self.actuators.is_empty();
+        if actuated {
+            self.actuator_forces(q, v);
+        }
         let w = &mut self.w;
         let a0 = sv(Vec3::ZERO, -self.gravity);
         // Forces accumulate in `pa`.

@@ -132,6 +132,8 @@ struct Work {
     /// `u = τ − Sᵀ pᴬ`.
     uu: Vec<[f64; 6]>,
     acc: Vec<SV>,
+    /// The actuators' generalized forces over `v`.
+    qfrc: Vec<f64>,
     /// RK4 stage buffers over `y = [q; v]`.
     y0: Vec<f64>,
     yt: Vec<f64>,
@@ -160,6 +162,11 @@ pub struct JointSpaceModel {
     qpos0: Vec<f64>,
     q_init: Vec<f64>,
     v_init: Vec<f64>,
+    /// The actuators with their joint's `(iq, iv)`, the joints' summed-force clamps (per
+    /// `v` entry), the current control.
+    actuators: Vec<(crate::multibody::model::Actuator, usize, usize)>,
+    force_range: Vec<Option<(f64, f64)>>,
+    ctrl: Vec<f64>,
     w: Work,
 }
 
@@ -308,6 +315,14 @@ impl JointSpaceModel {
                     )));
                 }
             }
+            if j.frictionloss != 0.0 {
+                return Err(invalid(format!(
+                    "joint `{}`: frictionloss = {} is not simulated by the joint-space methods (dry friction is \
+                     a constraint, as MuJoCo treats it, which an ODE method cannot hold exactly; the liemid methods \
+                     hold it)",
+                    j.name, j.frictionloss
+                )));
+            }
             for (name, x) in [
                 ("stiffness", j.stiffness),
                 ("spring_ref", j.spring_ref),
@@ -402,11 +417,27 @@ impl JointSpaceModel {
             dinv: vec![ZERO66; nb],
             uu: vec![[0.0; 6]; nb],
             acc: vec![ZERO6; nb],
+            qfrc: vec![0.0; nv],
             y0: vec![0.0; nq + nv],
             yt: vec![0.0; nq + nv],
             k: core::array::from_fn(|_| vec![0.0; nq + nv]),
         };
+        model.validate_actuators()?;
+        let actuators = model
+            .actuators
+            .iter()
+            .map(|a| (a.clone(), out[a.joint].iq, out[a.joint].iv))
+            .collect();
+        let mut force_range = vec![None; nv];
+        for (k, j) in model.joints.iter().enumerate().take(nb) {
+            if out[k].nd == 1 {
+                force_range[out[k].iv] = j.actuator_force_range;
+            }
+        }
         let mut m = JointSpaceModel {
+            actuators,
+            force_range,
+            ctrl: model.ctrl.clone().unwrap_or_else(|| vec![0.0; model.actuators.len()]),
             nodes: out,
             gravity: model.gravity,
             nq,
@@ -420,6 +451,50 @@ impl JointSpaceModel {
         let q = m.q_init.clone();
         m.kinematics(&q)?;
         Ok(m)
+    }
+
+    /// The current control, one value per actuator (the model's order).
+    #[must_use]
+    pub fn ctrl(&self) -> &[f64] {
+        &self.ctrl
+    }
+
+    /// Set the control, held until set again (MuJoCo's `d.ctrl`).
+    ///
+    /// # Errors
+    /// [`Error::InvalidModel`] naming the actuator for a wrong length or a value that is
+    /// not finite.
+    pub fn set_ctrl(&mut self, ctrl: &[f64]) -> Result<()> {
+        if ctrl.len() != self.ctrl.len() {
+            return Err(invalid(format!(
+                "ctrl has {} values, the model has {} actuators",
+                ctrl.len(),
+                self.ctrl.len()
+            )));
+        }
+        if let Some(k) = ctrl.iter().position(|x| !x.is_finite()) {
+            return Err(invalid(format!(
+                "ctrl[{k}] (actuator `{}`) = {} is not finite",
+                self.actuators[k].0.name, ctrl[k]
+            )));
+        }
+        self.ctrl.copy_from_slice(ctrl);
+        Ok(())
+    }
+
+    /// The actuators' generalized forces at `(q, v)` into `qfrc` (MuJoCo's
+    /// `qfrc_actuator`: each force clamped, times the gear, summed, the joint's clamp).
+    fn actuator_forces(&mut self, q: &[f64], v: &[f64]) {
+        let qfrc = &mut self.w.qfrc;
+        qfrc.iter_mut().for_each(|x| *x = 0.0);
+        for ((act, iq, iv), &u) in self.actuators.iter().zip(&self.ctrl) {
+            qfrc[*iv] += act.gear * act.force(act.clamp_ctrl(u), q[*iq], v[*iv]);
+        }
+        for (f, r) in qfrc.iter_mut().zip(&self.force_range) {
+            if let Some((lo, hi)) = r {
+                *f = f.clamp(*lo, *hi);
+            }
+        }
     }
 
     /// Number of position coordinates (free 7, ball 4, hinge 1, slide 1, weld 0).

@@ -161,5 +161,7 @@ fn loop_joint(
         spring_ref: 0.0,
         damping: 0.0,
         armature: 0.0,
+        frictionloss: 0.0,
+        actuator_force_range: None,
     }
 }

@@ -166,6 +166,11 @@ impl<'a, 'i> State<'a, 'i> {
                 (b.stiffness != 0.0, "a spring (stiffness)"),
                 (b.damping != 0.0, "a damper (damping)"),
                 (b.armature != 0.0, "a rotor inertia (armature)"),
+                (b.frictionloss != 0.0, "dry friction (frictionloss)"),
+                (
+                    b.actuator_force_range.is_some(),
+                    "an actuator force clamp (actuatorfrcrange)",
+                ),
             ];
             if let Some((_, what)) = what.iter().find(|(bad, _)| *bad) {
                 return Err(cx.err(
@@ -249,7 +254,7 @@ impl<'a, 'i> State<'a, 'i> {
             iq += dq;
             iv += dv;
         }
-        self.note_other_attributes(key, &["name", "qpos", "qvel", "time"]);
+        self.note_other_attributes(key, &["name", "qpos", "qvel", "time", "ctrl"]);
         Ok((q_in.map(|_| qpos), v_in.map(|_| qvel)))
     }
 }

@@ -10,8 +10,9 @@
 //! childclass>`, `<inertial pos quat… mass diaginertia|fullinertia>`, geoms for mass when
 //! a body has no inertial (sphere, capsule, cylinder, box, ellipsoid; `size`, `fromto`,
 //! `mass` or `density`, default 1000), `<joint type=hinge|slide|ball|free axis pos range
-//! limited ref springref stiffness damping armature>`, `<freejoint>` and the first
-//! `<keyframe><key qpos qvel>`.
+//! limited ref springref stiffness damping armature frictionloss actuatorfrcrange>`,
+//! `<freejoint>`, `<actuator>` (`motor`, `position`, `velocity`, `general` on hinges and
+//! slides, see [`mod@actuator`]) and the first `<keyframe><key qpos qvel ctrl>`.
 //!
 //! Decisions:
 //! - A body without a joint is welded to its parent (a `Weld` joint); if it has no mass
@@ -31,8 +32,8 @@
 //!   no exact form on the merged joint and are refused, naming the body and the joint; so
 //!   is any other combination (a hinge and a slide on one axis, a ball or a free joint with
 //!   others, four hinges, parallel axes, different anchors), naming the body and its
-//!   joints. Actuators are not simulated (listed in [`Loaded::ignored`]), on merged joints
-//!   as on any other.
+//!   joints. Actuators on merged hinges are listed as not simulated (the merged joint has no
+//!   coordinate per hinge).
 //! - Hinge and slide `ref`: MuJoCo's `qpos0 = ref`, i.e. the body pose in the file is the
 //!   pose at joint value `ref`. The model's reference is the body pose in the file at joint
 //!   coordinate 0, so the model's coordinate is MuJoCo's `qpos − ref`: `range`,
@@ -46,7 +47,7 @@
 //!   other equalities are listed as ignored.
 //! - `<include file>` is expanded as MuJoCo does (see [`mod@include`]); `<frame>`,
 //!   `<composite>`, `<flexcomp>`, `<replicate>` and `<attach>` are refused (they add or move
-//!   bodies); actuators, tendons, sensors, joint and tendon equalities, contacts,
+//!   bodies); tendons, sensors, joint and tendon equalities, contacts,
 //!   geom contact and visual properties, sites, cameras, lights, assets and the like are
 //!   listed in [`Loaded::ignored`].
 
@@ -63,6 +64,7 @@ use super::xml::{
 use crate::error::Result;
 use crate::linalg::{Mat3, Vec3};
 
+pub mod actuator;
 mod equality;
 mod geom;
 pub mod include;
@@ -106,6 +108,7 @@ fn parse_assembled(text: &str, name_for_errors: &str, sources: &Sources) -> Resu
         joint_names: HashMap::new(),
         materials: HashMap::new(),
         world_shapes: Vec::new(),
+        joint_refs: HashMap::new(),
     };
     st.classes.insert("main", Class::default());
     let elements: Vec<Node> = root.children().filter(Node::is_element).collect();
@@ -122,6 +125,7 @@ fn parse_assembled(text: &str, name_for_errors: &str, sources: &Sources) -> Resu
     let mut timestep = None;
     let mut keys = Vec::new();
     let mut equalities = Vec::new();
+    let mut actuators = Vec::new();
     for &node in &elements {
         match node.tag_name().name() {
             "compiler" | "default" => {}
@@ -143,6 +147,7 @@ fn parse_assembled(text: &str, name_for_errors: &str, sources: &Sources) -> Resu
             "worldbody" => st.read_children(node, None, "main")?,
             "keyframe" => keys.extend(node.children().filter(|c| c.has_tag_name("key"))),
             "equality" => equalities.push(node),
+            "actuator" => actuators.push(node),
             "include" => return Err(cx.err(node, NO_INCLUDE)),
             other => st.ignored.note(other),
         }
@@ -164,9 +169,16 @@ fn parse_assembled(text: &str, name_for_errors: &str, sources: &Sources) -> Resu
         timestep,
         qpos,
         qvel,
+        actuators: Vec::new(),
+        ctrl: None,
     };
     let loops = equality::loop_joints(&cx, &equalities, &model, &built.merged, &mut st.ignored)?;
     model.joints.extend(loops);
+    let kept = st.read_actuators(&actuators, &mut model)?;
+    if let Some(&key) = keys.first() {
+        st.read_key_ctrl(key, &kept, &mut model)?;
+    }
+    model.validate_actuators().map_err(|e| cx.err(root, e.to_string()))?;
     Ok(Loaded {
         files: Vec::new(),
         model,
@@ -212,6 +224,9 @@ impl Default for Compiler {
 struct Class<'a> {
     joint: HashMap<&'a str, &'a str>,
     geom: HashMap<&'a str, &'a str>,
+    /// Every actuator shortcut's defaults in one map (MuJoCo's shortcuts all set the one
+    /// actuator default of a class).
+    actuator: HashMap<&'a str, &'a str>,
 }
 
 struct State<'a, 'i> {
@@ -228,6 +243,8 @@ struct State<'a, 'i> {
     materials: HashMap<&'a str, [f32; 4]>,
     /// The shapes of `<worldbody>`'s own geoms.
     world_shapes: Vec<crate::multibody::shapes::Shape>,
+    /// The `ref` of each named hinge and slide (MuJoCo's `qpos` minus the model's).
+    joint_refs: HashMap<String, f64>,
 }
 
 /// An element with its default class: attribute lookup falls back on the class.
@@ -264,6 +281,23 @@ impl<'a, 'i> State<'a, 'i> {
             if !known.contains(&a.name()) {
                 self.ignored.note(&format!("{} {}", node.tag_name().name(), a.name()));
             }
+        }
+    }
+
+    /// Whether a range is limited: `limited` (`true`, `false` or `auto`, the default),
+    /// `auto` meaning "when a range is given" under `compiler autolimits` (an error without).
+    fn limited(&self, node: Node, limited: Option<&str>, has_range: bool, range: &str) -> Result<bool> {
+        match limited.unwrap_or("auto") {
+            "auto" => {
+                if has_range && !self.compiler.autolimits {
+                    return Err(self.cx.err(
+                        node,
+                        format!("{range} given without its limited attribute while compiler autolimits is false"),
+                    ));
+                }
+                Ok(has_range)
+            }
+            v => parse_bool(&self.cx, node, range, v),
         }
     }
 
@@ -318,6 +352,8 @@ impl<'a, 'i> State<'a, 'i> {
             let map = match c.tag_name().name() {
                 "joint" => &mut class.joint,
                 "geom" => &mut class.geom,
+                "general" | "motor" | "position" | "velocity" | "intvelocity" | "damper" | "cylinder" | "muscle"
+                | "adhesion" => &mut class.actuator,
                 _ => continue,
             };
             for a in c.attributes() {
@@ -510,6 +546,8 @@ impl<'a, 'i> State<'a, 'i> {
             spring_ref: 0.0,
             damping: 0.0,
             armature: 0.0,
+            frictionloss: 0.0,
+            actuator_force_range: None,
             merge: Merge::IfMassless,
             shapes,
             file,
@@ -665,8 +703,35 @@ impl<'a, 'i> State<'a, 'i> {
         if kind == RawKind::Free && (body.stiffness != 0.0 || body.damping != 0.0) {
             self.ignored.note("free joint stiffness and damping");
         }
-        if num("frictionloss")?.is_some_and(|f| f != 0.0) {
-            self.ignored.note("joint frictionloss");
+        body.frictionloss = num("frictionloss")?.unwrap_or(0.0);
+        if body.frictionloss < 0.0 {
+            return Err(cx.err(node, format!("negative frictionloss {}", body.frictionloss)));
+        }
+        if body.frictionloss != 0.0 && !matches!(kind, RawKind::Hinge(_) | RawKind::Slide(_)) {
+            self.ignored.note(&format!("{ty} joint frictionloss"));
+            body.frictionloss = 0.0;
+        }
+        let frc_range = j
+            .get("actuatorfrcrange")
+            .map(|v| cx.array_of::<2>(node, "actuatorfrcrange", v))
+            .transpose()?;
+        if self.limited(
+            node,
+            j.get("actuatorfrclimited"),
+            frc_range.is_some(),
+            "actuatorfrcrange",
+        )? {
+            let [lo, hi] = frc_range.ok_or_else(|| cx.err(node, "actuatorfrclimited without actuatorfrcrange"))?;
+            if lo.is_nan() || hi.is_nan() || lo > hi {
+                return Err(cx.err(
+                    node,
+                    format!("actuatorfrcrange lower bound {lo} above upper bound {hi}"),
+                ));
+            }
+            body.actuator_force_range = Some((lo, hi));
+        }
+        if let (Some(n), RawKind::Hinge(_) | RawKind::Slide(_)) = (node.attribute("name"), kind) {
+            self.joint_refs.insert(n.to_string(), reference);
         }
         let known = [
             "name",
@@ -682,6 +747,8 @@ impl<'a, 'i> State<'a, 'i> {
             "damping",
             "armature",
             "frictionloss",
+            "actuatorfrcrange",
+            "actuatorfrclimited",
         ];
         let extra = node.attributes().map(|a| a.name()).chain(j.defaults.keys().copied());
         for a in extra.filter(|a| !known.contains(a)).collect::<Vec<_>>() {
