@@ -36,45 +36,7 @@ use crate::linalg::{Mat3, Vec3};
 use super::constraints::{add_impulse, apply, pose, Row};
 use super::method::StepReport;
 use super::system::MultibodySystem;
-use super::workspace::{Matrix, Workspace};
-
-/// Scratch of the bounded friction rows, sized once for the system's friction joints.
-#[derive(Clone, Debug, Default)]
-pub(super) struct FrictionScratch {
-    /// The joints with friction and their bounds `f_k`.
-    pub(super) joints: Vec<usize>,
-    pub(super) bound: Vec<f64>,
-    /// The rows at the half-kick's configuration.
-    pub(super) grad: Vec<Option<Row>>,
-    pub(super) sigma: Vec<f64>,
-    pub(super) rates0: Vec<f64>,
-    pub(super) rates: Vec<f64>,
-    /// `K`, column-major (`n × n`).
-    pub(super) k: Vec<f64>,
-    pub(super) linear: Vec<Vec3>,
-    pub(super) angular: Vec<Vec3>,
-}
-
-impl FrictionScratch {
-    pub(super) fn new(sys: &MultibodySystem) -> Self {
-        let joints: Vec<usize> = (0..sys.joints.len())
-            .filter(|&k| sys.params[k].frictionloss > 0.0)
-            .collect();
-        let n = joints.len();
-        let nb = sys.mass.len();
-        FrictionScratch {
-            bound: joints.iter().map(|&k| sys.params[k].frictionloss).collect(),
-            joints,
-            grad: vec![None; n],
-            sigma: vec![0.0; n],
-            rates0: vec![0.0; n],
-            rates: vec![0.0; n],
-            k: vec![0.0; n * n],
-            linear: vec![Vec3::ZERO; nb],
-            angular: vec![Vec3::ZERO; nb],
-        }
-    }
-}
+use super::workspace::{FrictionScratch, Matrix, Workspace};
 
 impl Workspace {
     /// The start half-kick's friction at the state `(c, R)` with momenta `p`, `Π`: adds

@@ -31,6 +31,44 @@ const RHO_REFINED_START: f64 = -13.815_510_557_964_274;
 /// weights' sum `2ⁿ − 1`.
 pub(super) const HISTORY: usize = 7;
 
+/// Scratch of the bounded friction rows, sized once for the system's friction joints.
+#[derive(Clone, Debug, Default)]
+pub(super) struct FrictionScratch {
+    /// The joints with friction and their bounds `f_k`.
+    pub(super) joints: Vec<usize>,
+    pub(super) bound: Vec<f64>,
+    /// The rows at the half-kick's configuration.
+    pub(super) grad: Vec<Option<Row>>,
+    pub(super) sigma: Vec<f64>,
+    pub(super) rates0: Vec<f64>,
+    pub(super) rates: Vec<f64>,
+    /// `K`, column-major (`n × n`).
+    pub(super) k: Vec<f64>,
+    pub(super) linear: Vec<Vec3>,
+    pub(super) angular: Vec<Vec3>,
+}
+
+impl FrictionScratch {
+    pub(super) fn new(sys: &MultibodySystem) -> Self {
+        let joints: Vec<usize> = (0..sys.joints.len())
+            .filter(|&k| sys.params[k].frictionloss > 0.0)
+            .collect();
+        let n = joints.len();
+        let nb = sys.mass.len();
+        FrictionScratch {
+            bound: joints.iter().map(|&k| sys.params[k].frictionloss).collect(),
+            joints,
+            grad: vec![None; n],
+            sigma: vec![0.0; n],
+            rates0: vec![0.0; n],
+            rates: vec![0.0; n],
+            k: vec![0.0; n * n],
+            linear: vec![Vec3::ZERO; nb],
+            angular: vec![Vec3::ZERO; nb],
+        }
+    }
+}
+
 /// Scratch of the dampers' implicit half-kicks (`dampers.rs`): per damper row its
 /// gradient, damping, force and the conjugate-gradient vectors, per body a momentum pair.
 #[derive(Clone, Debug, Default)]
@@ -120,7 +158,7 @@ pub(super) struct Workspace {
     /// Scratch of the implicit damper solve (`dampers.rs`).
     pub(super) dampers: DamperScratch,
     /// The joint friction rows' scratch (`friction.rs`).
-    pub(super) friction: super::friction::FrictionScratch,
+    pub(super) friction: FrictionScratch,
     pub(super) vel: Vec<Vec3>,
     pub(super) omega: Vec<Vec3>,
     pub(super) solver: TreeSolver,
@@ -209,7 +247,7 @@ impl Workspace {
             damp_f: z3.clone(),
             damp_t: z3.clone(),
             dampers: DamperScratch::new(3 * nj, nb),
-            friction: super::friction::FrictionScratch::new(sys),
+            friction: FrictionScratch::new(sys),
             vel: z3.clone(),
             omega: z3,
             solver: {
