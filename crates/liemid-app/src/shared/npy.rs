@@ -100,5 +100,6 @@ mod tests {
         assert!(read_matrix(&path, 2).unwrap_err().contains("expected shape (N, 2)"));
         std::fs::write(&path, b"not numpy").unwrap();
         assert!(read_matrix(&path, 3).unwrap_err().contains("not a .npy file"));
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
