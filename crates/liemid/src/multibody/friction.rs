@@ -194,7 +194,7 @@ impl Workspace {
 
     /// The velocities of the momenta `lin`, `ang` projected on `G v = 0` (the start rows or
     /// the end rows, factored) into `vel`, `omega` (the momenta are changed).
-    fn project(
+    pub(super) fn project(
         &mut self,
         sys: &MultibodySystem,
         lin: &mut [Vec3],

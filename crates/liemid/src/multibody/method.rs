@@ -108,6 +108,15 @@ pub struct StepReport {
     pub velocity_violation: f64,
     /// Joint limits switched on or off.
     pub limit_changes: u32,
+    /// Most contact points of a stage (found at its start, touching or within reach).
+    pub contacts: u32,
+    /// Outer iterations of the contact position problem (each re-runs the drift), over
+    /// all stages.
+    pub contact_iterations: u32,
+    /// Projected Gauss–Seidel sweeps of the contact problems, over all stages.
+    pub contact_sweeps: u32,
+    /// The deepest penetration found at a stage's start (m; 0 when none).
+    pub penetration: f64,
 }
 
 /// State of one joint limit.

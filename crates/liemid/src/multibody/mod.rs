@@ -42,6 +42,7 @@ mod armature;
 mod blocks;
 mod cholesky;
 pub mod constraints;
+pub mod contact;
 pub mod control;
 mod dampers;
 pub mod driver;
@@ -68,6 +69,7 @@ mod workspace;
 mod xml;
 
 pub use constraints::{JointGeometry, JointRows, Row};
+pub use contact::Collision;
 pub use control::ControlTable;
 pub use driver::{joint_space_notes, JointSpaceRun, ModelNote, MultibodyRun, Prepared, Simulation};
 pub use ensemble::MultibodyEnsemble;

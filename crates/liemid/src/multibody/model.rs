@@ -196,6 +196,8 @@ pub struct Model {
     pub actuators: Vec<Actuator>,
     /// The starting control, one value per actuator (MJCF keyframe `ctrl`); `None`: zero.
     pub ctrl: Option<Vec<f64>>,
+    /// The shapes that touch and the contact options (empty: no contacts).
+    pub collision: super::contact::Collision,
 }
 
 use crate::error::{Error, Result};

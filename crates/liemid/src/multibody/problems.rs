@@ -123,6 +123,7 @@ pub fn double_pendulum() -> Model {
         qvel: None,
         actuators: Vec::new(),
         ctrl: None,
+        collision: Default::default(),
     }
 }
 
@@ -183,6 +184,7 @@ pub fn chain(n: usize) -> Model {
         qvel: None,
         actuators: Vec::new(),
         ctrl: None,
+        collision: Default::default(),
     }
 }
 
@@ -256,6 +258,7 @@ pub fn spacecraft() -> Model {
         qvel: Some(vec![0.0, 0.0, 0.0, w.x, w.y, w.z, 0.0, 0.0]),
         actuators: Vec::new(),
         ctrl: None,
+        collision: Default::default(),
     }
 }
 
@@ -324,6 +327,7 @@ pub fn closed_loop() -> Model {
         qvel: None,
         actuators: Vec::new(),
         ctrl: None,
+        collision: Default::default(),
     }
 }
 
@@ -400,6 +404,7 @@ pub fn test_chain() -> Model {
         qvel: None,
         actuators: Vec::new(),
         ctrl: None,
+        collision: Default::default(),
     }
 }
 
@@ -435,5 +440,6 @@ pub fn fast_top_ball() -> Model {
         qvel: Some(vec![0.0, 0.0, spin]),
         actuators: Vec::new(),
         ctrl: None,
+        collision: Default::default(),
     }
 }

@@ -284,8 +284,68 @@ impl Workspace {
             self.pb[i] = state.p[i] + (self.force[i] + df) * hh;
             self.pib[i] = state.pi[i] + (self.torque[i] + dt) * hh;
         }
-        let (mut extrapolated, mut points) = self.start_multipliers(h, stage);
+        let start = self.start_multipliers(h, stage);
         let limit_changes = report.limit_changes;
+        let mut positions = |w: &mut Workspace, report: &mut StepReport, first: bool| {
+            let (extrapolated, points) = if first { start } else { (false, 0) };
+            w.positions(sys, state, h, report, stage, extrapolated, points)
+        };
+        self.contact_positions(sys, state, h, report, &mut positions)?;
+        // End forces (position-dependent: cached for the next step).
+        let t1 = t + h;
+        sys.forces(t1, &self.c_new, &self.r_new, &mut self.force1, &mut self.torque1);
+        self.solve_velocities(sys, t, h, report)?;
+        // Commit.
+        for i in 0..nb {
+            let ok = self.p_half[i].is_finite() && self.pi_new[i].is_finite() && self.r_new[i].is_finite();
+            if !ok {
+                return Err(Error::NonFiniteResult {
+                    method: self.method_name,
+                    t,
+                    h,
+                });
+            }
+        }
+        state.t = t1;
+        state.c.copy_from_slice(&self.c_new);
+        state.rotation.copy_from_slice(&self.r_new);
+        state.p.copy_from_slice(&self.p_half);
+        state.pi.copy_from_slice(&self.pi_new);
+        core::mem::swap(&mut self.rows0, &mut self.rows1);
+        // The velocity solve's factorization (at `rows1`, now `rows0`) is the next position
+        // solve's quasi-Newton matrix.
+        self.factor_rows0 = self.rows0.iter().any(|r| r.n > 0);
+        if report.limit_changes == limit_changes {
+            push_front(&mut self.lambda_steps, h);
+        } else {
+            self.lambda_steps = [f64::NAN; 4];
+        }
+        if let Some((k, _)) = stage {
+            let nj = self.lambda.len();
+            for (hist, l) in self.stage_lambda[k * nj..(k + 1) * nj].iter_mut().zip(&self.lambda) {
+                push_front(hist, *l);
+            }
+        }
+        core::mem::swap(&mut self.force, &mut self.force1);
+        core::mem::swap(&mut self.torque, &mut self.torque1);
+        self.remember(sys, state);
+        Ok(())
+    }
+
+    /// The position solve with the joint limits: the quasi-Newton iteration from the
+    /// multipliers in `lambda` (`extrapolated` from `points` past stages), redone with the
+    /// limits switched on or off, and from safer starts when an extrapolated one fails.
+    #[allow(clippy::too_many_arguments)]
+    fn positions(
+        &mut self,
+        sys: &MultibodySystem,
+        state: &MultibodyState,
+        h: f64,
+        report: &mut StepReport,
+        stage: Option<(usize, f64)>,
+        mut extrapolated: bool,
+        mut points: usize,
+    ) -> Result<()> {
         let mut passes = 0;
         loop {
             if let Err(e) = self.solve_positions(sys, state, h, report) {
@@ -326,44 +386,6 @@ impl Workspace {
             self.factor_rows0 = false;
             self.start_rows_at(sys, state);
         }
-        // End forces (position-dependent: cached for the next step).
-        let t1 = t + h;
-        sys.forces(t1, &self.c_new, &self.r_new, &mut self.force1, &mut self.torque1);
-        self.solve_velocities(sys, t, h, report)?;
-        // Commit.
-        for i in 0..nb {
-            let ok = self.p_half[i].is_finite() && self.pi_new[i].is_finite() && self.r_new[i].is_finite();
-            if !ok {
-                return Err(Error::NonFiniteResult {
-                    method: self.method_name,
-                    t,
-                    h,
-                });
-            }
-        }
-        state.t = t1;
-        state.c.copy_from_slice(&self.c_new);
-        state.rotation.copy_from_slice(&self.r_new);
-        state.p.copy_from_slice(&self.p_half);
-        state.pi.copy_from_slice(&self.pi_new);
-        core::mem::swap(&mut self.rows0, &mut self.rows1);
-        // The velocity solve's factorization (at `rows1`, now `rows0`) is the next position
-        // solve's quasi-Newton matrix.
-        self.factor_rows0 = self.rows0.iter().any(|r| r.n > 0);
-        if report.limit_changes == limit_changes {
-            push_front(&mut self.lambda_steps, h);
-        } else {
-            self.lambda_steps = [f64::NAN; 4];
-        }
-        if let Some((k, _)) = stage {
-            let nj = self.lambda.len();
-            for (hist, l) in self.stage_lambda[k * nj..(k + 1) * nj].iter_mut().zip(&self.lambda) {
-                push_front(hist, *l);
-            }
-        }
-        core::mem::swap(&mut self.force, &mut self.force1);
-        core::mem::swap(&mut self.torque, &mut self.torque1);
-        self.remember(sys, state);
         Ok(())
     }
 }

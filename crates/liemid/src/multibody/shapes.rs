@@ -64,6 +64,32 @@ pub struct Shape {
     pub rgba: [f32; 4],
     /// MuJoCo's visual group (0 to 5; groups 0, 1 and 2 are shown by default).
     pub group: u8,
+    /// How it touches other shapes (`None`: drawn only, as URDF visuals and MJCF geoms
+    /// with `contype` and `conaffinity` both 0).
+    pub collision: Option<Collides>,
+}
+
+/// A shape's contact properties (MJCF `geom`: `contype`, `conaffinity`, `friction`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Collides {
+    /// The geom's name, for messages (`None` when the file gives none).
+    pub name: Option<String>,
+    /// MuJoCo's bit masks: two shapes may touch when `contype` of either shares a bit with
+    /// `conaffinity` of the other.
+    pub contype: u32,
+    /// See `contype`.
+    pub conaffinity: u32,
+    /// The sliding friction coefficient µ (MJCF `friction`'s first value; 0 with
+    /// `condim = 1`). A pair takes the larger of its two shapes' values, as MuJoCo does.
+    pub friction: f64,
+}
+
+impl Collides {
+    /// Whether shapes with these properties may touch (MuJoCo's rule).
+    #[must_use]
+    pub fn pairs_with(&self, other: &Collides) -> bool {
+        self.contype & other.conaffinity != 0 || other.contype & self.conaffinity != 0
+    }
 }
 
 impl Shape {

@@ -12,6 +12,7 @@ use crate::linalg::{Mat3, Vec3};
 
 use super::armature::Armature;
 use super::constraints::{JointGeometry, JointParams};
+use super::contact::ContactGeometry;
 use super::model::{JointKind, Model};
 
 /// A force law added to gravity, springs and constant loads: given the time and the
@@ -72,6 +73,8 @@ pub struct MultibodySystem {
     pub(super) ctrl: Vec<f64>,
     /// The summed actuator force clamp per joint (`actuatorfrcrange`).
     pub(super) joint_force_range: Vec<Option<(f64, f64)>>,
+    /// The contact geometry (`None`: nothing can touch, or contacts switched off).
+    pub(super) contact: Option<ContactGeometry>,
     /// Counts the edits of the forces ([`Self::set_body_load`], [`Self::set_force_hook`]),
     /// so that an integrator's cached start forces are known to be stale.
     pub(super) revision: u64,
@@ -186,15 +189,25 @@ impl MultibodySystem {
             }
         }
         let z3 = vec![Vec3::ZERO; nb];
+        let com: Vec<Vec3> = model.bodies.iter().map(|b| b.com).collect();
+        let body_names: Vec<String> = model.bodies.iter().map(|b| b.name.clone()).collect();
+        // The tree's parent of each body (its first joint's parent).
+        let mut parents = vec![None; nb];
+        for g in joints.iter().take(nb) {
+            parents[g.child] = g.parent;
+        }
+        let contact = ContactGeometry::new(&model.collision, &com, &parents, &body_names)
+            .map_err(|reason| Error::InvalidModel { reason })?;
         Ok(MultibodySystem {
             name: model.name.clone(),
-            body_names: model.bodies.iter().map(|b| b.name.clone()).collect(),
+            body_names,
             joint_names: model.joints.iter().map(|j| j.name.clone()).collect(),
             mass: model.bodies.iter().map(|b| b.mass).collect(),
             inertia_matrix,
             armature,
             inertia,
-            com: model.bodies.iter().map(|b| b.com).collect(),
+            com,
+            contact,
             has_damping: params.iter().any(|p| p.damping > 0.0),
             has_friction: params.iter().any(|p| p.frictionloss > 0.0),
             params,

@@ -193,6 +193,7 @@ pub fn parse(text: &str, name_for_errors: &str) -> Result<Loaded> {
             qvel: None,
             actuators: Vec::new(),
             ctrl: None,
+            collision: Default::default(),
         },
         ignored: ignored.into_vec(),
         merged: built.merged,
@@ -349,6 +350,7 @@ fn read_visual(cx: &Ctx, node: Node, ignored: &mut Ignored) -> Result<Option<Sha
         rotation,
         rgba,
         group: 0,
+        collision: None,
     }))
 }
 

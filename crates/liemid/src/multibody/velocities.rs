@@ -44,6 +44,10 @@ impl Workspace {
             self.end_friction(sys, t, hh, any_rows)?;
             self.velocity_pass(sys, hh, any_rows, report)?;
         }
+        if sys.contact.is_some() && self.end_contacts(sys, t, hh, report)? {
+            // The contact forces after the others (`contact/step.rs`), then the μ-kick.
+            self.velocity_pass(sys, hh, any_rows, report)?;
+        }
         // Apply the end kick into p_half / pi_new.
         for i in 0..nb {
             self.p_half[i] += (self.force1[i] + self.damp_f[i]) * hh;

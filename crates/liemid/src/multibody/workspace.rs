@@ -159,6 +159,8 @@ pub(super) struct Workspace {
     pub(super) dampers: DamperScratch,
     /// The joint friction rows' scratch (`friction.rs`).
     pub(super) friction: FrictionScratch,
+    /// The contact solves' scratch (`contact/step.rs`).
+    pub(super) contact: super::contact::ContactScratch,
     pub(super) vel: Vec<Vec3>,
     pub(super) omega: Vec<Vec3>,
     pub(super) solver: TreeSolver,
@@ -248,6 +250,7 @@ impl Workspace {
             damp_t: z3.clone(),
             dampers: DamperScratch::new(3 * nj, nb),
             friction: FrictionScratch::new(sys),
+            contact: super::contact::ContactScratch::new(sys.mass.len()),
             vel: z3.clone(),
             omega: z3,
             solver: {

@@ -72,6 +72,7 @@ fn model(name: &str, bodies: Vec<Body>, joints: Vec<Joint>, gravity: Vec3) -> Mo
         qvel: None,
         actuators: Vec::new(),
         ctrl: None,
+        collision: Default::default(),
     }
 }
 

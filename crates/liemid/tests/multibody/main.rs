@@ -15,6 +15,7 @@ static GLOBAL: thread_counting::Counting = thread_counting::Counting;
 mod actuators;
 mod armature;
 mod ball_spring;
+mod contact;
 mod dampers;
 mod equality;
 mod files;

@@ -6,7 +6,7 @@
 
 use roxmltree::Node;
 
-use super::super::shapes::{Shape, ShapeKind};
+use super::super::shapes::{Collides, Shape, ShapeKind};
 use super::super::xml::{rotation_to_z, MassProps};
 use super::{Elem, State};
 use crate::error::Result;
@@ -109,6 +109,74 @@ impl<'a, 'i> State<'a, 'i> {
             rotation,
             rgba,
             group,
+            collision: self.geom_collision(g)?,
+        }))
+    }
+
+    /// A geom's contact properties (`contype`, `conaffinity`, `friction`, `condim`); `None`
+    /// when it touches nothing (both masks 0). The soft-contact parameters (`solref`,
+    /// `solimp`, `margin`, `gap`, `priority`, `solmix`) are noted: liemid's contacts are
+    /// hard. `condim` 1 is frictionless; 4 and 6 (torsional, rolling friction) keep the
+    /// sliding friction only, with a note.
+    fn geom_collision(&mut self, g: &Elem<'a, 'i>) -> Result<Option<Collides>> {
+        let cx = self.cx;
+        let node = g.node;
+        let mask = |attr: &str| -> Result<u32> {
+            match g.get(attr) {
+                None => Ok(1),
+                Some(v) => {
+                    let [k] = cx.array_of::<1>(node, attr, v)?;
+                    if !(0.0..=f64::from(u32::MAX)).contains(&k) || k.fract() != 0.0 {
+                        return Err(cx.err(
+                            node,
+                            format!("{attr} {k}: expected a whole number from 0 to 4294967295"),
+                        ));
+                    }
+                    Ok(k as u32)
+                }
+            }
+        };
+        let (contype, conaffinity) = (mask("contype")?, mask("conaffinity")?);
+        if contype == 0 && conaffinity == 0 {
+            return Ok(None);
+        }
+        let condim = match g.get("condim") {
+            None => 3,
+            Some(v) => {
+                let [k] = cx.array_of::<1>(node, "condim", v)?;
+                match k {
+                    1.0 => 1,
+                    3.0 => 3,
+                    4.0 | 6.0 => {
+                        self.ignored
+                            .note("geom condim 4 and 6 (torsional and rolling friction; sliding friction kept)");
+                        3
+                    }
+                    _ => return Err(cx.err(node, format!("condim {k}: expected 1, 3, 4 or 6"))),
+                }
+            }
+        };
+        let friction = match g.get("friction") {
+            None => 1.0,
+            Some(v) => {
+                let f = cx.floats(node, "friction", v, 1, 3)?;
+                if f.iter().any(|x| !x.is_finite() || *x < 0.0) {
+                    return Err(cx.err(node, "friction: each value must be finite and not negative"));
+                }
+                f[0]
+            }
+        };
+        for attr in ["solref", "solimp", "margin", "gap", "priority", "solmix"] {
+            if g.get(attr).is_some() {
+                self.ignored
+                    .note(&format!("geom {attr} (soft-contact parameter: contacts are hard here)"));
+            }
+        }
+        Ok(Some(Collides {
+            name: node.attribute("name").map(str::to_string),
+            contype,
+            conaffinity,
+            friction: if condim == 1 { 0.0 } else { friction },
         }))
     }
 
@@ -116,7 +184,6 @@ impl<'a, 'i> State<'a, 'i> {
     pub(super) fn geom_mass(&mut self, g: Elem<'a, 'i>) -> Result<MassProps> {
         let cx = self.cx;
         let node = g.node;
-        self.ignored.note("geom contacts");
         let ty = g.get("type").unwrap_or("sphere");
         let mass_attr = g.get("mass").map(|v| cx.array_of::<1>(node, "mass", v)).transpose()?;
         let density = g

@@ -65,6 +65,7 @@ use crate::error::Result;
 use crate::linalg::{Mat3, Vec3};
 
 pub mod actuator;
+mod contact;
 mod equality;
 mod geom;
 pub mod include;
@@ -126,6 +127,8 @@ fn parse_assembled(text: &str, name_for_errors: &str, sources: &Sources) -> Resu
     let mut keys = Vec::new();
     let mut equalities = Vec::new();
     let mut actuators = Vec::new();
+    let mut contacts = Vec::new();
+    let (mut contact_disabled, mut parent_contacts) = (false, false);
     for &node in &elements {
         match node.tag_name().name() {
             "compiler" | "default" => {}
@@ -141,13 +144,33 @@ fn parse_assembled(text: &str, name_for_errors: &str, sources: &Sources) -> Resu
                 }
                 st.note_other_attributes(node, &["gravity", "timestep"]);
                 for c in node.children().filter(Node::is_element) {
-                    st.ignored.note(&format!("option {}", c.tag_name().name()));
+                    if c.has_tag_name("flag") {
+                        for a in c.attributes() {
+                            let on = match a.value() {
+                                "enable" => true,
+                                "disable" => false,
+                                v => {
+                                    return Err(
+                                        cx.err(c, format!("flag {}=\"{v}\": expected enable or disable", a.name()))
+                                    )
+                                }
+                            };
+                            match a.name() {
+                                "contact" => contact_disabled = !on,
+                                "filterparent" => parent_contacts = !on,
+                                other => st.ignored.note(&format!("option flag {other}")),
+                            }
+                        }
+                    } else {
+                        st.ignored.note(&format!("option {}", c.tag_name().name()));
+                    }
                 }
             }
             "worldbody" => st.read_children(node, None, "main")?,
             "keyframe" => keys.extend(node.children().filter(|c| c.has_tag_name("key"))),
             "equality" => equalities.push(node),
             "actuator" => actuators.push(node),
+            "contact" => contacts.push(node),
             "include" => return Err(cx.err(node, NO_INCLUDE)),
             other => st.ignored.note(other),
         }
@@ -161,6 +184,13 @@ fn parse_assembled(text: &str, name_for_errors: &str, sources: &Sources) -> Resu
     };
     let mut built = build(std::mem::take(&mut st.raw))?;
     built.shapes.extend(std::mem::take(&mut st.world_shapes));
+    let exclude = st.read_excludes(&contacts, &built)?;
+    for s in &built.shapes {
+        if s.collision.is_some() && matches!(s.kind, crate::multibody::ShapeKind::Ellipsoid { .. }) {
+            st.ignored
+                .note("ellipsoid geom contacts (no ellipsoid in the collision library: drawn only)");
+        }
+    }
     let mut model = Model {
         name: root.attribute("model").unwrap_or_default().to_string(),
         bodies: built.bodies,
@@ -171,6 +201,12 @@ fn parse_assembled(text: &str, name_for_errors: &str, sources: &Sources) -> Resu
         qvel,
         actuators: Vec::new(),
         ctrl: None,
+        collision: crate::multibody::Collision {
+            shapes: built.shapes.iter().filter(|s| s.collision.is_some()).cloned().collect(),
+            exclude,
+            disabled: contact_disabled,
+            parent_contacts,
+        },
     };
     let loops = equality::loop_joints(&cx, &equalities, &model, &built.merged, &mut st.ignored)?;
     model.joints.extend(loops);
@@ -440,7 +476,6 @@ impl<'a, 'i> State<'a, 'i> {
                 "body" => self.read_body(c, parent, childclass)?,
                 "joint" | "freejoint" | "inertial" if parent.is_some() => {}
                 "geom" => {
-                    self.ignored.note("geom contacts");
                     if parent.is_none() {
                         let class = self.class_of(c, childclass)?;
                         let elem = Elem {

@@ -1,0 +1,438 @@
+//! Collision detection for the contact step: the model's touching shapes as `parry3d`
+//! shapes, a sort-and-sweep broad phase on bounding spheres, parry's contact manifolds as the
+//! narrow phase, and each manifold point as a [`ContactPoint`] whose gap and slide can be
+//! evaluated at any configuration (the drift's end) without detecting again.
+//!
+//! A point's gap is `φ = n·(x_a − x_b) − ρ_a − ρ_b`, with `x_a`, `x_b` material points of
+//! the two bodies and `ρ` the rounding radius of a sphere or capsule (its core point is on
+//! the centre or the axis, so a rolling ball keeps its exact gap); `n` turns with body `b`
+//! (a face or the floor), or, when both shapes are round, is the direction between the two
+//! core points (two balls: the exact gap). Flat features (box corners on a face) are exact
+//! with material points.
+//!
+//! Reference: parry3d documentation (contact manifolds); MuJoCo documentation, Computation,
+//! "Collision detection" (the filters).
+
+use parry3d_f64::math::{Matrix as PMat, Pose, Rotation as PRot, Vector as PVec};
+use parry3d_f64::query::{ContactManifold, DefaultQueryDispatcher, PersistentQueryDispatcher};
+use parry3d_f64::shape::SharedShape;
+
+use crate::linalg::{Mat3, Vec3};
+
+use super::super::shapes::{Shape, ShapeKind};
+use super::Collision;
+
+/// One shape of the contact geometry, posed relative to its body's centre of mass.
+#[derive(Clone)]
+struct Collider {
+    body: Option<usize>,
+    shape: SharedShape,
+    /// Offset from the centre of mass and attitude in the body frame (world: absolute).
+    offset: Vec3,
+    rotation: Mat3,
+    /// The rounding radius (sphere, capsule), 0 otherwise.
+    round: f64,
+    /// Bounding radius about `offset` (infinite for a plane).
+    radius: f64,
+    plane: bool,
+    friction: f64,
+    contype: u32,
+    conaffinity: u32,
+}
+
+/// The model's touching shapes, ready for detection (built once per system).
+#[derive(Clone)]
+pub(in crate::multibody) struct ContactGeometry {
+    colliders: Vec<Collider>,
+    /// Body pairs never in contact (excluded, or parent and child), sorted, the world as
+    /// `usize::MAX`.
+    excluded: Vec<(usize, usize)>,
+    /// The largest finite bounding radius: the model's contact length scale.
+    pub(in crate::multibody) length: f64,
+    /// Per body, the farthest point of its shapes from its centre of mass.
+    pub(in crate::multibody) reach: Vec<f64>,
+}
+
+impl core::fmt::Debug for ContactGeometry {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("ContactGeometry")
+            .field("shapes", &self.colliders.len())
+            .finish_non_exhaustive()
+    }
+}
+
+/// One contact point of a step: the bodies, the material points and the normal.
+#[derive(Clone, Copy, Debug)]
+pub(in crate::multibody) struct ContactPoint {
+    pub a: Option<usize>,
+    pub b: Option<usize>,
+    /// Core points relative to the centres of mass, in the bodies' frames (world: absolute).
+    pub pa: Vec3,
+    pub pb: Vec3,
+    /// Rounding radii.
+    pub ra: f64,
+    pub rb: f64,
+    /// The normal in `b`'s frame (from `b` to `a`), when `b`'s feature is flat.
+    pub nb: Vec3,
+    /// Both features round: the normal joins the core points.
+    pub round: bool,
+    pub mu: f64,
+    /// The surface material points (for the slide over a step) in the bodies' frames.
+    pub ma: Vec3,
+    pub mb: Vec3,
+    /// Their world positions at the step's start, and the start's tangents.
+    pub xa0: Vec3,
+    pub xb0: Vec3,
+    pub t1: Vec3,
+    pub t2: Vec3,
+}
+
+fn to_p(v: Vec3) -> PVec {
+    PVec::new(v.x, v.y, v.z)
+}
+
+fn from_p(v: PVec) -> Vec3 {
+    Vec3::new(v.x, v.y, v.z)
+}
+
+fn rot_p(r: &Mat3) -> PRot {
+    let m = &r.m;
+    let mat = PMat::from_cols(
+        PVec::new(m[0][0], m[1][0], m[2][0]),
+        PVec::new(m[0][1], m[1][1], m[2][1]),
+        PVec::new(m[0][2], m[1][2], m[2][2]),
+    );
+    PRot::from_mat3(&mat).normalize()
+}
+
+/// The world position of a point `p` of body `i` (relative to its centre of mass).
+#[inline]
+pub(in crate::multibody) fn world(body: Option<usize>, p: Vec3, c: &[Vec3], r: &[Mat3]) -> Vec3 {
+    body.map_or(p, |i| c[i] + r[i] * p)
+}
+
+/// A body's attitude (the world's: identity).
+#[inline]
+pub(in crate::multibody) fn attitude<'a>(body: Option<usize>, r: &'a [Mat3]) -> &'a Mat3 {
+    body.map_or(&Mat3::IDENTITY, |i| &r[i])
+}
+
+/// Two unit vectors completing the unit `n` to a right-handed basis.
+pub(in crate::multibody) fn tangents(n: Vec3) -> (Vec3, Vec3) {
+    let helper = if n.x.abs() < 0.6 {
+        Vec3::new(1.0, 0.0, 0.0)
+    } else {
+        Vec3::new(0.0, 1.0, 0.0)
+    };
+    let t1 = helper - n * n.dot(helper);
+    let t1 = t1 * (1.0 / t1.norm());
+    (t1, n.cross(t1))
+}
+
+impl ContactPoint {
+    /// The normal and the core points' world positions at `(c, R)`.
+    #[inline]
+    pub(in crate::multibody) fn frame(&self, c: &[Vec3], r: &[Mat3]) -> (Vec3, Vec3, Vec3) {
+        let xa = world(self.a, self.pa, c, r);
+        let xb = world(self.b, self.pb, c, r);
+        let n = if self.round {
+            let d = xa - xb;
+            let l = d.norm();
+            if l > 0.0 {
+                d * (1.0 / l)
+            } else {
+                *attitude(self.b, r) * self.nb
+            }
+        } else {
+            *attitude(self.b, r) * self.nb
+        };
+        (n, xa, xb)
+    }
+
+    /// The gap at `(c, R)` (negative: penetration).
+    #[inline]
+    pub(in crate::multibody) fn gap(&self, c: &[Vec3], r: &[Mat3]) -> f64 {
+        let (n, xa, xb) = self.frame(c, r);
+        n.dot(xa - xb) - self.ra - self.rb
+    }
+
+    /// The slide of the surface material points since the step's start, on the start's
+    /// tangents.
+    #[inline]
+    pub(in crate::multibody) fn slide(&self, c: &[Vec3], r: &[Mat3]) -> (f64, f64) {
+        let d = (world(self.a, self.ma, c, r) - self.xa0) - (world(self.b, self.mb, c, r) - self.xb0);
+        (d.dot(self.t1), d.dot(self.t2))
+    }
+
+    /// The point where the contact's forces act at `(c, R)` (halfway between the two
+    /// surfaces, so the pair of forces has no moment) and the normal there.
+    #[inline]
+    pub(in crate::multibody) fn application(&self, c: &[Vec3], r: &[Mat3]) -> (Vec3, Vec3) {
+        let (n, xa, xb) = self.frame(c, r);
+        ((xa - n * self.ra + xb + n * self.rb) * 0.5, n)
+    }
+}
+
+impl ContactGeometry {
+    /// The contact geometry of `collision` for bodies whose centres of mass are `com` (body
+    /// frame), `parents` the tree's parent of each body; `None` when nothing can touch.
+    ///
+    /// # Errors
+    /// A plane on a moving body (MuJoCo's planes are static), named.
+    pub(in crate::multibody) fn new(
+        collision: &Collision,
+        com: &[Vec3],
+        parents: &[Option<usize>],
+        body_names: &[String],
+    ) -> core::result::Result<Option<Self>, String> {
+        if !collision.any() {
+            return Ok(None);
+        }
+        for s in &collision.shapes {
+            if let (ShapeKind::Plane { .. }, Some(b)) = (&s.kind, s.body) {
+                let name = s
+                    .collision
+                    .as_ref()
+                    .and_then(|c| c.name.as_deref())
+                    .unwrap_or("(unnamed)");
+                return Err(format!(
+                    "plane geom {name} on body {}: a plane touches things only as static ground (put it in the worldbody, or give it contype=\"0\" conaffinity=\"0\")",
+                    body_names[b]
+                ));
+            }
+        }
+        let colliders: Vec<Collider> = collision.shapes.iter().filter_map(|s| collider(s, com)).collect();
+        let mut reach = vec![0.0f64; com.len()];
+        for k in &colliders {
+            if let Some(b) = k.body {
+                reach[b] = reach[b].max(k.offset.norm() + k.radius);
+            }
+        }
+        let key = |b: Option<usize>| b.unwrap_or(usize::MAX);
+        let mut excluded: Vec<(usize, usize)> = collision
+            .exclude
+            .iter()
+            .map(|&(x, y)| (key(x).min(key(y)), key(x).max(key(y))))
+            .collect();
+        if !collision.parent_contacts {
+            for (i, p) in parents.iter().enumerate() {
+                if let Some(p) = p {
+                    excluded.push(((*p).min(i), (*p).max(i)));
+                }
+            }
+        }
+        excluded.sort_unstable();
+        excluded.dedup();
+        let length = colliders
+            .iter()
+            .filter(|c| c.radius.is_finite())
+            .fold(0.0f64, |m, c| m.max(c.radius));
+        Ok(Some(ContactGeometry {
+            colliders,
+            excluded,
+            length: if length > 0.0 { length } else { 1.0 },
+            reach,
+        }))
+    }
+
+    fn excluded(&self, x: Option<usize>, y: Option<usize>) -> bool {
+        let (x, y) = (x.unwrap_or(usize::MAX), y.unwrap_or(usize::MAX));
+        self.excluded.binary_search(&(x.min(y), x.max(y))).is_ok()
+    }
+
+    /// The contact points at `(c, R)` whose gap is below `margin(a) + margin(b)` (each
+    /// body's reach over the step; the world's 0), into `out`; `order` and `manifolds` are
+    /// scratch. Returns the deepest penetration found (0 when none).
+    pub(in crate::multibody) fn detect(
+        &self,
+        c: &[Vec3],
+        r: &[Mat3],
+        margin: &[f64],
+        out: &mut Vec<ContactPoint>,
+        order: &mut Vec<(f64, usize)>,
+        manifolds: &mut Vec<ContactManifold<(), ()>>,
+    ) -> f64 {
+        out.clear();
+        let reach = |b: Option<usize>| b.map_or(0.0, |i| margin[i]);
+        let centre = |k: &Collider| world(k.body, k.offset, c, r);
+        // Broad phase: sort the finite shapes by the lower end of their bounding spheres
+        // along x, sweep; planes against every shape.
+        order.clear();
+        for (i, k) in self.colliders.iter().enumerate() {
+            if !k.plane {
+                order.push((centre(k).x - k.radius - reach(k.body), i));
+            }
+        }
+        order.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+        let mut deepest = 0.0f64;
+        for s in 0..order.len() {
+            let i = order[s].1;
+            let ki = &self.colliders[i];
+            let ci = centre(ki);
+            let hi = ci.x + ki.radius + reach(ki.body);
+            for &(lo, j) in &order[s + 1..] {
+                if lo > hi {
+                    break;
+                }
+                let kj = &self.colliders[j];
+                let cj = centre(kj);
+                let m = reach(ki.body) + reach(kj.body);
+                if (ci - cj).norm() <= ki.radius + kj.radius + m {
+                    deepest = deepest.min(self.pair(i, j, c, r, m, out, manifolds));
+                }
+            }
+        }
+        for (i, ki) in self.colliders.iter().enumerate().filter(|(_, k)| k.plane) {
+            let n = *attitude(ki.body, r) * (ki.rotation * Vec3::new(0.0, 0.0, 1.0));
+            let o = centre(ki);
+            for (j, kj) in self.colliders.iter().enumerate().filter(|(_, k)| !k.plane) {
+                let m = reach(ki.body) + reach(kj.body);
+                if n.dot(centre(kj) - o) <= kj.radius + m {
+                    deepest = deepest.min(self.pair(j, i, c, r, m, out, manifolds));
+                }
+            }
+        }
+        deepest
+    }
+
+    /// The manifold points of colliders `i` and `j` within `margin`; returns the deepest
+    /// penetration (or 0).
+    #[allow(clippy::too_many_arguments)]
+    fn pair(
+        &self,
+        i: usize,
+        j: usize,
+        c: &[Vec3],
+        r: &[Mat3],
+        margin: f64,
+        out: &mut Vec<ContactPoint>,
+        manifolds: &mut Vec<ContactManifold<(), ()>>,
+    ) -> f64 {
+        let (ki, kj) = (&self.colliders[i], &self.colliders[j]);
+        if ki.body == kj.body
+            || ki.contype & kj.conaffinity == 0 && kj.contype & ki.conaffinity == 0
+            || self.excluded(ki.body, kj.body)
+        {
+            return 0.0;
+        }
+        // The flat side is `b`: the world or a plane, else a shape that is not round.
+        let (ka, kb) = if kj.plane || (kj.body.is_none() && !ki.plane) || (ki.round > 0.0 && kj.round == 0.0) {
+            (ki, kj)
+        } else {
+            (kj, ki)
+        };
+        let pose = |k: &Collider| {
+            let rot = *attitude(k.body, r) * k.rotation;
+            Pose::from_parts(to_p(world(k.body, k.offset, c, r)), rot_p(&rot))
+        };
+        let (pa, pb) = (pose(ka), pose(kb));
+        let pab = pa.inv_mul(&pb);
+        manifolds.clear();
+        let mut workspace = None;
+        if DefaultQueryDispatcher
+            .contact_manifolds(&pab, &*ka.shape, &*kb.shape, margin, manifolds, &mut workspace)
+            .is_err()
+        {
+            return 0.0;
+        }
+        let mu = ka.friction.max(kb.friction);
+        let round = ka.round > 0.0 && kb.round > 0.0;
+        let ra_body = *attitude(ka.body, r);
+        let rb_body = *attitude(kb.body, r);
+        let mut deepest = 0.0f64;
+        for mf in manifolds.iter() {
+            // Normals in the shapes' frames, outward: n1 on `a` toward `b`, n2 on `b` toward `a`.
+            let n1 = from_p(mf.local_n1);
+            let n2 = from_p(mf.local_n2);
+            if n2.norm() == 0.0 {
+                continue;
+            }
+            let nb_body = kb.rotation * n2;
+            let na_body = ka.rotation * n1;
+            for p in &mf.points {
+                if p.dist > margin {
+                    continue;
+                }
+                deepest = deepest.min(p.dist);
+                // Core points: the surface point moved inward by the rounding radius.
+                let core_a = ka.offset + ka.rotation * from_p(p.local_p1) - na_body * ka.round;
+                let core_b = kb.offset + kb.rotation * from_p(p.local_p2) - nb_body * kb.round;
+                let n = rb_body * nb_body;
+                let (t1, t2) = tangents(n);
+                let ma = core_a - ra_body.transpose() * n * ka.round;
+                let mb = core_b + rb_body.transpose() * n * kb.round;
+                out.push(ContactPoint {
+                    a: ka.body,
+                    b: kb.body,
+                    pa: core_a,
+                    pb: core_b,
+                    ra: ka.round,
+                    rb: kb.round,
+                    nb: nb_body,
+                    round,
+                    mu,
+                    ma,
+                    mb,
+                    xa0: world(ka.body, ma, c, r),
+                    xb0: world(kb.body, mb, c, r),
+                    t1,
+                    t2,
+                });
+            }
+        }
+        deepest
+    }
+}
+
+/// A shape as a collider: posed from its body's centre of mass; `None` when it does not
+/// touch or its kind has no contact here (ellipsoids: the loader notes them).
+fn collider(s: &Shape, com: &[Vec3]) -> Option<Collider> {
+    let props = s.collision.as_ref()?;
+    let offset = s.body.map_or(s.position, |b| s.position - com[b]);
+    // parry's cylinder is along y, MuJoCo's along z: a quarter turn about x.
+    let y_to_z = Mat3::from_rows([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]]);
+    let (shape, rotation, round, radius, plane) = match &s.kind {
+        ShapeKind::Plane { .. } => (
+            SharedShape::halfspace(PVec::new(0.0, 0.0, 1.0)),
+            s.rotation,
+            0.0,
+            f64::INFINITY,
+            true,
+        ),
+        ShapeKind::Sphere { radius } => (SharedShape::ball(*radius), s.rotation, *radius, *radius, false),
+        ShapeKind::Capsule { radius, half_length } => (
+            SharedShape::capsule_z(*half_length, *radius),
+            s.rotation,
+            *radius,
+            radius + half_length,
+            false,
+        ),
+        ShapeKind::Cylinder { radius, half_length } => (
+            SharedShape::cylinder(*half_length, *radius),
+            s.rotation * y_to_z,
+            0.0,
+            radius.hypot(*half_length),
+            false,
+        ),
+        ShapeKind::Box { half } => (
+            SharedShape::cuboid(half[0], half[1], half[2]),
+            s.rotation,
+            0.0,
+            Vec3::from_array(*half).norm(),
+            false,
+        ),
+        ShapeKind::Ellipsoid { .. } => return None,
+    };
+    Some(Collider {
+        body: s.body,
+        shape,
+        offset,
+        rotation,
+        round,
+        radius,
+        plane,
+        friction: props.friction,
+        contype: props.contype,
+        conaffinity: props.conaffinity,
+    })
+}

@@ -1,0 +1,356 @@
+//! The contact forces in the step's two half-kicks (module docs of `contact`): the rows,
+//! the response matrix `W`, the position problem's outer iteration around the drift and the
+//! velocity problem with the μ-kick.
+
+use crate::error::{Error, Result};
+use crate::linalg::{Mat3, Vec3};
+
+use super::super::method::StepReport;
+use super::super::state::MultibodyState;
+use super::super::system::MultibodySystem;
+use super::super::workspace::Workspace;
+use super::cone;
+use super::detect::{tangents, ContactPoint};
+use parry3d_f64::query::ContactManifold;
+
+/// Most outer iterations of the position problem (each re-runs the drift).
+const MAX_OUTER: usize = 50;
+
+/// The three rows of one contact at one configuration: directions (normal, two tangents)
+/// and the body-frame moments of a unit force along each on `a` and on `b`.
+#[derive(Clone, Copy, Debug)]
+struct Rows {
+    a: Option<usize>,
+    b: Option<usize>,
+    dir: [Vec3; 3],
+    ta: [Vec3; 3],
+    tb: [Vec3; 3],
+}
+
+impl Rows {
+    /// At `(c, R)` through `x`, along `dir`.
+    fn at(p: &ContactPoint, c: &[Vec3], r: &[Mat3], x: Vec3, dir: [Vec3; 3]) -> Rows {
+        let moment = |body: Option<usize>, d: Vec3| match body {
+            Some(i) => r[i].tr_mul_vec((x - c[i]).cross(d)),
+            None => Vec3::ZERO,
+        };
+        Rows {
+            a: p.a,
+            b: p.b,
+            dir,
+            ta: dir.map(|d| moment(p.a, d)),
+            tb: dir.map(|d| moment(p.b, d)),
+        }
+    }
+
+    fn rate(&self, i: usize, vel: &[Vec3], omega: &[Vec3]) -> f64 {
+        let mut r = 0.0;
+        if let Some(a) = self.a {
+            r += self.dir[i].dot(vel[a]) + self.ta[i].dot(omega[a]);
+        }
+        if let Some(b) = self.b {
+            r -= self.dir[i].dot(vel[b]) + self.tb[i].dot(omega[b]);
+        }
+        r
+    }
+
+    fn apply(&self, i: usize, f: f64, lin: &mut [Vec3], ang: &mut [Vec3]) {
+        if let Some(a) = self.a {
+            lin[a] += self.dir[i] * f;
+            ang[a] += self.ta[i] * f;
+        }
+        if let Some(b) = self.b {
+            lin[b] -= self.dir[i] * f;
+            ang[b] -= self.tb[i] * f;
+        }
+    }
+}
+
+/// Scratch of the contact solves, grown as contacts appear (a step with the same number of
+/// contacts as a past one allocates nothing).
+#[derive(Clone, Default)]
+pub(in crate::multibody) struct ContactScratch {
+    points: Vec<ContactPoint>,
+    active: Vec<usize>,
+    rows: Vec<Rows>,
+    order: Vec<(f64, usize)>,
+    manifolds: Vec<ContactManifold<(), ()>>,
+    margin: Vec<f64>,
+    w: Vec<f64>,
+    r0: Vec<f64>,
+    rates: Vec<f64>,
+    sigma: Vec<f64>,
+    mu: Vec<f64>,
+    base_p: Vec<Vec3>,
+    base_pi: Vec<Vec3>,
+    linear: Vec<Vec3>,
+    angular: Vec<Vec3>,
+}
+
+impl core::fmt::Debug for ContactScratch {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("ContactScratch")
+            .field("points", &self.points.len())
+            .finish_non_exhaustive()
+    }
+}
+
+impl ContactScratch {
+    pub(in crate::multibody) fn new(bodies: usize) -> Self {
+        ContactScratch {
+            margin: vec![0.0; bodies],
+            base_p: vec![Vec3::ZERO; bodies],
+            base_pi: vec![Vec3::ZERO; bodies],
+            linear: vec![Vec3::ZERO; bodies],
+            angular: vec![Vec3::ZERO; bodies],
+            ..ContactScratch::default()
+        }
+    }
+}
+
+impl Workspace {
+    /// The contact problem's response `W = (h/2) D P M⁻¹ Dᵀ` over `s.rows` (row-major into
+    /// `s.w`): column by column, the rates after a half-kick by a unit force on one row,
+    /// projected on the joints (the start rows or the end rows, factored).
+    fn contact_response(&mut self, sys: &MultibodySystem, s: &mut ContactScratch, hh: f64, start: bool) {
+        let any_rows = if start { &self.rows0 } else { &self.rows1 }.iter().any(|r| r.n > 0);
+        let m = 3 * s.rows.len();
+        s.w.clear();
+        s.w.resize(m * m, 0.0);
+        for col in 0..m {
+            s.linear.iter_mut().for_each(|v| *v = Vec3::ZERO);
+            s.angular.iter_mut().for_each(|v| *v = Vec3::ZERO);
+            s.rows[col / 3].apply(col % 3, hh, &mut s.linear, &mut s.angular);
+            self.project(sys, &mut s.linear, &mut s.angular, hh, any_rows, start);
+            for (row, rows) in s.rows.iter().enumerate() {
+                for i in 0..3 {
+                    s.w[(3 * row + i) * m + col] = rows.rate(i, &self.vel, &self.omega);
+                }
+            }
+        }
+    }
+
+    /// The position half of the contact step: contacts detected at the start with the
+    /// bodies' reach over the step, then the outer iteration `σ → drift → (gap, slide)/h →
+    /// linearised cone problem → σ` until the law holds at the drift's end to the
+    /// tolerance (module docs). `positions` runs the drift with its joint solve from
+    /// the momenta in `pb`, `pib`.
+    pub(in crate::multibody) fn contact_positions(
+        &mut self,
+        sys: &MultibodySystem,
+        state: &MultibodyState,
+        h: f64,
+        report: &mut StepReport,
+        positions: &mut dyn FnMut(&mut Workspace, &mut StepReport, bool) -> Result<()>,
+    ) -> Result<()> {
+        let Some(geometry) = &sys.contact else {
+            return positions(self, report, true);
+        };
+        if h <= 0.0 {
+            return Err(Error::InvalidParameter {
+                name: "h",
+                value: h,
+                reason: "contact needs a positive step (contacts dissipate: they are not time-reversible)",
+            });
+        }
+        let hh = 0.5 * h;
+        let mut s = core::mem::take(&mut self.contact);
+        // Each body's reach over the step: twice its points' speed bound, and the pull of
+        // its forces over the step.
+        for i in 0..sys.mass.len() {
+            let v = state.p[i].norm() / sys.mass[i];
+            let w = sys.inertia[i].apply_inverse(state.pi[i]).norm();
+            let a = self.force[i].norm() / sys.mass[i];
+            s.margin[i] = 2.0 * h * (v + w * geometry.reach[i]) + h * h * a + 1e-4 * geometry.length;
+        }
+        let deepest = {
+            let ContactScratch {
+                points,
+                order,
+                manifolds,
+                margin,
+                ..
+            } = &mut s;
+            geometry.detect(&state.c, &state.rotation, margin, points, order, manifolds)
+        };
+        report.penetration = report.penetration.max(-deepest);
+        report.contacts = report.contacts.max(u32::try_from(s.points.len()).unwrap_or(u32::MAX));
+        if s.points.is_empty() {
+            self.contact = s;
+            return positions(self, report, true);
+        }
+        let result = self.contact_outer(sys, state, h, hh, geometry.length, &mut s, report, positions);
+        self.contact = s;
+        result
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn contact_outer(
+        &mut self,
+        sys: &MultibodySystem,
+        state: &MultibodyState,
+        h: f64,
+        hh: f64,
+        length: f64,
+        s: &mut ContactScratch,
+        report: &mut StepReport,
+        positions: &mut dyn FnMut(&mut Workspace, &mut StepReport, bool) -> Result<()>,
+    ) -> Result<()> {
+        let n = s.points.len();
+        let (c, r) = (&state.c, &state.rotation);
+        s.rows.clear();
+        for p in &s.points {
+            let (x, nrm) = p.application(c, r);
+            s.rows.push(Rows::at(p, c, r, x, [nrm, p.t1, p.t2]));
+        }
+        s.mu.clear();
+        s.mu.extend(s.points.iter().map(|p| p.mu));
+        // W at the start rows, factored (the velocity solve of the last step factored them).
+        if self.rows0.iter().any(|r| r.n > 0) && !self.factor_rows0 {
+            self.factor(sys, super::super::workspace::Matrix::Start)?;
+            report.factorizations += 1;
+        }
+        self.contact_response(sys, s, hh, true);
+        s.base_p.copy_from_slice(&self.pb);
+        s.base_pi.copy_from_slice(&self.pib);
+        s.sigma.clear();
+        s.sigma.resize(3 * n, 0.0);
+        s.r0.resize(3 * n, 0.0);
+        s.rates.resize(3 * n, 0.0);
+        // Gap and slide to 1e-12 of the contact length: as rates over the step.
+        let tol = 1e-12 * length / h;
+        let mut first = true;
+        for outer in 0.. {
+            self.pb.copy_from_slice(&s.base_p);
+            self.pib.copy_from_slice(&s.base_pi);
+            for (k, rows) in s.rows.iter().enumerate() {
+                for i in 0..3 {
+                    rows.apply(i, hh * s.sigma[3 * k + i], &mut self.pb, &mut self.pib);
+                }
+            }
+            positions(self, report, first)?;
+            first = false;
+            for (k, p) in s.points.iter().enumerate() {
+                let (t1, t2) = p.slide(&self.c_new, &self.r_new);
+                s.rates[3 * k] = p.gap(&self.c_new, &self.r_new) / h;
+                s.rates[3 * k + 1] = t1 / h;
+                s.rates[3 * k + 2] = t2 / h;
+            }
+            let worst = cone::violation(&s.rates, &s.sigma, &s.mu);
+            if worst <= tol {
+                report.contact_iterations += u32::try_from(outer).unwrap_or(u32::MAX);
+                return Ok(());
+            }
+            if outer >= MAX_OUTER {
+                return Err(Error::NewtonDidNotConverge {
+                    method: self.method_name,
+                    equation: "the contacts at the drift's end (gap and slide)",
+                    t: state.t,
+                    h,
+                    residual: worst * h / length,
+                    iterations: u32::try_from(outer).unwrap_or(u32::MAX),
+                });
+            }
+            // The linearised problem about the current σ: r(σ') ≈ r(σ) + W (σ' − σ).
+            let m = 3 * n;
+            for i in 0..m {
+                let row = &s.w[i * m..(i + 1) * m];
+                s.r0[i] = s.rates[i] - row.iter().zip(&s.sigma).map(|(a, b)| a * b).sum::<f64>();
+            }
+            let done = cone::solve(&s.w, &s.r0, &s.mu, &mut s.sigma, &mut s.rates, 0.25 * tol);
+            report.contact_sweeps += u32::try_from(done.sweeps).unwrap_or(u32::MAX);
+            if !done.converged {
+                return Err(Error::NewtonDidNotConverge {
+                    method: self.method_name,
+                    equation: "the contact cone problem of the position solve (projected Gauss-Seidel)",
+                    t: state.t,
+                    h,
+                    residual: done.worst * h / length,
+                    iterations: u32::try_from(done.sweeps).unwrap_or(u32::MAX),
+                });
+            }
+        }
+        unreachable!("the outer loop returns")
+    }
+
+    /// The velocity half: the contacts touching at the end (gap within 1e-9 of the contact
+    /// length) get rows at the end configuration, and their forces are chosen after the
+    /// other end forces so that no contact approaches and each sticks or slides by
+    /// Coulomb's law after the μ-kick; the forces are added to `damp_f`, `damp_t`.
+    pub(in crate::multibody) fn end_contacts(
+        &mut self,
+        sys: &MultibodySystem,
+        t: f64,
+        hh: f64,
+        report: &mut StepReport,
+    ) -> Result<bool> {
+        let Some(geometry) = &sys.contact else {
+            return Ok(false);
+        };
+        let mut s = core::mem::take(&mut self.contact);
+        let (c, r) = (&self.c_new, &self.r_new);
+        s.active.clear();
+        s.rows.clear();
+        for (k, p) in s.points.iter().enumerate() {
+            if p.gap(c, r) <= 1e-9 * geometry.length {
+                let (x, nrm) = p.application(c, r);
+                let (t1, t2) = tangents(nrm);
+                s.active.push(k);
+                s.rows.push(Rows::at(p, c, r, x, [nrm, t1, t2]));
+            }
+        }
+        if s.rows.is_empty() {
+            self.contact = s;
+            return Ok(false);
+        }
+        let n = s.rows.len();
+        s.mu.clear();
+        let points = &s.points;
+        s.mu.extend(s.active.iter().map(|&k| points[k].mu));
+        let any_rows = self.rows1.iter().any(|r| r.n > 0);
+        // r₀: the rates after the μ-kick without contact forces.
+        for i in 0..sys.mass.len() {
+            s.linear[i] = self.p_half[i] + (self.force1[i] + self.damp_f[i]) * hh;
+            s.angular[i] = self.pi_new[i] + (self.torque1[i] + self.damp_t[i]) * hh;
+        }
+        let (mut lin, mut ang) = (core::mem::take(&mut s.linear), core::mem::take(&mut s.angular));
+        self.project(sys, &mut lin, &mut ang, hh, any_rows, false);
+        s.linear = lin;
+        s.angular = ang;
+        s.r0.clear();
+        for rows in &s.rows {
+            for i in 0..3 {
+                s.r0.push(rows.rate(i, &self.vel, &self.omega));
+            }
+        }
+        self.contact_response(sys, &mut s, hh, false);
+        s.sigma.clear();
+        s.sigma.resize(3 * n, 0.0);
+        s.rates.resize(3 * n, 0.0);
+        let vscale = (0..sys.mass.len()).fold(sys.velocity_floor(), |m, i| {
+            m.max(self.vel[i].norm() + geometry.length * self.omega[i].norm())
+        });
+        let tol = 1e-12 * vscale;
+        let done = cone::solve(&s.w, &s.r0, &s.mu, &mut s.sigma, &mut s.rates, tol);
+        report.contact_sweeps += u32::try_from(done.sweeps).unwrap_or(u32::MAX);
+        if !done.converged {
+            let worst = done.worst / vscale;
+            self.contact = s;
+            return Err(Error::NewtonDidNotConverge {
+                method: self.method_name,
+                equation: "the contact cone problem of the velocity solve (projected Gauss-Seidel)",
+                t,
+                h: 2.0 * hh,
+                residual: worst,
+                iterations: u32::try_from(done.sweeps).unwrap_or(u32::MAX),
+            });
+        }
+        for (k, rows) in s.rows.iter().enumerate() {
+            for i in 0..3 {
+                rows.apply(i, s.sigma[3 * k + i], &mut self.damp_f, &mut self.damp_t);
+            }
+        }
+        self.contact = s;
+        Ok(true)
+    }
+}
