@@ -119,16 +119,25 @@ impl MultibodySystem {
     }
 
     /// The rate of joint `k` (hinge rad/s, slide m/s): the coordinate's gradient applied
-    /// to the bodies' velocities `v = p/m`, `Ω = I⁻¹ Π`; `None` for other kinds.
+    /// to the bodies' velocities `v = p/m`, `Ω = I⁻¹ Π` (with hinge armature `Ω = 𝕁⁻¹ Π`,
+    /// one solve over the tree, docs/theory/multibody.md §7); `None` for other kinds.
     #[must_use]
     pub fn joint_rate(&self, state: &MultibodyState, k: usize) -> Option<f64> {
         let g = self.joints.get(k)?;
         let (pi, pj) = pose(g, &state.c, &state.rotation);
         let (_, row) = g.coordinate(pi, pj)?;
+        let rates = self.armature.as_ref().map(|a| {
+            let mut w = state.pi.clone();
+            a.solve(&mut w);
+            w
+        });
         let vel = |i: usize| {
             (
                 state.p[i] * (1.0 / self.mass[i]),
-                self.inertia[i].apply_inverse(state.pi[i]),
+                match &rates {
+                    None => self.inertia[i].apply_inverse(state.pi[i]),
+                    Some(w) => w[i],
+                },
             )
         };
         let (vi, wi) = g

@@ -1,6 +1,6 @@
 //! The multibody domain (one test binary): the RATTLE step (`rattle`), ball springs, dampers,
 //! equality constraints, the model files, `<include>`, the joint-space reference, merged
-//! hinges, and the step's symplecticity (`symplectic`).
+//! hinges, the step's symplecticity (`symplectic`), and a UR10e-style wrist (`wrist`).
 
 #[path = "../common/cotangent.rs"]
 mod cotangent;
@@ -25,3 +25,4 @@ mod joint_space;
 mod merged;
 mod rattle;
 mod symplectic;
+mod wrist;
