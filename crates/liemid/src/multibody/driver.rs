@@ -66,6 +66,27 @@ pub enum ModelNote {
         /// Relative velocity violation.
         velocity: f64,
     },
+    /// A mesh a page cannot draw from its file (a viewer's note: drawing is not physics).
+    MeshNotDrawn {
+        /// The geom (MJCF) or visual (URDF) and its body, in words.
+        geom: String,
+        /// The file as the model names it.
+        file: String,
+        /// Why: the file is missing, unreadable, of another format, not a mesh.
+        reason: String,
+        /// Whether the box of the geom's `size` is drawn in its place (else nothing is).
+        boxed: bool,
+    },
+    /// A mesh a page draws with fewer triangles than its file has, to keep the page within
+    /// its size budget.
+    MeshSimplified {
+        /// The file as the model names it.
+        file: String,
+        /// The file's triangles.
+        triangles: usize,
+        /// The triangles drawn.
+        kept: usize,
+    },
 }
 
 impl ModelNote {
@@ -97,6 +118,25 @@ impl core::fmt::Display for ModelNote {
                 f,
                 "the start violated the loop-closing joints (relative position {position:.1e}, velocity \
                  {velocity:.1e}); projected onto them"
+            ),
+            ModelNote::MeshNotDrawn {
+                geom,
+                file,
+                reason,
+                boxed,
+            } => write!(
+                f,
+                "the mesh of {geom} is not drawn from `{file}`: {reason}; {}",
+                if *boxed {
+                    "the box of the geom's size stands in for it"
+                } else {
+                    "nothing is drawn in its place"
+                }
+            ),
+            ModelNote::MeshSimplified { file, triangles, kept } => write!(
+                f,
+                "the mesh `{file}` is drawn simplified, {kept} of its {triangles} triangles (the page's size \
+                 budget)"
             ),
         }
     }
