@@ -234,8 +234,8 @@ def make_pages(liemid: Path, work: Path) -> List[Tuple[str, Path]]:
         "spins": ["spins", str(ex / "spins_square.toml"), "--out", str(work / "spins.csv")],
         "beam": ["beam", "--t-end", "10"],
         "multibody": ["multibody", "--problem", "chain-10", "--t-end", "2", "--every", "20"],
-        # The model's own shapes and a floor (MJCF geoms; the arm's meshes are not read, so
-        # its collision capsules and boxes of inertia stand in). The arm's actuators hold its
+        # The model's own shapes and a floor (MJCF geoms; the arm's visuals are meshes read
+        # from examples/multibody/meshes/: STL and OBJ). The arm's actuators hold its
         # keyframe still, so a control away from it makes the page move (the servos swing
         # both links and the wrist's motor turns it).
         "multibody-humanoid": ["multibody", str(ex / "multibody" / "humanoid_scene.xml"), "--t-end", "1"],

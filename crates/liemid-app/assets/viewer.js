@@ -245,9 +245,31 @@
       };
     }
 
+    // The meshes of the page (`data-meshes`: each mesh's vertices, then its triangles'
+    // indices), flat-shaded geometries shared by the shapes that draw them.
+    function meshGeometries() {
+      const counts = sc.meshes || [];
+      if (!counts.length) return [];
+      const data = floats('data-meshes');
+      let at = 0;
+      return counts.map(([nv, nt]) => {
+        const position = data.slice(at, at + 3 * nv);
+        at += 3 * nv;
+        const index = new Uint32Array(3 * nt);
+        for (let i = 0; i < 3 * nt; i++) index[i] = data[at + i];
+        at += 3 * nt;
+        const indexed = new THREE.BufferGeometry();
+        indexed.setAttribute('position', new THREE.BufferAttribute(position, 3));
+        indexed.setIndex(new THREE.BufferAttribute(index, 1));
+        const g = indexed.toNonIndexed();
+        g.computeVertexNormals();
+        return g;
+      });
+    }
+
     // A model's shape (MuJoCo's conventions: capsules and cylinders along z, planes normal
-    // to z) as a three.js object.
-    function shapeObject(sh) {
+    // to z) as a three.js object; a mesh's size is the scale of its coordinates.
+    function shapeObject(sh, geometries) {
       const [a, b, c] = sh.size;
       const [r, gc, bl, alpha] = sh.rgba;
       const material = new THREE.MeshStandardMaterial({ color: new THREE.Color(r, gc, bl), roughness: 0.6, transparent: alpha < 1, opacity: alpha });
@@ -269,7 +291,11 @@
       else if (sh.kind === 'capsule') object = new THREE.Mesh(alongZ(new THREE.CapsuleGeometry(a, 2 * b, 8, 16)), material);
       else if (sh.kind === 'cylinder') object = new THREE.Mesh(alongZ(new THREE.CylinderGeometry(a, a, 2 * b, 24)), material);
       else if (sh.kind === 'box') object = new THREE.Mesh(new THREE.BoxGeometry(2 * a, 2 * b, 2 * c), material);
-      else {
+      else if (sh.kind === 'mesh') {
+        material.side = THREE.DoubleSide;
+        object = new THREE.Mesh(geometries[sh.mesh], material);
+        object.scale.set(a, b, c);
+      } else {
         object = new THREE.Mesh(new THREE.SphereGeometry(1, 24, 16), material);
         object.scale.set(a, b, c);
       }
@@ -311,15 +337,16 @@
         groups.push(group);
       }
       const drawn = new Array(n).fill(false);
+      const geometries = meshGeometries();
       shapes.forEach((sh) => {
-        const object = shapeObject(sh);
+        const object = shapeObject(sh, geometries);
         if (sh.body === null || sh.body === undefined) scene.add(object);
         else {
           groups[sh.body].add(object);
           drawn[sh.body] = true;
         }
       });
-      // A body the file draws nothing of (its meshes are not read) keeps its box of inertia;
+      // A body the file draws nothing of (its meshes missing) keeps its box of inertia;
       // the others' boxes and the joints are shown on request.
       let allBoxes = true;
       if (shapes.length) {

@@ -570,6 +570,7 @@ fn multibody_simulator(
 #[pyfunction]
 #[pyo3(signature = (model, times, xpos, xquat, energy_error, total_steps, path=None))]
 fn multibody_view(
+    py: Python<'_>,
     model: &MultibodyModel,
     times: PyReadonlyArray1<'_, f64>,
     xpos: PyReadonlyArray1<'_, f64>,
@@ -597,7 +598,13 @@ fn multibody_view(
             energy.len()
         )));
     }
-    let mut page = view::page(sc);
+    let (mut page, notes) = view::page(sc);
+    // What the page cannot draw as the file says (missing or simplified meshes), as the
+    // command says it.
+    for note in notes {
+        let text = std::ffi::CString::new(format!("{}: {note}", sc.name)).unwrap_or_default();
+        PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyUserWarning>(), &text, 1)?;
+    }
     let mut frame = Vec::with_capacity(7 * bodies);
     for k in 0..n {
         frame.clear();

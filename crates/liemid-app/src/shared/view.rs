@@ -81,17 +81,38 @@ pub struct Joint {
 pub struct ViewShape {
     /// The body it moves with, `None` for the world.
     pub body: Option<usize>,
-    /// `plane`, `sphere`, `capsule`, `cylinder`, `box` or `ellipsoid`.
+    /// `plane`, `sphere`, `capsule`, `cylinder`, `box`, `ellipsoid` or `mesh`.
     pub kind: String,
     /// Plane: half-extents (0: unbounded) and 0; sphere: radius; capsule and cylinder: radius
-    /// and half-length; box: half-edges; ellipsoid: semi-axes.
+    /// and half-length; box: half-edges; ellipsoid: semi-axes; mesh: the scale of the
+    /// mesh's coordinates.
     pub size: [f32; 3],
+    /// A mesh's index in the scene's meshes.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mesh: Option<usize>,
     /// Its origin in the body's centre-of-mass frame (or the world).
     pub position: [f32; 3],
     /// Its attitude in the body's frame (or the world), `w, x, y, z`.
     pub quaternion: [f32; 4],
     /// Colour and opacity.
     pub rgba: [f32; 4],
+}
+
+/// A triangle mesh a page draws (in the page's `data-meshes` array, not its JSON).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ViewMesh {
+    /// The vertices, three numbers each.
+    pub vertices: Vec<f32>,
+    /// The triangles, three vertex indices each.
+    pub indices: Vec<u32>,
+}
+
+impl ViewMesh {
+    /// Bytes the mesh takes in a page before base64 (four per number).
+    #[must_use]
+    pub fn bytes(&self) -> usize {
+        4 * (self.vertices.len() + self.indices.len())
+    }
 }
 
 /// What a page draws, and the layout of one frame.
@@ -142,6 +163,9 @@ pub enum Scene {
         /// inertia are then hidden unless asked for.
         #[serde(default)]
         shapes: Vec<ViewShape>,
+        /// The meshes the shapes draw (in the page as numbers, not in its JSON).
+        #[serde(default, skip_serializing)]
+        meshes: Vec<ViewMesh>,
     },
 }
 
@@ -178,6 +202,7 @@ impl Scene {
                 half_extents,
                 joints,
                 shapes,
+                ..
             } if shapes.is_empty() => format!(
                 "{} bodies as boxes and {} joints as lines",
                 half_extents.len(),
@@ -362,8 +387,17 @@ impl ViewPage {
             // Large lists go in the static array, not in JSON.
             m.remove("sites");
             m.remove("elements");
-            if let Scene::Articulated { half_extents, .. } = &self.scene {
+            if let Scene::Articulated {
+                half_extents, meshes, ..
+            } = &self.scene
+            {
                 m.insert("half_extents".into(), json!(half_extents.len()));
+                // Each mesh's vertex and triangle counts; the numbers are in `data-meshes`.
+                let counts: Vec<[usize; 2]> = meshes
+                    .iter()
+                    .map(|k| [k.vertices.len() / 3, k.indices.len() / 3])
+                    .collect();
+                m.insert("meshes".into(), json!(counts));
             }
         }
         let budget_mb = self.budget as f64 / 1e6;
@@ -417,6 +451,19 @@ impl ViewPage {
         )?;
         write_floats(w, "data-energy", self.energy.iter().flatten().copied())?;
         write_floats(w, "data-static", self.static_data().into_iter())?;
+        // Each mesh's vertices, then its indices (as f32: exact below 2^24, far above the
+        // vertices of a mesh the page keeps).
+        let meshes: &[ViewMesh] = match &self.scene {
+            Scene::Articulated { meshes, .. } => meshes,
+            _ => &[],
+        };
+        write_floats(
+            w,
+            "data-meshes",
+            meshes
+                .iter()
+                .flat_map(|k| k.vertices.iter().copied().chain(k.indices.iter().map(|&i| i as f32))),
+        )?;
         for (id, text) in [
             ("three-core", THREE_CORE),
             ("three-module", THREE_MODULE),

@@ -463,6 +463,16 @@ fn run_maximal(
         "max_position_constraint_violation": run.max_position_violation,
         "max_velocity_constraint_violation": run.max_velocity_violation,
         "max_momentum_change": if free { momentum } else { json!(null) },
+        "contacts": if sim.system.has_contacts() {
+            json!({
+                "most_points": run.max_contacts,
+                "deepest_penetration": run.max_penetration,
+                "position_iterations": run.contact_iterations,
+                "solver_sweeps": run.contact_sweeps,
+            })
+        } else {
+            json!(null)
+        },
         "final": finals,
         "joints": joint_values,
         "ignored": sc.ignored,
@@ -508,6 +518,15 @@ fn print_summary(s: &serde_json::Value) {
             "max momentum change            linear {:.3e}, angular {:.3e}",
             m["linear"].as_f64().unwrap_or(f64::NAN),
             m["angular"].as_f64().unwrap_or(f64::NAN)
+        );
+    }
+    if let Some(c) = s["contacts"].as_object() {
+        crate::outln!(
+            "contacts                       at most {} points, deepest penetration {:.3e} m, {} position iterations, {} solver sweeps",
+            c["most_points"],
+            c["deepest_penetration"].as_f64().unwrap_or(f64::NAN),
+            c["position_iterations"],
+            c["solver_sweeps"]
         );
     }
     for j in s["joints"].as_array().into_iter().flatten() {

@@ -72,7 +72,14 @@ impl Sink {
         Ok(Sink {
             writer: writer(sc, out)?,
             record: Record::default(),
-            page: view.then(|| super::view::page(sc)),
+            page: view.then(|| {
+                // What the page cannot draw as the file says (missing or simplified meshes).
+                let (page, notes) = super::view::page(sc);
+                for note in notes {
+                    eprintln!("liemid: note: {}: {note}", sc.name);
+                }
+                page
+            }),
             centres: sc.model.bodies.iter().map(|b| b.com).collect(),
             row: Vec::new(),
             frame: Vec::new(),

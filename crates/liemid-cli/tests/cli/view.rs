@@ -157,3 +157,100 @@ fn beam_page_and_refusals() {
     check_page(&dir.join("b.html"), " frames of ");
     refusals(&dir, &["beam", "--t-end", "1"], None);
 }
+
+/// The numbers of the page's `<script id="ID">` block (base64 of little-endian `f32`).
+fn page_floats(html: &str, id: &str) -> Vec<f32> {
+    let start = html.find(&format!("id=\"{id}\">")).unwrap() + id.len() + 6;
+    let text = &html[start..start + html[start..].find("</script>").unwrap()];
+    let value = |c: u8| match c {
+        b'A'..=b'Z' => c - b'A',
+        b'a'..=b'z' => c - b'a' + 26,
+        b'0'..=b'9' => c - b'0' + 52,
+        b'+' => 62,
+        _ => 63,
+    };
+    let mut bytes = Vec::new();
+    for q in text.as_bytes().chunks(4) {
+        let n = q
+            .iter()
+            .fold(0u32, |n, &c| (n << 6) | u32::from(if c == b'=' { 0 } else { value(c) }));
+        let pad = q.iter().filter(|&&c| c == b'=').count();
+        bytes.extend_from_slice(&n.to_be_bytes()[1..4 - pad]);
+    }
+    bytes
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect()
+}
+
+/// A model with mesh geoms (`compiler meshdir`, a binary STL the test writes): the page
+/// holds the mesh's vertices and triangles and draws it at the asset's scale; a geom whose
+/// file is missing is drawn as the box of its `size` with a note naming the geom and the
+/// file; `--view` onto the mesh file is refused as an input of the run, as for includes.
+#[test]
+fn multibody_page_draws_a_mesh_from_its_file_and_notes_a_missing_one() {
+    let dir = scratch("view-mesh");
+    std::fs::create_dir_all(dir.join("meshes")).unwrap();
+    let v: [[f32; 3]; 4] = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1]];
+    let faces = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
+    let mut stl = vec![0u8; 80];
+    stl.extend_from_slice(&4u32.to_le_bytes());
+    for f in faces {
+        stl.extend_from_slice(&[0u8; 12]);
+        for k in f {
+            for c in v[k] {
+                stl.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        stl.extend_from_slice(&[0, 0]);
+    }
+    std::fs::write(dir.join("meshes/tet.stl"), &stl).unwrap();
+    let model = r#"<mujoco model="meshes"><compiler meshdir="meshes"/>
+  <asset><mesh name="tet" file="tet.stl" scale="2 2 2"/><mesh file="gone.stl"/></asset>
+  <worldbody><body name="b" pos="0 0 1"><joint type="hinge" axis="1 0 0"/>
+    <inertial pos="0 0 -0.2" mass="1" diaginertia="0.01 0.01 0.01"/>
+    <geom type="mesh" mesh="tet" rgba="0.2 0.6 0.9 1"/>
+    <geom name="lost" type="mesh" mesh="gone" size="0.1 0.2 0.3"/>
+  </body></worldbody></mujoco>"#;
+    std::fs::write(dir.join("model.xml"), model).unwrap();
+    let o = run_in(
+        &dir,
+        &["multibody", "model.xml", "--t-end", "0.01", "--view", "page.html"],
+    );
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("the mesh of `lost` on body `b` is not drawn from `gone.stl`: cannot read the file")
+            && err.contains("the box of the geom's size stands in for it"),
+        "{err}"
+    );
+    check_page(&dir.join("page.html"), "frames of 10 steps");
+    let html = std::fs::read_to_string(dir.join("page.html")).unwrap();
+    assert!(html.contains("\"meshes\":[[4,4]]"), "the mesh's counts");
+    assert!(html.contains("\"kind\":\"mesh\",\"mesh\":0"));
+    assert!(html.contains("\"size\":[2.0,2.0,2.0]"), "the asset's scale");
+    assert!(
+        html.contains("\"kind\":\"box\"")
+            && html.contains("\"size\":[0.10000000149011612,0.20000000298023224,0.30000001192092896]")
+    );
+    // The file's four vertices (merged from the twelve triangle corners), then its four
+    // triangles over them.
+    let numbers = page_floats(&html, "data-meshes");
+    assert_eq!(numbers.len(), 24);
+    let vertices: Vec<[f32; 3]> = numbers[..12].chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
+    for p in v {
+        assert!(vertices.contains(&p), "{p:?} not in {vertices:?}");
+    }
+    for (t, f) in numbers[12..].chunks(3).zip(faces) {
+        let corners: Vec<[f32; 3]> = t.iter().map(|&i| vertices[i as usize]).collect();
+        assert_eq!(corners, f.map(|k| v[k]).to_vec());
+    }
+    // The mesh file is an input: --view onto it is refused and it is left as it was.
+    for target in ["meshes/tet.stl", "model.xml"] {
+        let before = std::fs::read(dir.join(target)).unwrap();
+        let o = run_in(&dir, &["multibody", "model.xml", "--t-end", "0.01", "--view", target]);
+        assert_eq!(o.status.code(), Some(2), "{target}: {}", stderr(&o));
+        assert!(stderr(&o).contains("is the input"), "{target}: {}", stderr(&o));
+        assert_eq!(std::fs::read(dir.join(target)).unwrap(), before);
+    }
+}

@@ -38,6 +38,30 @@ pub struct MultibodyRun {
     pub max_linear_momentum_change: f64,
     /// Largest `|L − L₀|` of the total angular momentum about the origin.
     pub max_angular_momentum_change: f64,
+    /// Most contact points of one step.
+    pub max_contacts: u32,
+    /// The deepest penetration found at a step's start (m).
+    pub max_penetration: f64,
+    /// Outer iterations of the contact position problem, and projected Gauss–Seidel
+    /// sweeps of the contact problems, over the run.
+    pub contact_iterations: u64,
+    /// See `contact_iterations`.
+    pub contact_sweeps: u64,
+}
+
+impl MultibodyRun {
+    /// Fold one step's report into the run's statistics (not the energy and momenta).
+    fn record(&mut self, k: u64, report: &StepReport) {
+        self.steps = k;
+        self.max_position_violation = self.max_position_violation.max(report.position_violation);
+        self.max_velocity_violation = self.max_velocity_violation.max(report.velocity_violation);
+        self.max_iterations = self.max_iterations.max(report.iterations);
+        self.total_iterations += u64::from(report.iterations);
+        self.max_contacts = self.max_contacts.max(report.contacts);
+        self.max_penetration = self.max_penetration.max(report.penetration);
+        self.contact_iterations += u64::from(report.contact_iterations);
+        self.contact_sweeps += u64::from(report.contact_sweeps);
+    }
 }
 
 /// What a run of a model leaves out or changes, said once before it runs (the command
@@ -66,6 +90,31 @@ pub enum ModelNote {
         /// Relative velocity violation.
         velocity: f64,
     },
+    /// The model's shapes touch, but this method runs without contacts (only `liemid`
+    /// has them: a composition's negative sub-steps cannot run a dissipative contact, and
+    /// the joint-space reference has none).
+    ContactsIgnored(&'static str),
+    /// A mesh a page cannot draw from its file (a viewer's note: drawing is not physics).
+    MeshNotDrawn {
+        /// The geom (MJCF) or visual (URDF) and its body, in words.
+        geom: String,
+        /// The file as the model names it.
+        file: String,
+        /// Why: the file is missing, unreadable, of another format, not a mesh.
+        reason: String,
+        /// Whether the box of the geom's `size` is drawn in its place (else nothing is).
+        boxed: bool,
+    },
+    /// A mesh a page draws with fewer triangles than its file has, to keep the page within
+    /// its size budget.
+    MeshSimplified {
+        /// The file as the model names it.
+        file: String,
+        /// The file's triangles.
+        triangles: usize,
+        /// The triangles drawn.
+        kept: usize,
+    },
 }
 
 impl ModelNote {
@@ -73,7 +122,10 @@ impl ModelNote {
     /// change of the start).
     #[must_use]
     pub fn is_ignored_content(&self) -> bool {
-        matches!(self, ModelNote::ArmatureDropped(_) | ModelNote::LimitsIgnored)
+        matches!(
+            self,
+            ModelNote::ArmatureDropped(_) | ModelNote::LimitsIgnored | ModelNote::ContactsIgnored(_)
+        )
     }
 }
 
@@ -98,6 +150,29 @@ impl core::fmt::Display for ModelNote {
                 "the start violated the loop-closing joints (relative position {position:.1e}, velocity \
                  {velocity:.1e}); projected onto them"
             ),
+            ModelNote::ContactsIgnored(method) => write!(
+                f,
+                "contacts between the model's shapes ({method} runs without them; --method liemid has them)"
+            ),
+            ModelNote::MeshNotDrawn {
+                geom,
+                file,
+                reason,
+                boxed,
+            } => write!(
+                f,
+                "the mesh of {geom} is not drawn from `{file}`: {reason}; {}",
+                if *boxed {
+                    "the box of the geom's size stands in for it"
+                } else {
+                    "nothing is drawn in its place"
+                }
+            ),
+            ModelNote::MeshSimplified { file, triangles, kept } => write!(
+                f,
+                "the mesh `{file}` is drawn simplified, {kept} of its {triangles} triangles (the page's size \
+                 budget)"
+            ),
         }
     }
 }
@@ -116,11 +191,14 @@ pub struct Prepared {
 /// The notes of a run of `model` in joint coordinates ([`JointSpaceModel`]).
 #[must_use]
 pub fn joint_space_notes(model: &Model) -> Vec<ModelNote> {
+    let mut notes = Vec::new();
     if model.joints.iter().any(|j| j.range.is_some()) {
-        vec![ModelNote::LimitsIgnored]
-    } else {
-        Vec::new()
+        notes.push(ModelNote::LimitsIgnored);
     }
+    if model.collision.any() {
+        notes.push(ModelNote::ContactsIgnored("the joint-space reference"));
+    }
+    notes
 }
 
 impl Rattle {
@@ -153,11 +231,7 @@ impl Rattle {
             let t_next = if k == n { t_end } else { t0 + k as f64 * h };
             let report = self.step(system, state, t_next - state.t)?;
             self.work.set_time(state, t_next);
-            run.steps = k;
-            run.max_position_violation = run.max_position_violation.max(report.position_violation);
-            run.max_velocity_violation = run.max_velocity_violation.max(report.velocity_violation);
-            run.max_iterations = run.max_iterations.max(report.iterations);
-            run.total_iterations += u64::from(report.iterations);
+            run.record(k, &report);
             let energy = system.energy(state);
             if !energy.is_finite() {
                 return Err(Error::NonFiniteResult {
@@ -225,6 +299,16 @@ impl Simulation {
             notes.push(ModelNote::ArmatureDropped(named.join(", ")));
             stripped = m;
             &stripped
+        } else {
+            model
+        };
+        let without_contacts;
+        let model = if method != MultibodyMethod::Liemid && model.collision.any() {
+            let mut m = model.clone();
+            m.collision.disabled = true;
+            notes.push(ModelNote::ContactsIgnored(method.name()));
+            without_contacts = m;
+            &without_contacts
         } else {
             model
         };
@@ -354,11 +438,7 @@ impl Simulation {
             let t_next = if k == n { t_end } else { t0 + k as f64 * h };
             let report = self.integrator.step(&self.system, state, t_next - state.t)?;
             self.integrator.work.set_time(state, t_next);
-            run.steps = k;
-            run.max_position_violation = run.max_position_violation.max(report.position_violation);
-            run.max_velocity_violation = run.max_velocity_violation.max(report.velocity_violation);
-            run.max_iterations = run.max_iterations.max(report.iterations);
-            run.total_iterations += u64::from(report.iterations);
+            run.record(k, &report);
             let energy = self.system.energy(state);
             if !energy.is_finite() {
                 return Err(Error::NonFiniteResult {

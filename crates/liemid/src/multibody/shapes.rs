@@ -3,8 +3,20 @@
 //! Each shape is posed in its body's frame (the frame origin of the model file, not the
 //! centre of mass) or in the world.
 //!
+//! A mesh is posed as MuJoCo draws it: MuJoCo recentres a mesh at its centroid and turns it
+//! to its principal axes of inertia (`mesh_pos`, `mesh_quat`), and composes that same
+//! offset into the geom's frame (`geom_pos`, `geom_quat`), so the two cancel and the file's
+//! vertices, scaled, appear posed by the geom's own `pos` and orientation. The shapes here
+//! keep the file's coordinates and the geom's frame as written, which draws the same thing
+//! without computing the inertial frame (URDF meshes are placed by the visual's `<origin>`,
+//! as URDF says).
+//!
 //! Reference: MuJoCo documentation, XML reference, `geom` (types, `size`, `fromto`, `rgba`,
-//! `material`, `group`); URDF `<visual>`.
+//! `material`, `group`), `mesh` (`file`, `scale`), `compiler` (`meshdir`, `assetdir`);
+//! MuJoCo's compiler, `mjCGeom::Compile` (the mesh offset accumulated into the geom's
+//! frame); URDF `<visual>`.
+
+use std::path::PathBuf;
 
 use crate::linalg::{Mat3, Vec3};
 
@@ -46,6 +58,21 @@ pub enum ShapeKind {
     Ellipsoid {
         /// Its semi-axes.
         radii: [f64; 3],
+    },
+    /// A triangle mesh from a file, in the file's coordinates times `scale` (read by the
+    /// viewer that draws it, with [`Mesh::read`](super::mesh::Mesh::read)).
+    Mesh {
+        /// The geom's name, else the mesh asset's (MJCF); the link's (URDF).
+        name: String,
+        /// The file as the model names it.
+        file: String,
+        /// The file found (recorded among the model's input files), or why none was.
+        path: Result<PathBuf, String>,
+        /// Scale along each axis of the file's coordinates.
+        scale: [f64; 3],
+        /// Half the edges of the box drawn in its place when the file gives no mesh: the
+        /// geom's `size` when it has three positive values (MJCF), else nothing is drawn.
+        half: Option<[f64; 3]>,
     },
 }
 

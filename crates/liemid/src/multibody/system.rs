@@ -91,6 +91,12 @@ impl core::fmt::Debug for MultibodySystem {
 }
 
 impl MultibodySystem {
+    /// Whether the system has contacts: shapes that can touch, contacts switched on.
+    #[must_use]
+    pub fn has_contacts(&self) -> bool {
+        self.contact.is_some()
+    }
+
     /// Build the system of a model: validate it, precompute the joint geometry and the
     /// force parameters.
     ///

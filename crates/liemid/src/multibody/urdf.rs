@@ -20,7 +20,7 @@
 //!   refused (naming the link) when it would move.
 //! - A `revolute` or `prismatic` joint without `<limit lower/upper>` is taken as unlimited
 //!   (the specification requires the limit; this is noted in [`Loaded::ignored`]).
-//! - Visuals, collisions, materials, transmissions, Gazebo tags, joint friction, effort and
+//! - Visuals are drawn (mesh files found as [`mesh_path`] says); collisions, materials, transmissions, Gazebo tags, joint friction, effort and
 //!   velocity limits, mimic, calibration and safety controllers are noted as ignored.
 
 use std::collections::HashMap;
@@ -39,12 +39,57 @@ use crate::linalg::{Mat3, Vec3};
 
 pub use super::xml::Loaded;
 
-/// Loads a URDF file (at most 64 MiB).
+/// Loads a URDF file (at most 64 MiB); its visuals' mesh files are found (see
+/// [`mesh_path`]) and listed in [`Loaded::files`], not read.
 pub fn load(path: &Path) -> Result<Loaded> {
     let text = read_bounded(path)?;
     let mut loaded = parse(&text, &path.display().to_string())?;
     loaded.files = vec![path.to_path_buf()];
+    let dir = path.parent().unwrap_or(Path::new(""));
+    for shape in &mut loaded.shapes {
+        if let ShapeKind::Mesh { file, path, .. } = &mut shape.kind {
+            *path = mesh_path(dir, file);
+            if let Ok(p) = path {
+                if !loaded.files.contains(p) {
+                    loaded.files.push(p.clone());
+                }
+            }
+        }
+    }
     Ok(loaded)
+}
+
+/// How many directories above the URDF's a `package://` path is looked for in.
+pub const PACKAGE_SEARCH_DEPTH: usize = 4;
+
+/// The mesh file `filename` of a URDF in directory `dir`: a `file://` path as it is (or
+/// relative to `dir`), a relative path relative to `dir`, and `package://PKG/REST` (ROS
+/// would ask its package index, which a plain file has not) as `REST` under `dir` or one of
+/// the [`PACKAGE_SEARCH_DEPTH`] directories above it, the first that exists. `Err` says why
+/// none was found.
+pub fn mesh_path(dir: &Path, filename: &str) -> std::result::Result<std::path::PathBuf, String> {
+    if let Some(rest) = filename.strip_prefix("package://") {
+        let Some((_, rest)) = rest.split_once('/') else {
+            return Err("a package:// path names no file in its package".into());
+        };
+        return dir
+            .ancestors()
+            .take(PACKAGE_SEARCH_DEPTH + 1)
+            .map(|d| d.join(rest))
+            .find(|p| p.is_file())
+            .ok_or_else(|| {
+                format!(
+                    "{rest} is not found under the URDF's directory nor the {PACKAGE_SEARCH_DEPTH} above it (ROS \
+                     packages are not looked up)"
+                )
+            });
+    }
+    let plain = filename.strip_prefix("file://").unwrap_or(filename);
+    if plain.contains("://") {
+        return Err("only package:// and file:// paths are read".into());
+    }
+    let p = Path::new(plain);
+    Ok(if p.is_absolute() { p.to_path_buf() } else { dir.join(p) })
 }
 
 /// Parses URDF text; `name_for_errors` names the file in error messages.
@@ -280,7 +325,7 @@ fn read_link<'a, 'i>(cx: &Ctx, node: Node<'a, 'i>, ignored: &mut Ignored) -> Res
     for c in node.children().filter(Node::is_element) {
         match c.tag_name().name() {
             "inertial" => mass = read_inertial(cx, c)?,
-            "visual" => shapes.extend(read_visual(cx, c, ignored)?),
+            "visual" => shapes.extend(read_visual(cx, c, name)?),
             other => ignored.note(other),
         }
     }
@@ -292,9 +337,10 @@ fn read_link<'a, 'i>(cx: &Ctx, node: Node<'a, 'i>, ignored: &mut Ignored) -> Res
     })
 }
 
-/// The shape of a `<visual>`: `<origin>`, `<geometry>` (box, cylinder, sphere; a mesh is not
-/// read: noted) and `<material><color rgba>`; `None` for a mesh.
-fn read_visual(cx: &Ctx, node: Node, ignored: &mut Ignored) -> Result<Option<Shape>> {
+/// The shape of a `<visual>` of link `link`: `<origin>`, `<geometry>` (box, cylinder, sphere,
+/// mesh with `filename` and `scale`, the file found by [`load`]) and `<material><color
+/// rgba>`.
+fn read_visual(cx: &Ctx, node: Node, link: &str) -> Result<Option<Shape>> {
     let (position, rotation) = origin(cx, node)?;
     let Some(g) = child(node, "geometry").and_then(|g| g.children().find(Node::is_element)) else {
         return Err(cx.err(node, "a <visual> needs a <geometry> with a shape"));
@@ -328,8 +374,17 @@ fn read_visual(cx: &Ctx, node: Node, ignored: &mut Ignored) -> Result<Option<Sha
             radius: positive("radius")?,
         },
         "mesh" => {
-            ignored.note("mesh visuals (not drawn: the files are not read)");
-            return Ok(None);
+            let scale = cx.array::<3>(g, "scale")?.unwrap_or([1.0; 3]);
+            if !scale.iter().all(|c| c.is_finite() && *c != 0.0) {
+                return Err(cx.err(g, "scale: three finite, non-zero factors"));
+            }
+            ShapeKind::Mesh {
+                name: link.to_string(),
+                file: required(cx, g, "filename")?.to_string(),
+                path: Err("the model was parsed from text, with no directory to find its files in".into()),
+                scale,
+                half: None,
+            }
         }
         other => return Err(cx.err(g, format!("unknown geometry <{other}>"))),
     };

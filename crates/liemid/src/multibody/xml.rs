@@ -68,6 +68,15 @@ impl Ignored {
 /// them whole.
 pub(crate) fn read_bounded(path: &Path) -> Result<String> {
     let name = path.display().to_string();
+    let bytes = read_bounded_bytes(path, MAX_FILE_BYTES, "a model file")?;
+    String::from_utf8(bytes).map_err(|e| file_error(&name, format!("not UTF-8 text: {e}")))
+}
+
+/// The bytes of the regular file `path`, at most `max_bytes` of them: every file a model
+/// reads (the model, its includes, its meshes) comes through here; `kind` names the kind of
+/// file in the error ("a model file").
+pub(crate) fn read_bounded_bytes(path: &Path, max_bytes: u64, kind: &str) -> Result<Vec<u8>> {
+    let name = path.display().to_string();
     let io = |e: std::io::Error| file_error(&name, format!("cannot read the file: {e}"));
     let meta = std::fs::metadata(path).map_err(io)?;
     if !meta.is_file() {
@@ -76,16 +85,22 @@ pub(crate) fn read_bounded(path: &Path) -> Result<String> {
             "not a regular file (a directory, FIFO or device is not read as a model)".into(),
         ));
     }
-    if meta.len() > MAX_FILE_BYTES {
-        return Err(too_large(&name));
+    let too_large = || {
+        file_error(
+            &name,
+            format!("larger than the {} MiB accepted for {kind}", max_bytes >> 20),
+        )
+    };
+    if meta.len() > max_bytes {
+        return Err(too_large());
     }
     let file = std::fs::File::open(path).map_err(io)?;
     let mut bytes = Vec::new();
-    file.take(MAX_FILE_BYTES + 1).read_to_end(&mut bytes).map_err(io)?;
-    if bytes.len() as u64 > MAX_FILE_BYTES {
-        return Err(too_large(&name));
+    file.take(max_bytes + 1).read_to_end(&mut bytes).map_err(io)?;
+    if bytes.len() as u64 > max_bytes {
+        return Err(too_large());
     }
-    String::from_utf8(bytes).map_err(|e| file_error(&name, format!("not UTF-8 text: {e}")))
+    Ok(bytes)
 }
 
 fn too_large(file: &str) -> Error {

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use liemid::multibody::model::{JointKind, Link, Model};
-use liemid::multibody::{mjcf, urdf};
+use liemid::multibody::{mjcf, urdf, ShapeKind};
 use liemid::{Mat3, Vec3};
 
 fn example(name: &str) -> PathBuf {
@@ -278,14 +278,7 @@ fn menagerie_style_arm() {
         "{:?}",
         l.ignored
     );
-    for kind in [
-        "sensor",
-        "asset",
-        "light",
-        "site",
-        "camera",
-        "option integrator",
-    ] {
+    for kind in ["sensor", "asset", "light", "site", "camera", "option integrator"] {
         assert!(l.ignored.iter().any(|s| s == kind), "{kind} not in {:?}", l.ignored);
     }
 }
@@ -364,17 +357,33 @@ fn ros_style_arm_lumps_fixed_joints() {
             axis: Vec3::new(0.0, 0.0, 1.0)
         }
     );
-    // The base's visual is a mesh: not drawn, and said so.
-    for kind in [
-        "material",
-        "mesh visuals (not drawn: the files are not read)",
-        "collision",
-        "transmission",
-        "joint friction",
-    ] {
+    for kind in ["material", "collision", "transmission", "joint friction"] {
         assert!(l.ignored.iter().any(|s| s == kind), "{kind} not in {:?}", l.ignored);
     }
-    assert!(l.shapes.is_empty());
+    // The base's visual is a mesh: `package://arm/meshes/base.stl` found as `meshes/base.stl`
+    // next to the URDF, and listed among the model's files (no output may replace it).
+    assert_eq!(l.shapes.len(), 1, "{:?}", l.shapes);
+    let ShapeKind::Mesh { file, path, scale, .. } = &l.shapes[0].kind else {
+        panic!("{:?}", l.shapes[0]);
+    };
+    assert_eq!((file.as_str(), *scale), ("package://arm/meshes/base.stl", [1.0; 3]));
+    let path = path.as_ref().unwrap();
+    assert!(
+        path.ends_with("meshes/base.stl") && path.is_file(),
+        "{}",
+        path.display()
+    );
+    assert!(l.files.contains(path));
+    let dir = example("arm.urdf").parent().unwrap().to_path_buf();
+    for (name, found) in [
+        ("package://arm/meshes/base.stl", true),
+        ("package://arm/meshes/none.stl", false),
+        ("package://arm", false),
+        ("http://example.invalid/base.stl", false),
+    ] {
+        assert_eq!(urdf::mesh_path(&dir, name).is_ok(), found, "{name}");
+    }
+    assert_eq!(urdf::mesh_path(&dir, "meshes/x.stl").unwrap(), dir.join("meshes/x.stl"));
 }
 
 // ---- refusals: each names the element and its line ----
@@ -584,7 +593,6 @@ fn a_long_attribute_is_abbreviated_in_the_error() {
 /// material's, `group`, and meshes noted as not drawn.
 #[test]
 fn the_shapes_of_a_scene_are_read_with_their_poses_and_colours() {
-    use liemid::multibody::ShapeKind;
     let l = mjcf::load(&example("humanoid_scene.xml")).unwrap();
     let floor: Vec<_> = l.shapes.iter().filter(|s| s.body.is_none()).collect();
     assert_eq!(floor.len(), 1);
@@ -597,7 +605,15 @@ fn the_shapes_of_a_scene_are_read_with_their_poses_and_colours() {
           <geom type="mesh" mesh="x"/>
         </body></worldbody></mujoco>"#;
     let l = mjcf::parse(text, "shapes.xml").unwrap();
-    assert_eq!(l.shapes.len(), 1, "{:?}", l.shapes);
+    assert_eq!(l.shapes.len(), 2, "{:?}", l.shapes);
+    // A mesh geom naming no declared mesh: a shape that says why it cannot be drawn.
+    match &l.shapes[1].kind {
+        ShapeKind::Mesh { file, path, half, .. } => {
+            assert_eq!((file.as_str(), half), ("x", &None));
+            assert!(path.as_ref().unwrap_err().contains("no <mesh name=\"x\">"), "{path:?}");
+        }
+        other => panic!("{other:?}"),
+    }
     let s = &l.shapes[0];
     assert_eq!(s.body, Some(0));
     assert_eq!(
@@ -613,11 +629,66 @@ fn the_shapes_of_a_scene_are_read_with_their_poses_and_colours() {
         (s.rgba, s.group, s.shown_by_default()),
         ([1.0, 0.0, 0.0, 0.5], 3, false)
     );
-    assert!(l
-        .ignored
-        .iter()
-        .any(|k| k == "mesh geoms (not drawn: the files are not read)"));
     let bad = text.replace("rgba=\"1 0 0 0.5\"", "rgba=\"2 0 0 1\"");
     let e = mjcf::parse(&bad, "shapes.xml").unwrap_err().to_string();
     assert!(e.contains("rgba: each component must lie in [0, 1]"), "{e}");
+}
+
+/// The arm's mesh geoms: each asset's file found under `compiler meshdir` relative to the
+/// main file (through the scene that includes it), listed among the model's files after the
+/// XML files, a default class's mesh `scale` applied, and posed by the geom's own frame.
+#[test]
+fn mesh_geoms_find_their_files_as_mujoco_does_and_list_them_as_inputs() {
+    let l = mjcf::load(&example("arm_scene.xml")).unwrap();
+    let meshes: Vec<_> = l
+        .shapes
+        .iter()
+        .filter_map(|s| match &s.kind {
+            ShapeKind::Mesh { file, path, .. } => Some((s, file.as_str(), path.as_ref().unwrap())),
+            _ => None,
+        })
+        .collect();
+    let files: Vec<&str> = meshes.iter().map(|m| m.1).collect();
+    assert_eq!(files, ["link0.stl", "link1.stl", "link2.stl", "hand.obj"]);
+    for (s, file, path) in &meshes {
+        assert!(
+            path.ends_with(format!("multibody/meshes/{file}")) && path.is_file(),
+            "{}",
+            path.display()
+        );
+        assert!(l.files.contains(path));
+        assert_eq!((s.group, s.position), (2, Vec3::ZERO));
+    }
+    assert!(l.files[0].ends_with("arm_scene.xml") && l.files[1].ends_with("arm.xml"));
+    assert_eq!(l.files.len(), 6);
+    let text = r#"<mujoco><compiler meshdir="/abs"/><default><mesh scale="2 2 2"/></default>
+        <asset><mesh file="a/part.stl"/><mesh name="m" file="b.obj" scale="1 1 3"/></asset><worldbody>
+        <body><inertial pos="0 0 0" mass="1" diaginertia="1 1 1"/><joint type="ball"/>
+          <geom type="mesh" mesh="part" size="1 2 3"/><geom name="g" type="mesh" mesh="m"/></body>
+        </worldbody></mujoco>"#;
+    let l = mjcf::parse(text, "m.xml").unwrap();
+    match (&l.shapes[0].kind, &l.shapes[1].kind) {
+        (
+            ShapeKind::Mesh {
+                name: n0,
+                scale: s0,
+                half: h0,
+                path: p0,
+                ..
+            },
+            ShapeKind::Mesh {
+                name: n1,
+                scale: s1,
+                half: h1,
+                ..
+            },
+        ) => {
+            assert_eq!((n0.as_str(), *s0, *h0), ("part", [2.0; 3], Some([1.0, 2.0, 3.0])));
+            assert_eq!((n1.as_str(), *s1, *h1), ("g", [1.0, 1.0, 3.0], None));
+            // Parsed from text: no directory to find the file in.
+            assert!(p0.as_ref().unwrap_err().contains("parsed from text"));
+        }
+        other => panic!("{other:?}"),
+    }
+    assert!(l.files.is_empty());
 }

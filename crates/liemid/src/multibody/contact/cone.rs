@@ -56,7 +56,7 @@ pub(super) fn solve(w: &[f64], r0: &[f64], mu: &[f64], sigma: &mut [f64], rates:
             };
         }
         sweeps += 1;
-        for k in 0..n {
+        for (k, &mu_k) in mu.iter().enumerate().take(n) {
             let b = 3 * k;
             let at = |i: usize, j: usize| w[(b + i) * m + b + j];
             let old = [sigma[b], sigma[b + 1], sigma[b + 2]];
@@ -70,7 +70,7 @@ pub(super) fn solve(w: &[f64], r0: &[f64], mu: &[f64], sigma: &mut [f64], rates:
                 0.0
             };
             let rho_t = [rho[1] + at(1, 0) * sn, rho[2] + at(2, 0) * sn];
-            let st = disc([[at(1, 1), at(1, 2)], [at(2, 1), at(2, 2)]], rho_t, mu[k] * sn);
+            let st = disc([[at(1, 1), at(1, 2)], [at(2, 1), at(2, 2)]], rho_t, mu_k * sn);
             let new = [sn, st[0], st[1]];
             for (j, (nv, ov)) in new.iter().zip(old).enumerate() {
                 let d = nv - ov;

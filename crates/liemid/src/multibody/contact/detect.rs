@@ -113,7 +113,7 @@ pub(in crate::multibody) fn world(body: Option<usize>, p: Vec3, c: &[Vec3], r: &
 
 /// A body's attitude (the world's: identity).
 #[inline]
-pub(in crate::multibody) fn attitude<'a>(body: Option<usize>, r: &'a [Mat3]) -> &'a Mat3 {
+pub(in crate::multibody) fn attitude(body: Option<usize>, r: &[Mat3]) -> &Mat3 {
     body.map_or(&Mat3::IDENTITY, |i| &r[i])
 }
 
@@ -421,7 +421,7 @@ fn collider(s: &Shape, com: &[Vec3]) -> Option<Collider> {
             Vec3::from_array(*half).norm(),
             false,
         ),
-        ShapeKind::Ellipsoid { .. } => return None,
+        ShapeKind::Ellipsoid { .. } | ShapeKind::Mesh { .. } => return None,
     };
     Some(Collider {
         body: s.body,

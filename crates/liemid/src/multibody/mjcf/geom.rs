@@ -1,8 +1,15 @@
 //! The mass properties of MJCF geoms (sphere, capsule, cylinder, box, ellipsoid; `size`,
 //! `fromto`, `mass` or `density`) for bodies without an `<inertial>`, and the shapes geoms
-//! draw (with `rgba`, a `material`'s colour and the visual `group`).
+//! draw (with `rgba`, a `material`'s colour and the visual `group`), meshes among them
+//! (`<asset><mesh name file scale class>`, the name defaulting to the file's stem; the file
+//! found as MuJoCo finds it: as it is when absolute, else under `compiler` `meshdir`, else
+//! `assetdir`, each taken as it is when absolute, else relative to the main model file's
+//! directory). A mesh's `refpos`/`refquat`, inline `vertex` data and builtin meshes are not
+//! drawn (the shape says why).
 //!
-//! Reference: MuJoCo documentation, XML reference, `geom`.
+//! Reference: MuJoCo documentation, XML reference, `geom`, `mesh`, `compiler`.
+
+use std::path::{Path, PathBuf};
 
 use roxmltree::Node;
 
@@ -15,25 +22,193 @@ use crate::linalg::{Mat3, Vec3};
 /// MuJoCo's default geom colour.
 const DEFAULT_RGBA: [f32; 4] = [0.5, 0.5, 0.5, 1.0];
 
+/// An `<asset><mesh>`: its file as written, and its scale.
+pub(super) struct MeshAsset {
+    file: Option<String>,
+    scale: [f64; 3],
+    /// Why the mesh is not drawn whatever its file (inline data, `refpos`).
+    unsupported: Option<String>,
+}
+
 impl<'a, 'i> State<'a, 'i> {
-    /// The colours of `<asset><material name rgba>`.
-    pub(super) fn read_materials(&mut self, asset: Node<'a, 'i>) -> Result<()> {
+    /// The colours of `<asset><material name rgba>` and the meshes of `<asset><mesh>`.
+    pub(super) fn read_assets(&mut self, asset: Node<'a, 'i>) -> Result<()> {
         let cx = self.cx;
         for m in asset.children().filter(|c| c.has_tag_name("material")) {
             if let (Some(name), Some(rgba)) = (m.attribute("name"), cx.array::<4>(m, "rgba")?) {
                 self.materials.insert(name, rgba.map(|c| c as f32));
             }
         }
+        for m in asset.children().filter(|c| c.has_tag_name("mesh")) {
+            let class = self.class_of(m, "main")?;
+            let defaults = self.classes[class].mesh.clone();
+            let get = |a: &str| m.attribute(a).or_else(|| defaults.get(a).copied());
+            let file = get("file").map(str::to_string);
+            let name = match (m.attribute("name"), &file) {
+                (Some(n), _) => n.to_string(),
+                (None, Some(f)) => Path::new(f)
+                    .file_stem()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_default(),
+                (None, None) => return Err(cx.err(m, "a <mesh> needs a name or a file")),
+            };
+            let scale = match get("scale") {
+                Some(v) => cx.array_of::<3>(m, "scale", v)?,
+                None => [1.0; 3],
+            };
+            if !scale.iter().all(|c| c.is_finite() && *c != 0.0) {
+                return Err(cx.err(m, "scale: three finite, non-zero factors"));
+            }
+            let unsupported = if file.is_none() {
+                Some("a mesh without a file (inline vertex data or a builtin mesh) is not drawn".to_string())
+            } else {
+                ["refpos", "refquat"]
+                    .into_iter()
+                    .find(|a| get(a).is_some())
+                    .map(|a| format!("a mesh with `{a}` is not drawn"))
+            };
+            if self
+                .meshes
+                .insert(
+                    name.clone(),
+                    MeshAsset {
+                        file,
+                        scale,
+                        unsupported,
+                    },
+                )
+                .is_some()
+            {
+                return Err(cx.err(m, format!("a second mesh named `{name}`")));
+            }
+        }
         Ok(())
     }
 
-    /// The shape a geom draws, in its body's frame; `None` for a mesh, a height field or an
-    /// SDF (their files are not read: noted once).
+    /// Where the mesh file `file` is, as MuJoCo looks for it; `Err` (why) for a model
+    /// parsed from text.
+    fn mesh_path(&self, file: &str) -> std::result::Result<PathBuf, String> {
+        let Some(dir) = &self.dir else {
+            return Err("the model was parsed from text, with no directory to find its files in".into());
+        };
+        let f = Path::new(file);
+        if f.is_absolute() {
+            return Ok(f.to_path_buf());
+        }
+        Ok(
+            match self.compiler.meshdir.as_ref().or(self.compiler.assetdir.as_ref()) {
+                Some(d) if Path::new(d).is_absolute() => Path::new(d).join(f),
+                Some(d) => dir.join(d).join(f),
+                None => dir.join(f),
+            },
+        )
+    }
+
+    /// The mesh files of the assets that exist: the model's inputs besides its XML files.
+    pub(super) fn mesh_files(&self) -> Vec<PathBuf> {
+        let mut files: Vec<PathBuf> = self
+            .meshes
+            .values()
+            .filter_map(|m| m.file.as_deref())
+            .filter_map(|f| self.mesh_path(f).ok())
+            .filter(|p| p.is_file())
+            .collect();
+        files.sort();
+        files.dedup();
+        files
+    }
+
+    /// The colour (`rgba`, else the material's, else MuJoCo's grey) and the visual group of
+    /// a geom.
+    fn appearance(&self, g: &Elem<'a, 'i>) -> Result<([f32; 4], u8)> {
+        let cx = self.cx;
+        let node = g.node;
+        let explicit = match g.get("rgba") {
+            Some(v) => Some(cx.array_of::<4>(node, "rgba", v)?.map(|c| c as f32)),
+            None => None,
+        };
+        let material = g.get("material").and_then(|m| self.materials.get(m).copied());
+        let rgba = explicit.or(material).unwrap_or(DEFAULT_RGBA);
+        if rgba.iter().any(|c| !(0.0..=1.0).contains(c)) {
+            return Err(cx.err(node, "rgba: each component must lie in [0, 1]"));
+        }
+        let group = match g.get("group") {
+            Some(v) => {
+                let [k] = cx.array_of::<1>(node, "group", v)?;
+                if !(0.0..=5.0).contains(&k) || k.fract() != 0.0 {
+                    return Err(cx.err(node, format!("group {k}: expected a whole number from 0 to 5")));
+                }
+                k as u8
+            }
+            None => 0,
+        };
+        Ok((rgba, group))
+    }
+
+    /// The shape of a mesh geom: its asset's file (found, or why not) and scale, posed by
+    /// the geom's own frame (see [`ShapeKind::Mesh`] and the module `shapes` on why that
+    /// is where MuJoCo draws it), with the box of the geom's `size` to stand in for a file
+    /// that gives no mesh.
+    fn mesh_shape(&mut self, g: &Elem<'a, 'i>) -> Result<Shape> {
+        let cx = self.cx;
+        let node = g.node;
+        let mesh = g.get("mesh").unwrap_or_default();
+        let name = node.attribute("name").unwrap_or(mesh).to_string();
+        let (file, path, scale) = match self.meshes.get(mesh) {
+            None if mesh.is_empty() => (String::new(), Err("the geom names no mesh".to_string()), [1.0; 3]),
+            None => (
+                mesh.to_string(),
+                Err(format!("no <mesh name=\"{mesh}\"> in <asset>")),
+                [1.0; 3],
+            ),
+            Some(a) => {
+                let file = a.file.clone().unwrap_or_default();
+                let path = match &a.unsupported {
+                    Some(why) => Err(why.clone()),
+                    None => self.mesh_path(&file),
+                };
+                (file, path, a.scale)
+            }
+        };
+        let size = match g.get("size") {
+            Some(v) => cx.floats(node, "size", v, 1, 3)?,
+            None => Vec::new(),
+        };
+        let half =
+            (size.len() == 3 && size.iter().all(|s| s.is_finite() && *s > 0.0)).then(|| [size[0], size[1], size[2]]);
+        let (position, rotation) = self.frame(node, &|a| g.get(a))?;
+        let (rgba, group) = self.appearance(g)?;
+        if self.geom_collision(g)?.is_some() {
+            self.ignored
+                .note("mesh geom contacts (not simulated: meshes are drawn only)");
+        }
+        Ok(Shape {
+            body: None,
+            kind: ShapeKind::Mesh {
+                name,
+                file,
+                path,
+                scale,
+                half,
+            },
+            position,
+            rotation,
+            rgba,
+            group,
+            collision: None,
+        })
+    }
+
+    /// The shape a geom draws, in its body's frame; `None` for a height field or an SDF
+    /// (their files are not read: noted once).
     pub(super) fn geom_shape(&mut self, g: &Elem<'a, 'i>) -> Result<Option<Shape>> {
         let cx = self.cx;
         let node = g.node;
         let ty = g.get("type").unwrap_or("sphere");
-        if matches!(ty, "mesh" | "hfield" | "sdf") {
+        if ty == "mesh" {
+            return self.mesh_shape(g).map(Some);
+        }
+        if matches!(ty, "hfield" | "sdf") {
             self.ignored
                 .note(&format!("{ty} geoms (not drawn: the files are not read)"));
             return Ok(None);
@@ -44,7 +219,12 @@ impl<'a, 'i> State<'a, 'i> {
         };
         let (mut position, mut rotation) = self.frame(node, &|a| g.get(a))?;
         let mut half_length = None;
-        if let Some(v) = g.get("fromto") {
+        // MuJoCo reads `fromto` for capsules, cylinders, boxes and ellipsoids only (a class
+        // default's `fromto` does not move a plane or a sphere of that class).
+        let fromto = g
+            .get("fromto")
+            .filter(|_| matches!(ty, "capsule" | "cylinder" | "box" | "ellipsoid"));
+        if let Some(v) = fromto {
             let f = cx.array_of::<6>(node, "fromto", v)?;
             let (a, b) = (Vec3::new(f[0], f[1], f[2]), Vec3::new(f[3], f[4], f[5]));
             rotation = rotation_to_z(cx.unit(node, "fromto", (b - a).to_array())?);
@@ -79,29 +259,12 @@ impl<'a, 'i> State<'a, 'i> {
             }
             ShapeKind::Box { half } => half.iter().all(|s| s.is_finite() && *s > 0.0),
             ShapeKind::Ellipsoid { radii } => radii.iter().all(|s| s.is_finite() && *s > 0.0),
+            ShapeKind::Mesh { .. } => true,
         };
         if !finite {
             return Err(cx.err(node, format!("a {ty} geom needs positive, finite size values")));
         }
-        let explicit = match g.get("rgba") {
-            Some(v) => Some(cx.array_of::<4>(node, "rgba", v)?.map(|c| c as f32)),
-            None => None,
-        };
-        let material = g.get("material").and_then(|m| self.materials.get(m).copied());
-        let rgba = explicit.or(material).unwrap_or(DEFAULT_RGBA);
-        if rgba.iter().any(|c| !(0.0..=1.0).contains(c)) {
-            return Err(cx.err(node, "rgba: each component must lie in [0, 1]"));
-        }
-        let group = match g.get("group") {
-            Some(v) => {
-                let [k] = cx.array_of::<1>(node, "group", v)?;
-                if !(0.0..=5.0).contains(&k) || k.fract() != 0.0 {
-                    return Err(cx.err(node, format!("group {k}: expected a whole number from 0 to 5")));
-                }
-                k as u8
-            }
-            None => 0,
-        };
+        let (rgba, group) = self.appearance(g)?;
         Ok(Some(Shape {
             body: None,
             kind,
@@ -224,7 +387,12 @@ impl<'a, 'i> State<'a, 'i> {
         };
         let (mut pos, mut rot) = self.frame(node, &|a| g.get(a))?;
         let mut half_length = None;
-        if let Some(v) = g.get("fromto") {
+        // MuJoCo reads `fromto` for capsules, cylinders, boxes and ellipsoids only (a class
+        // default's `fromto` does not move a plane or a sphere of that class).
+        let fromto = g
+            .get("fromto")
+            .filter(|_| matches!(ty, "capsule" | "cylinder" | "box" | "ellipsoid"));
+        if let Some(v) = fromto {
             let f = cx.array_of::<6>(node, "fromto", v)?;
             let (a, b) = (Vec3::new(f[0], f[1], f[2]), Vec3::new(f[3], f[4], f[5]));
             let d = b - a;

@@ -52,7 +52,7 @@
 //!   listed in [`Loaded::ignored`].
 
 use std::collections::HashMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use roxmltree::Node;
 
@@ -76,21 +76,28 @@ use merge::KeyMap;
 pub use super::xml::Loaded;
 
 /// Loads an MJCF file (at most 64 MiB with its includes expanded), reading the files it
-/// `<include>`s (see [`mod@include`]); no mesh or other asset file is read.
+/// `<include>`s (see [`mod@include`]); mesh files are found (`compiler` `meshdir` or
+/// `assetdir`, relative to this file's directory, as MuJoCo does) and listed in
+/// [`Loaded::files`] but not read: a viewer reads them ([`ShapeKind::Mesh`](super::ShapeKind::Mesh)).
 pub fn load(path: &Path) -> Result<Loaded> {
     let (text, sources, files) = include::expand(path)?;
-    let mut loaded = parse_assembled(&text, &path.display().to_string(), &sources)?;
-    loaded.files = files;
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let mut loaded = parse_assembled(&text, &path.display().to_string(), &sources, Some(dir))?;
+    // The model's files, then its mesh files (found next to it, see [`ShapeKind::Mesh`]).
+    let meshes = std::mem::replace(&mut loaded.files, files);
+    loaded.files.extend(meshes);
     Ok(loaded)
 }
 
 /// Parses MJCF text; `name_for_errors` names the file in error messages. An `<include>`
-/// is refused (no file to resolve it against): use [`load`].
+/// is refused (no file to resolve it against): use [`load`]; so are mesh files (their
+/// shapes say why they cannot be drawn).
 pub fn parse(text: &str, name_for_errors: &str) -> Result<Loaded> {
-    parse_assembled(text, name_for_errors, Sources::NONE)
+    parse_assembled(text, name_for_errors, Sources::NONE, None)
 }
 
-fn parse_assembled(text: &str, name_for_errors: &str, sources: &Sources) -> Result<Loaded> {
+/// Parses the assembled text of a model whose file lies in `dir` (`None`: text).
+fn parse_assembled(text: &str, name_for_errors: &str, sources: &Sources, dir: Option<PathBuf>) -> Result<Loaded> {
     let doc = parse_document(text, name_for_errors, sources)?;
     let lines = line_starts(text);
     let cx = Ctx::new(name_for_errors, sources, &lines);
@@ -108,6 +115,8 @@ fn parse_assembled(text: &str, name_for_errors: &str, sources: &Sources) -> Resu
         body_names: HashMap::new(),
         joint_names: HashMap::new(),
         materials: HashMap::new(),
+        meshes: HashMap::new(),
+        dir,
         world_shapes: Vec::new(),
         joint_refs: HashMap::new(),
     };
@@ -118,10 +127,11 @@ fn parse_assembled(text: &str, name_for_errors: &str, sources: &Sources) -> Resu
         match node.tag_name().name() {
             "compiler" => st.read_compiler(node)?,
             "default" => st.read_default(node, None)?,
-            "asset" => st.read_materials(node)?,
+            "asset" => st.read_assets(node)?,
             _ => {}
         }
     }
+    let mesh_files = st.mesh_files();
     let mut gravity = Vec3::new(0.0, 0.0, -9.81);
     let mut timestep = None;
     let mut keys = Vec::new();
@@ -216,7 +226,7 @@ fn parse_assembled(text: &str, name_for_errors: &str, sources: &Sources) -> Resu
     }
     model.validate_actuators().map_err(|e| cx.err(root, e.to_string()))?;
     Ok(Loaded {
-        files: Vec::new(),
+        files: mesh_files,
         model,
         ignored: st.ignored.into_vec(),
         merged: built.merged,
@@ -242,6 +252,9 @@ struct Compiler {
     eulerseq: [u8; 3],
     autolimits: bool,
     from_geom: FromGeom,
+    /// `meshdir`, else `assetdir`: where mesh files are found.
+    meshdir: Option<String>,
+    assetdir: Option<String>,
 }
 
 impl Default for Compiler {
@@ -251,6 +264,8 @@ impl Default for Compiler {
             eulerseq: *b"xyz",
             autolimits: true,
             from_geom: FromGeom::Auto,
+            meshdir: None,
+            assetdir: None,
         }
     }
 }
@@ -263,6 +278,8 @@ struct Class<'a> {
     /// Every actuator shortcut's defaults in one map (MuJoCo's shortcuts all set the one
     /// actuator default of a class).
     actuator: HashMap<&'a str, &'a str>,
+    /// `<mesh>` asset defaults (`scale`).
+    mesh: HashMap<&'a str, &'a str>,
 }
 
 struct State<'a, 'i> {
@@ -277,6 +294,10 @@ struct State<'a, 'i> {
     joint_names: HashMap<&'a str, Node<'a, 'i>>,
     /// `<asset><material name rgba>`: the colours geoms name.
     materials: HashMap<&'a str, [f32; 4]>,
+    /// `<asset><mesh>`: the meshes geoms name.
+    meshes: HashMap<String, geom::MeshAsset>,
+    /// The model file's directory (`None`: parsed from text).
+    dir: Option<PathBuf>,
     /// The shapes of `<worldbody>`'s own geoms.
     world_shapes: Vec<crate::multibody::shapes::Shape>,
     /// The `ref` of each named hinge and slide (MuJoCo's `qpos` minus the model's).
@@ -364,7 +385,25 @@ impl<'a, 'i> State<'a, 'i> {
                 _ => return Err(cx.err(node, format!("inertiafromgeom=\"{v}\": expected false, true or auto"))),
             };
         }
-        self.note_other_attributes(node, &["angle", "eulerseq", "autolimits", "inertiafromgeom"]);
+        for (attr, into) in [
+            ("meshdir", &mut self.compiler.meshdir),
+            ("assetdir", &mut self.compiler.assetdir),
+        ] {
+            if let Some(v) = node.attribute(attr) {
+                *into = Some(v.to_string());
+            }
+        }
+        self.note_other_attributes(
+            node,
+            &[
+                "angle",
+                "eulerseq",
+                "autolimits",
+                "inertiafromgeom",
+                "meshdir",
+                "assetdir",
+            ],
+        );
         Ok(())
     }
 
@@ -388,6 +427,7 @@ impl<'a, 'i> State<'a, 'i> {
             let map = match c.tag_name().name() {
                 "joint" => &mut class.joint,
                 "geom" => &mut class.geom,
+                "mesh" => &mut class.mesh,
                 "general" | "motor" | "position" | "velocity" | "intvelocity" | "damper" | "cylinder" | "muscle"
                 | "adhesion" => &mut class.actuator,
                 _ => continue,
