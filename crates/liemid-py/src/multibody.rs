@@ -569,6 +569,7 @@ fn multibody_simulator(
 /// it) or returned as HTML.
 #[pyfunction]
 #[pyo3(signature = (model, times, xpos, xquat, energy_error, total_steps, path=None))]
+#[allow(clippy::too_many_arguments)] // the Python signature, keyword by keyword
 fn multibody_view(
     py: Python<'_>,
     model: &MultibodyModel,

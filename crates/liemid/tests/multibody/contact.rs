@@ -124,3 +124,113 @@ fn two_balls_in_an_oblique_impact_keep_their_momenta_and_lose_energy() {
     assert!(touched > 0, "the balls never met");
     assert!(e_prev < 0.9 * e0, "the impact lost only {} of {e0} J", e0 - e_prev);
 }
+
+#[test]
+fn a_ball_with_restitution_bounces_to_the_apex_heights_of_newtons_law() {
+    // Dropped from h0 = 1 m (gap) with e = 0.8: the k-th apex is e^(2k) h0.
+    let (e, h0, r) = (0.8f64, 1.0, 0.05);
+    let text = format!(
+        "<mujoco><custom><numeric name=\"restitution\" data=\"{e}\"/></custom><worldbody>\
+         <geom type=\"plane\" size=\"0 0 1\"/><body name=\"ball\" pos=\"0 0 {z}\"><freejoint/>\
+         <geom type=\"sphere\" size=\"{r}\" mass=\"1\"/></body></worldbody></mujoco>",
+        z = h0 + r
+    );
+    let model = mjcf::parse(&text, "ball.xml").unwrap().model;
+    let prepared = Simulation::prepare(&model, MultibodyMethod::Liemid).unwrap();
+    let (mut sim, mut s) = (prepared.simulation, prepared.state);
+    let h = 1e-3;
+    let (mut apexes, mut rising, mut top, mut lowest) = (Vec::new(), false, 0.0f64, f64::INFINITY);
+    while apexes.len() < 10 {
+        sim.step(&mut s, h).unwrap();
+        let z = s.c[0].z - r;
+        lowest = lowest.min(z);
+        let v = s.p[0].z;
+        if v > 0.0 {
+            rising = true;
+            top = z;
+        } else if rising {
+            rising = false;
+            apexes.push(top.max(z));
+        }
+        assert!(s.t < 20.0, "only {} bounces in 20 s", apexes.len());
+    }
+    for (k, apex) in apexes.iter().enumerate() {
+        let expected = e.powi(2 * (k as i32 + 1)) * h0;
+        // The apex is sampled at the steps: below the parabola's top by at most g h²/8.
+        assert!(
+            (apex - expected).abs() <= 1e-3 * expected,
+            "apex {}: {apex} m, Newton's law {expected} m",
+            k + 1
+        );
+    }
+    assert!(lowest >= -1e-12, "the ball went {:e} m into the floor", -lowest);
+}
+
+#[test]
+fn a_ball_rolls_down_a_slope_at_five_sevenths_of_the_sliding_acceleration() {
+    // A solid ball (I = 2/5 m r²) on a 20° slope with µ = 0.5 > (2/7) tan 20°: it rolls
+    // without slipping, a = (5/7) g sin θ.
+    let (slope, r) = (20f64.to_radians(), 0.1);
+    let (s_, c_) = slope.sin_cos();
+    let half = slope / 2.0;
+    let text = format!(
+        "<mujoco><worldbody><geom type=\"plane\" size=\"0 0 1\" euler=\"0 {deg} 0\" friction=\"0.5\"/>\
+         <body name=\"ball\" pos=\"{x} 0 {z}\"><freejoint/><geom type=\"sphere\" size=\"{r}\" mass=\"1\" friction=\"0.5\"/></body>\
+         </worldbody><keyframe><key qpos=\"{x} 0 {z} {qw} 0 {qy} 0\"/></keyframe></mujoco>",
+        deg = slope.to_degrees(),
+        x = r * s_,
+        z = r * c_,
+        qw = half.cos(),
+        qy = half.sin(),
+    );
+    let model = mjcf::parse(&text, "rolling.xml").unwrap().model;
+    let (path, _) = run_box(&model, slope, 1e-3, 1000);
+    let a = 5.0 / 7.0 * G * s_;
+    for (k, p) in path.iter().enumerate().skip(1) {
+        let t = k as f64 * 1e-3;
+        let expected = 0.5 * a * t * t;
+        let got = p[0] - path[0][0];
+        // Kick-drift-kick is exact under the constant force of rolling: round-off only.
+        assert!(
+            (got - expected).abs() <= 1e-12 * expected,
+            "t = {t}: {got} m, rolling {expected} m"
+        );
+        assert!(
+            (p[2] - r).abs() <= 1e-10,
+            "t = {t}: the centre is {} m off the slope",
+            p[2] - r
+        );
+    }
+}
+
+/// Open (issue 45): the position problem's Gauss–Seidel does not reach its tolerance on the
+/// stack (4 redundant corners per face: 2.0e-8 of the contact length after 2000 sweeps at
+/// t = 0.004), and finishing on the active set meets contact rows that the end geometry
+/// makes inconsistent (the regularised solve gives normal forces of −272 N). Needs a
+/// solver for redundant stacks (a Newton or interior-point method on the cone).
+#[test]
+#[ignore = "open: the cone solve does not converge on a stack of ten boxes (issue 45)"]
+fn a_stack_of_ten_boxes_stays_put() {
+    let mut bodies = String::new();
+    for k in 0..10 {
+        bodies += &format!(
+            "<body name=\"b{k}\" pos=\"0 0 {z}\"><freejoint/><geom type=\"box\" size=\"0.1 0.1 0.05\" mass=\"1\"/></body>",
+            z = 0.05 + 0.1 * k as f64
+        );
+    }
+    let text = format!("<mujoco><worldbody><geom type=\"plane\" size=\"0 0 1\"/>{bodies}</worldbody></mujoco>");
+    let model = mjcf::parse(&text, "stack.xml").unwrap().model;
+    let prepared = Simulation::prepare(&model, MultibodyMethod::Liemid).unwrap();
+    let (mut sim, mut s) = (prepared.simulation, prepared.state);
+    let start = s.c.clone();
+    let steps = 2000;
+    let mut worst: f64 = 0.0;
+    for _ in 0..steps {
+        let report = sim.step(&mut s, 1e-3).unwrap();
+        assert!(report.contacts >= 40, "t = {}: {} contact points", s.t, report.contacts);
+        for (c, c0) in s.c.iter().zip(&start) {
+            worst = worst.max((*c - *c0).norm());
+        }
+    }
+    assert!(worst <= 1e-9, "the stack moved {worst:e} m in {steps} steps");
+}

@@ -51,6 +51,8 @@ pub(in crate::multibody) struct ContactGeometry {
     pub(in crate::multibody) length: f64,
     /// Per body, the farthest point of its shapes from its centre of mass.
     pub(in crate::multibody) reach: Vec<f64>,
+    /// Newton's coefficient of restitution.
+    pub(in crate::multibody) restitution: f64,
 }
 
 impl core::fmt::Debug for ContactGeometry {
@@ -83,6 +85,11 @@ pub(in crate::multibody) struct ContactPoint {
     /// Their world positions at the step's start, and the start's tangents.
     pub xa0: Vec3,
     pub xb0: Vec3,
+    /// The bodies' centres and attitudes at the step's start (a round side's slide).
+    pub ca0: Vec3,
+    pub cb0: Vec3,
+    pub rota0: Mat3,
+    pub rotb0: Mat3,
     pub t1: Vec3,
     pub t2: Vec3,
 }
@@ -156,20 +163,36 @@ impl ContactPoint {
         n.dot(xa - xb) - self.ra - self.rb
     }
 
-    /// The slide of the surface material points since the step's start, on the start's
-    /// tangents.
+    /// The slide of the contact since the step's start, on the start's tangents. A flat
+    /// side's contact is a material point (a box corner: pivoting about it keeps it exactly);
+    /// a round side's is where it rolls to: the centre's displacement plus the start's
+    /// lever `x₀ − c₀` turned by the rotation vector `log(R R₀ᵀ)`, which vanishes exactly for
+    /// rolling without slip at any angle (a material point of a rolling ball moves by
+    /// `ρ (θ − sin θ)`, and holding it still makes the ball roll fast by O(h)).
     #[inline]
     pub(in crate::multibody) fn slide(&self, c: &[Vec3], r: &[Mat3]) -> (f64, f64) {
-        let d = (world(self.a, self.ma, c, r) - self.xa0) - (world(self.b, self.mb, c, r) - self.xb0);
+        let moved = |body: Option<usize>, round: f64, m: Vec3, x0: Vec3, c0: Vec3, r0: &Mat3| match body {
+            None => Vec3::ZERO,
+            Some(i) if round > 0.0 => {
+                let phi = crate::so3::log(&(r[i] * r0.transpose()));
+                (c[i] - c0) + phi.cross(x0 - c0)
+            }
+            Some(i) => c[i] + r[i] * m - x0,
+        };
+        let d = moved(self.a, self.ra, self.ma, self.xa0, self.ca0, &self.rota0)
+            - moved(self.b, self.rb, self.mb, self.xb0, self.cb0, &self.rotb0);
         (d.dot(self.t1), d.dot(self.t2))
     }
 
-    /// The point where the contact's forces act at `(c, R)` (halfway between the two
-    /// surfaces, so the pair of forces has no moment) and the normal there.
+    /// The point where the contact's forces act at `(c, R)` and the normal there: on the
+    /// normal through `a`'s contact point, halfway across the gap (both forces of the pair
+    /// act at it, so they have no moment). Not halfway to `b`'s point: `b`'s point is where
+    /// the contact was at the step's start, and a rolling ball has moved on from it.
     #[inline]
     pub(in crate::multibody) fn application(&self, c: &[Vec3], r: &[Mat3]) -> (Vec3, Vec3) {
         let (n, xa, xb) = self.frame(c, r);
-        ((xa - n * self.ra + xb + n * self.rb) * 0.5, n)
+        let gap = n.dot(xa - xb) - self.ra - self.rb;
+        (xa - n * (self.ra + 0.5 * gap), n)
     }
 }
 
@@ -232,6 +255,7 @@ impl ContactGeometry {
             excluded,
             length: if length > 0.0 { length } else { 1.0 },
             reach,
+            restitution: collision.restitution,
         }))
     }
 
@@ -340,6 +364,7 @@ impl ContactGeometry {
         let ra_body = *attitude(ka.body, r);
         let rb_body = *attitude(kb.body, r);
         let mut deepest = 0.0f64;
+        let first = out.len();
         for mf in manifolds.iter() {
             // Normals in the shapes' frames, outward: n1 on `a` toward `b`, n2 on `b` toward `a`.
             let n1 = from_p(mf.local_n1);
@@ -357,6 +382,15 @@ impl ContactGeometry {
                 // Core points: the surface point moved inward by the rounding radius.
                 let core_a = ka.offset + ka.rotation * from_p(p.local_p1) - na_body * ka.round;
                 let core_b = kb.offset + kb.rotation * from_p(p.local_p2) - nb_body * kb.round;
+                // The same point twice (face on face: each face's clip gives the corners
+                // the other gives) would be a redundant row.
+                let close = 1e-9 * self.length;
+                if out[first..]
+                    .iter()
+                    .any(|q| (q.pa - core_a).norm() <= close && (q.pb - core_b).norm() <= close)
+                {
+                    continue;
+                }
                 let n = rb_body * nb_body;
                 let (t1, t2) = tangents(n);
                 let ma = core_a - ra_body.transpose() * n * ka.round;
@@ -375,6 +409,10 @@ impl ContactGeometry {
                     mb,
                     xa0: world(ka.body, ma, c, r),
                     xb0: world(kb.body, mb, c, r),
+                    ca0: ka.body.map_or(Vec3::ZERO, |i| c[i]),
+                    cb0: kb.body.map_or(Vec3::ZERO, |i| c[i]),
+                    rota0: ra_body,
+                    rotb0: rb_body,
                     t1,
                     t2,
                 });

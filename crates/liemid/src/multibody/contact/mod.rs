@@ -56,6 +56,10 @@ pub struct Collision {
     pub exclude: Vec<(Option<usize>, Option<usize>)>,
     /// Contacts switched off (MJCF `<option><flag contact="disable"/>`).
     pub disabled: bool,
+    /// Newton's coefficient of restitution `e` of every contact (0: plastic, the default;
+    /// MJCF `<custom><numeric name="restitution" data="e"/>`): an impact separates at `e`
+    /// times its approach speed.
+    pub restitution: f64,
     /// Contacts between a body and its parent body kept (MJCF `<flag filterparent=
     /// "disable"/>`); by default a body never touches its parent unless that is the world.
     pub parent_contacts: bool,

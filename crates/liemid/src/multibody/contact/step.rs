@@ -81,6 +81,12 @@ pub(in crate::multibody) struct ContactScratch {
     rates: Vec<f64>,
     sigma: Vec<f64>,
     sigma_ok: Vec<f64>,
+    polish: cone::Polish,
+    /// The last step's points and position forces (the warm start).
+    last_points: Vec<ContactPoint>,
+    last_sigma: Vec<f64>,
+    /// Per point, the normal speed at which it would meet (restitution only).
+    approach: Vec<f64>,
     lambda_ok: Vec<[f64; 6]>,
     mu: Vec<f64>,
     base_p: Vec<Vec3>,
@@ -207,6 +213,27 @@ impl Workspace {
         }
         s.mu.clear();
         s.mu.extend(s.points.iter().map(|p| p.mu));
+        s.approach.clear();
+        if sys.contact.as_ref().is_some_and(|g| g.restitution > 0.0) {
+            // The free normal motion over the step, φ(t) = φ + v t + a t²/2 (exact under a
+            // constant force, as kick-drift-kick is), meets φ = 0 at the speed
+            // u = √(v² − 2 a φ): the approach speed of an impact within the step.
+            self.velocities(sys, &state.p, &state.pi);
+            s.approach
+                .extend(s.rows.iter().map(|rows| rows.rate(0, &self.vel, &self.omega)));
+            s.linear.copy_from_slice(&self.force);
+            s.angular.copy_from_slice(&self.torque);
+            self.velocities(sys, &s.linear, &s.angular);
+            for ((p, rows), u) in s.points.iter().zip(&s.rows).zip(s.approach.iter_mut()) {
+                let (v, a) = (*u, rows.rate(0, &self.vel, &self.omega));
+                let gap = p.gap(c, r).max(0.0);
+                *u = if v < 0.0 || a < 0.0 {
+                    (v * v - 2.0 * a * gap).max(0.0).sqrt()
+                } else {
+                    0.0
+                };
+            }
+        }
         // W at the start rows, factored (the velocity solve of the last step factored them).
         if self.rows0.iter().any(|r| r.n > 0) && !self.factor_rows0 {
             self.factor(sys, super::super::workspace::Matrix::Start)?;
@@ -217,6 +244,9 @@ impl Workspace {
         s.base_pi.copy_from_slice(&self.pib);
         s.sigma.clear();
         s.sigma.resize(3 * n, 0.0);
+        // Warm start: a contact found at the same material points as in the last step
+        // (a resting one) starts from its last force.
+        warm(&s.points, &s.last_points, &s.last_sigma, length, &mut s.sigma);
         s.r0.resize(3 * n, 0.0);
         s.rates.resize(3 * n, 0.0);
         // Gap and slide to 1e-12 of the contact length: as rates over the step.
@@ -270,6 +300,10 @@ impl Workspace {
             let worst = cone::violation(&s.rates, &s.sigma, &s.mu);
             if worst <= tol {
                 report.contact_iterations += u32::try_from(outer).unwrap_or(u32::MAX);
+                s.last_points.clear();
+                s.last_points.extend_from_slice(&s.points);
+                s.last_sigma.clear();
+                s.last_sigma.extend_from_slice(&s.sigma);
                 return Ok(());
             }
             if outer >= MAX_OUTER {
@@ -288,7 +322,15 @@ impl Workspace {
                 let row = &s.w[i * m..(i + 1) * m];
                 s.r0[i] = s.rates[i] - row.iter().zip(&s.sigma).map(|(a, b)| a * b).sum::<f64>();
             }
-            let done = cone::solve(&s.w, &s.r0, &s.mu, &mut s.sigma, &mut s.rates, 0.25 * tol);
+            let done = cone::solve(
+                &s.w,
+                &s.r0,
+                &s.mu,
+                &mut s.sigma,
+                &mut s.rates,
+                0.25 * tol,
+                &mut s.polish,
+            );
             report.contact_sweeps += u32::try_from(done.sweeps).unwrap_or(u32::MAX);
             if !done.converged {
                 return Err(Error::NewtonDidNotConverge {
@@ -349,9 +391,15 @@ impl Workspace {
         s.linear = lin;
         s.angular = ang;
         s.r0.clear();
-        for rows in &s.rows {
+        let e = geometry.restitution;
+        for (rows, &k) in s.rows.iter().zip(&s.active) {
             for i in 0..3 {
                 s.r0.push(rows.rate(i, &self.vel, &self.omega));
+            }
+            if e > 0.0 {
+                // Separate at e times the approach speed: r_n = v_n⁺ − e u ≥ 0.
+                let at = s.r0.len() - 3;
+                s.r0[at] -= e * s.approach[k];
             }
         }
         self.contact_response(sys, &mut s, hh, false);
@@ -362,7 +410,7 @@ impl Workspace {
             m.max(self.vel[i].norm() + geometry.length * self.omega[i].norm())
         });
         let tol = 1e-12 * vscale;
-        let done = cone::solve(&s.w, &s.r0, &s.mu, &mut s.sigma, &mut s.rates, tol);
+        let done = cone::solve(&s.w, &s.r0, &s.mu, &mut s.sigma, &mut s.rates, tol, &mut s.polish);
         report.contact_sweeps += u32::try_from(done.sweeps).unwrap_or(u32::MAX);
         if !done.converged {
             let worst = done.worst / vscale;
@@ -383,5 +431,23 @@ impl Workspace {
         }
         self.contact = s;
         Ok(true)
+    }
+}
+
+/// Start each of `points` from the force of the same contact in `last` (the same bodies and
+/// material points within `1e-9` of the contact length, the same normal): `sigma` (zero
+/// elsewhere).
+fn warm(points: &[ContactPoint], last: &[ContactPoint], last_sigma: &[f64], length: f64, sigma: &mut [f64]) {
+    let close = 1e-9 * length;
+    for (k, p) in points.iter().enumerate() {
+        if let Some(j) = last.iter().position(|q| {
+            q.a == p.a
+                && q.b == p.b
+                && (q.pa - p.pa).norm() <= close
+                && (q.pb - p.pb).norm() <= close
+                && (q.nb - p.nb).norm() <= 1e-9
+        }) {
+            sigma[3 * k..3 * k + 3].copy_from_slice(&last_sigma[3 * j..3 * j + 3]);
+        }
     }
 }

@@ -139,6 +139,7 @@ fn parse_assembled(text: &str, name_for_errors: &str, sources: &Sources, dir: Op
     let mut actuators = Vec::new();
     let mut contacts = Vec::new();
     let (mut contact_disabled, mut parent_contacts) = (false, false);
+    let mut restitution = 0.0;
     for &node in &elements {
         match node.tag_name().name() {
             "compiler" | "default" => {}
@@ -181,6 +182,22 @@ fn parse_assembled(text: &str, name_for_errors: &str, sources: &Sources, dir: Op
             "equality" => equalities.push(node),
             "actuator" => actuators.push(node),
             "contact" => contacts.push(node),
+            "custom" => {
+                for c in node.children().filter(Node::is_element) {
+                    match (c.tag_name().name(), c.attribute("name")) {
+                        ("numeric", Some("restitution")) => {
+                            let [e] = cx
+                                .array::<1>(c, "data")?
+                                .ok_or_else(|| cx.err(c, "restitution needs data=\"e\""))?;
+                            if !(0.0..=1.0).contains(&e) {
+                                return Err(cx.err(c, format!("restitution {e}: expected a coefficient from 0 to 1")));
+                            }
+                            restitution = e;
+                        }
+                        (kind, _) => st.ignored.note(&format!("custom {kind}")),
+                    }
+                }
+            }
             "include" => return Err(cx.err(node, NO_INCLUDE)),
             other => st.ignored.note(other),
         }
@@ -216,6 +233,7 @@ fn parse_assembled(text: &str, name_for_errors: &str, sources: &Sources, dir: Op
             exclude,
             disabled: contact_disabled,
             parent_contacts,
+            restitution,
         },
     };
     let loops = equality::loop_joints(&cx, &equalities, &model, &built.merged, &mut st.ignored)?;
