@@ -111,9 +111,9 @@ pub enum Error {
     },
     /// The rotation increment of a step exceeds half a turn.
     #[error(
-        "{method}: the step from t = {} with h = {} turns the body by {angle:.3} rad, more than \
+        "{method}: the step from t = {} with h = {} turns the body by {} rad, more than \
          half a turn; the midpoint equation has no unique solution there: reduce the step"
-    , Num(*.t), Num(*.h))]
+    , Num(*.t), Num(*.h), Short(*.angle))]
     StepTooLarge {
         /// The integrator.
         method: &'static str,
@@ -234,7 +234,37 @@ fn abbreviate_quoted(message: &str) -> String {
         if k % 2 == 1 {
             out.push_str(&abbreviate(part));
         } else {
-            out.push_str(part);
+            out.push_str(&shorten_numbers(part));
+        }
+    }
+    out
+}
+
+/// `text` with every number written with more than 24 characters (a value of 1e300 printed
+/// digit by digit) written as [`Num`] writes it.
+fn shorten_numbers(text: &str) -> String {
+    let bytes = text.as_bytes();
+    let mut out = String::with_capacity(text.len().min(1024));
+    let mut i = 0;
+    while i < bytes.len() {
+        let starts =
+            bytes[i].is_ascii_digit() || (bytes[i] == b'-' && bytes.get(i + 1).is_some_and(u8::is_ascii_digit));
+        if starts {
+            let mut j = i + 1;
+            while j < bytes.len() && (bytes[j].is_ascii_digit() || matches!(bytes[j], b'.' | b'e' | b'E' | b'+' | b'-'))
+            {
+                j += 1;
+            }
+            let token = &text[i..j];
+            match token.parse::<f64>() {
+                Ok(v) if token.len() > 24 => out.push_str(&Num(v).to_string()),
+                _ => out.push_str(token),
+            }
+            i = j;
+        } else {
+            let c = text[i..].chars().next().unwrap_or(' ');
+            out.push(c);
+            i += c.len_utf8();
         }
     }
     out
@@ -272,6 +302,21 @@ impl core::fmt::Display for Num {
             write!(f, "{}", self.0)
         } else {
             write!(f, "{:e}", self.0)
+        }
+    }
+}
+
+/// A number with three decimals where that is short (`7.291`), else in scientific notation
+/// with three (`1.021e43`).
+pub struct Short(pub f64);
+
+impl core::fmt::Display for Short {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let a = self.0.abs();
+        if a == 0.0 || !a.is_finite() || (1e-3..1e6).contains(&a) {
+            write!(f, "{:.3}", self.0)
+        } else {
+            write!(f, "{:.3e}", self.0)
         }
     }
 }

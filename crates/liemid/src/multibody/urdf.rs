@@ -491,7 +491,7 @@ fn read_joint<'a, 'i>(cx: &Ctx, node: Node<'a, 'i>, ignored: &mut Ignored) -> Re
     if let Some(d) = child(node, "dynamics") {
         damping = cx.array::<1>(d, "damping")?.map_or(0.0, |v| v[0]);
         if damping < 0.0 {
-            return Err(cx.err(d, format!("negative damping {damping}")));
+            return Err(cx.err(d, format!("negative damping {}", crate::error::Num(damping))));
         }
         if cx.array::<1>(d, "friction")?.is_some_and(|f| f[0] != 0.0) {
             ignored.note("joint friction");

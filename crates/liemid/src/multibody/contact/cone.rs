@@ -21,139 +21,6 @@
 /// Most sweeps of one solve.
 pub(super) const MAX_SWEEPS: usize = 2000;
 
-/// Sweeps between attempts to finish the solve on the active set ([`polish`]).
-const POLISH_EVERY: usize = 20;
-
-/// Scratch of [`polish`].
-#[derive(Clone, Debug, Default)]
-pub(super) struct Polish {
-    rows: Vec<usize>,
-    a: Vec<f64>,
-    x: Vec<f64>,
-    b: Vec<f64>,
-    trial: Vec<f64>,
-    trial_rates: Vec<f64>,
-}
-
-/// Finish a slow Gauss–Seidel solve where it has found the active set and every active
-/// contact sticks (a stack at rest: Gauss–Seidel contracts slowly over redundant contacts,
-/// four corners on a face, and wanders into internal friction forces that cancel, some on
-/// their cones' edges): from its normal forces and no friction, solve `W_AA σ_A = −r₀_A` over the rows of the touching contacts
-/// (normal and tangents), regularised by `ε = 1e-13 max W_ii` and refined to the system's
-/// own residual (consistent over redundant rows, so the refinement converges), and accept
-/// it when it obeys the law to the tolerance (normal forces not negative, inside the cones,
-/// the other contacts not approaching). Returns whether it was accepted.
-fn polish(w: &[f64], r0: &[f64], mu: &[f64], sigma: &mut [f64], rates: &mut [f64], tol: f64, p: &mut Polish) -> bool {
-    let m = r0.len();
-    p.rows.clear();
-    for (k, &mu_k) in mu.iter().enumerate() {
-        let b = 3 * k;
-        if sigma[b] > 0.0 {
-            p.rows.push(b);
-            if mu_k > 0.0 {
-                p.rows.extend([b + 1, b + 2]);
-            }
-        }
-    }
-    let n = p.rows.len();
-    if n == 0 {
-        return false;
-    }
-    p.a.clear();
-    p.a.resize(n * n, 0.0);
-    let mut diag: f64 = 0.0;
-    for (i, &ri) in p.rows.iter().enumerate() {
-        for (j, &rj) in p.rows.iter().enumerate() {
-            p.a[i * n + j] = 0.5 * (w[ri * m + rj] + w[rj * m + ri]);
-        }
-        diag = diag.max(p.a[i * n + i]);
-    }
-    if diag <= 0.0 {
-        return false;
-    }
-    let eps = 1e-13 * diag;
-    for i in 0..n {
-        p.a[i * n + i] += eps;
-    }
-    // Cholesky in place (lower).
-    for j in 0..n {
-        let mut d = p.a[j * n + j];
-        for k in 0..j {
-            d -= p.a[j * n + k] * p.a[j * n + k];
-        }
-        if d <= 0.0 {
-            return false;
-        }
-        let d = d.sqrt();
-        p.a[j * n + j] = d;
-        for i in j + 1..n {
-            let mut v = p.a[i * n + j];
-            for k in 0..j {
-                v -= p.a[i * n + k] * p.a[j * n + k];
-            }
-            p.a[i * n + j] = v / d;
-        }
-    }
-    let chol_solve = |a: &[f64], x: &mut [f64]| {
-        for i in 0..n {
-            let mut v = x[i];
-            for k in 0..i {
-                v -= a[i * n + k] * x[k];
-            }
-            x[i] = v / a[i * n + i];
-        }
-        for i in (0..n).rev() {
-            let mut v = x[i];
-            for k in i + 1..n {
-                v -= a[k * n + i] * x[k];
-            }
-            x[i] = v / a[i * n + i];
-        }
-    };
-    // From the Gauss–Seidel normal forces: the refinement corrects it within the range of W_AA
-    // and keeps its share of the redundant rows (positive normal forces), where a
-    // minimum-norm solution could trade normal for internal tangential forces.
-    p.x.clear();
-    p.x.extend(p.rows.iter().map(|&r| if r % 3 == 0 { sigma[r] } else { 0.0 }));
-    p.b.resize(n, 0.0);
-    for _ in 0..6 {
-        // b = −r₀_A − W_AA x, the residual of the unregularised system.
-        for (i, &ri) in p.rows.iter().enumerate() {
-            let mut v = -r0[ri];
-            for (j, &rj) in p.rows.iter().enumerate() {
-                v -= w[ri * m + rj] * p.x[j];
-            }
-            p.b[i] = v;
-        }
-        let (a, b) = (&p.a, &mut p.b);
-        chol_solve(a, b);
-        for (x, d) in p.x.iter_mut().zip(&p.b) {
-            *x += d;
-        }
-    }
-    p.trial.clear();
-    p.trial.resize(m, 0.0);
-    for (i, &ri) in p.rows.iter().enumerate() {
-        p.trial[ri] = p.x[i];
-    }
-    p.trial_rates.resize(m, 0.0);
-    for i in 0..m {
-        let row = &w[i * m..(i + 1) * m];
-        p.trial_rates[i] = r0[i] + row.iter().zip(&p.trial).map(|(a, b)| a * b).sum::<f64>();
-    }
-    let admissible = p
-        .trial
-        .chunks(3)
-        .zip(mu)
-        .all(|(c, &mu)| c[0] >= 0.0 && c[1].hypot(c[2]) <= mu * c[0]);
-    if admissible && violation(&p.trial_rates, &p.trial, mu) <= tol {
-        sigma.copy_from_slice(&p.trial);
-        rates.copy_from_slice(&p.trial_rates);
-        return true;
-    }
-    false
-}
-
 /// The outcome of a solve: sweeps made and the law's worst violation at the end.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Solved {
@@ -162,25 +29,84 @@ pub(super) struct Solved {
     pub converged: bool,
 }
 
-/// Solve for `sigma` (started from its content) with `w` (row-major, `3n × 3n`), `r0`,
-/// friction `mu`; `rates` receives `r₀ + W σ`. Stops when the worst violation is at most `tol`.
-pub(super) fn solve(
-    w: &[f64],
-    r0: &[f64],
+/// Most alternations of normal and friction force within one contact per sweep.
+const BLOCK_PASSES: usize = 16;
+
+/// Sweeps between attempts to finish the solve another way (the dense response's
+/// active-set finish, `polish.rs`).
+pub(super) const FINISH_EVERY: usize = 20;
+
+/// `W` as the solve sees it: each contact's 3x3 block, the current rates of a contact, and
+/// the update of every rate when one contact's force changes.
+pub(super) trait Response {
+    /// Contact `k`'s diagonal block of `W`.
+    fn block(&self, k: usize) -> [[f64; 3]; 3];
+    /// Contact `k`'s rates `r₀ + W σ` at the current forces.
+    fn rates(&self, k: usize) -> [f64; 3];
+    /// Contact `k`'s force changed by `delta`.
+    fn add(&mut self, k: usize, delta: [f64; 3]);
+}
+
+/// `W` dense (row-major, `3n × 3n`), the rates kept up to date column by column.
+pub(super) struct Dense<'a> {
+    pub w: &'a [f64],
+    pub rates: &'a mut [f64],
+}
+
+impl Dense<'_> {
+    /// Start from forces `sigma`: `rates = r₀ + W σ`.
+    pub fn start(&mut self, r0: &[f64], sigma: &[f64]) {
+        let m = r0.len();
+        for i in 0..m {
+            let row = &self.w[i * m..(i + 1) * m];
+            self.rates[i] = r0[i] + row.iter().zip(sigma).map(|(a, b)| a * b).sum::<f64>();
+        }
+    }
+}
+
+impl Response for Dense<'_> {
+    fn block(&self, k: usize) -> [[f64; 3]; 3] {
+        let m = self.rates.len();
+        let b = 3 * k;
+        core::array::from_fn(|i| core::array::from_fn(|j| self.w[(b + i) * m + b + j]))
+    }
+
+    fn rates(&self, k: usize) -> [f64; 3] {
+        [self.rates[3 * k], self.rates[3 * k + 1], self.rates[3 * k + 2]]
+    }
+
+    fn add(&mut self, k: usize, delta: [f64; 3]) {
+        let m = self.rates.len();
+        for (j, d) in delta.iter().enumerate() {
+            if *d != 0.0 {
+                let col = 3 * k + j;
+                for (i, ri) in self.rates.iter_mut().enumerate() {
+                    *ri += self.w[i * m + col] * d;
+                }
+            }
+        }
+    }
+}
+
+/// Solve for `sigma` (started from its content, with `response` at those forces) with
+/// friction `mu`; `rates` receives the final rates. Stops when the worst violation is at
+/// most `tol`; every [`FINISH_EVERY`] sweeps `finish` may complete the solve (it returns
+/// whether it changed `sigma` and the response).
+pub(super) fn solve<R: Response>(
+    response: &mut R,
     mu: &[f64],
     sigma: &mut [f64],
     rates: &mut [f64],
     tol: f64,
-    scratch: &mut Polish,
+    mut finish: impl FnMut(&mut R, &mut [f64], &[f64]) -> bool,
 ) -> Solved {
-    let m = r0.len();
-    let n = m / 3;
-    for i in 0..m {
-        let row = &w[i * m..(i + 1) * m];
-        rates[i] = r0[i] + row.iter().zip(sigma.iter()).map(|(a, b)| a * b).sum::<f64>();
-    }
+    let n = mu.len();
     let mut sweeps = 0;
+    let mut finished = 0;
     loop {
+        for k in 0..n {
+            rates[3 * k..3 * k + 3].copy_from_slice(&response.rates(k));
+        }
         let worst = violation(rates, sigma, mu);
         if worst <= tol {
             return Solved {
@@ -196,37 +122,76 @@ pub(super) fn solve(
                 converged: false,
             };
         }
-        if sweeps > 0 && sweeps % POLISH_EVERY == 0 && polish(w, r0, mu, sigma, rates, tol, scratch) {
-            continue;
+        if sweeps > 0 && sweeps % FINISH_EVERY == 0 && finished != sweeps {
+            // Once per such sweep count (each may change the forces, then the rates are
+            // measured again).
+            finished = sweeps;
+            if finish(response, sigma, rates) || align(response, mu, sigma, rates) {
+                continue;
+            }
         }
         sweeps += 1;
-        for (k, &mu_k) in mu.iter().enumerate().take(n) {
+        for (k, &mu_k) in mu.iter().enumerate() {
             let b = 3 * k;
-            let at = |i: usize, j: usize| w[(b + i) * m + b + j];
+            let w = response.block(k);
+            let r = response.rates(k);
             let old = [sigma[b], sigma[b + 1], sigma[b + 2]];
             // The rates without contact k's own force.
             let rho: [f64; 3] =
-                core::array::from_fn(|i| rates[b + i] - (at(i, 0) * old[0] + at(i, 1) * old[1] + at(i, 2) * old[2]));
-            let wnn = at(0, 0);
-            let sn = if wnn > 0.0 {
-                (-(rho[0] + at(0, 1) * old[1] + at(0, 2) * old[2]) / wnn).max(0.0)
-            } else {
-                0.0
-            };
-            let rho_t = [rho[1] + at(1, 0) * sn, rho[2] + at(2, 0) * sn];
-            let st = disc([[at(1, 1), at(1, 2)], [at(2, 1), at(2, 2)]], rho_t, mu_k * sn);
-            let new = [sn, st[0], st[1]];
-            for (j, (nv, ov)) in new.iter().zip(old).enumerate() {
-                let d = nv - ov;
-                if d != 0.0 {
-                    sigma[b + j] = *nv;
-                    for (i, ri) in rates.iter_mut().enumerate() {
-                        *ri += w[i * m + b + j] * d;
-                    }
+                core::array::from_fn(|i| r[i] - (w[i][0] * old[0] + w[i][1] * old[1] + w[i][2] * old[2]));
+            // The contact's own 3x3 problem, normal and friction in turn until they agree
+            // (a box corner's normal force turns the box and so moves the corner along the
+            // plane: one pass each would leave that coupling to the outer sweeps).
+            let mut new = old;
+            for _ in 0..BLOCK_PASSES {
+                let sn = if w[0][0] > 0.0 {
+                    (-(rho[0] + w[0][1] * new[1] + w[0][2] * new[2]) / w[0][0]).max(0.0)
+                } else {
+                    0.0
+                };
+                let rho_t = [rho[1] + w[1][0] * sn, rho[2] + w[2][0] * sn];
+                let st = disc([[w[1][1], w[1][2]], [w[2][1], w[2][2]]], rho_t, mu_k * sn);
+                let next = [sn, st[0], st[1]];
+                let change = (0..3).fold(0.0f64, |m, i| m.max((next[i] - new[i]).abs()));
+                new = next;
+                if change <= 4.0 * f64::EPSILON * (new[0].abs() + new[1].abs() + new[2].abs()) {
+                    break;
                 }
+            }
+            let delta = [new[0] - old[0], new[1] - old[1], new[2] - old[2]];
+            if delta != [0.0; 3] {
+                sigma[b..b + 3].copy_from_slice(&new);
+                response.add(k, delta);
             }
         }
     }
+}
+
+/// Turn every sliding contact's friction force against its slip rate, `σ_t = −µ σ_n r̂_t`
+/// at the current rates; returns whether a force changed. Gauss–Seidel leaves opposite
+/// friction forces on contacts that slide together along one edge (a mode that moves
+/// nothing, so the sweeps correct it only through the cone's curvature: 0.25 % per sweep on
+/// a tilted cube landing on an edge); aligning them removes it at once, and the sweeps go
+/// on from there.
+fn align<R: Response>(response: &mut R, mu: &[f64], sigma: &mut [f64], rates: &[f64]) -> bool {
+    let mut changed = false;
+    for (k, &mu_k) in mu.iter().enumerate() {
+        let b = 3 * k;
+        let bound = mu_k * sigma[b];
+        let (st, rt) = ([sigma[b + 1], sigma[b + 2]], [rates[b + 1], rates[b + 2]]);
+        let rl = rt[0].hypot(rt[1]);
+        if bound > 0.0 && st[0].hypot(st[1]) >= bound * (1.0 - 1e-9) && rl > 0.0 {
+            let aligned = [-bound * rt[0] / rl, -bound * rt[1] / rl];
+            let delta = [0.0, aligned[0] - st[0], aligned[1] - st[1]];
+            if delta != [0.0; 3] {
+                sigma[b + 1] = aligned[0];
+                sigma[b + 2] = aligned[1];
+                response.add(k, delta);
+                changed = true;
+            }
+        }
+    }
+    changed
 }
 
 /// The worst violation of the law by `(rates, sigma)`.
@@ -338,6 +303,12 @@ mod tests {
     fn one_contact_sticks_below_the_cone_and_slides_on_it() {
         // A point of unit mass on a plane: W = I (per unit force over the half-kick).
         let w = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+        let solve = |w: &[f64], r0: &[f64], mu: &[f64], s: &mut [f64], r: &mut [f64], tol: f64| {
+            let mut kept = r0.to_vec();
+            let mut dense = Dense { w, rates: &mut kept };
+            dense.start(r0, s);
+            super::solve(&mut dense, mu, s, r, tol, |_, _, _| false)
+        };
         // Pushed into the plane at 1 and along it at 0.3 with µ = 0.5: sticks.
         let (mut s, mut r) = ([0.0; 3], [0.0; 3]);
         let done = solve(

@@ -39,6 +39,7 @@
 
 mod cone;
 mod detect;
+mod polish;
 mod step;
 
 pub(super) use detect::ContactGeometry;

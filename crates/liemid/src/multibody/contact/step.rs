@@ -81,7 +81,9 @@ pub(in crate::multibody) struct ContactScratch {
     rates: Vec<f64>,
     sigma: Vec<f64>,
     sigma_ok: Vec<f64>,
-    polish: cone::Polish,
+    polish: super::polish::Polish,
+    /// The rates the dense response keeps.
+    kept: Vec<f64>,
     /// The last step's points and position forces (the warm start).
     last_points: Vec<ContactPoint>,
     last_sigma: Vec<f64>,
@@ -322,15 +324,7 @@ impl Workspace {
                 let row = &s.w[i * m..(i + 1) * m];
                 s.r0[i] = s.rates[i] - row.iter().zip(&s.sigma).map(|(a, b)| a * b).sum::<f64>();
             }
-            let done = cone::solve(
-                &s.w,
-                &s.r0,
-                &s.mu,
-                &mut s.sigma,
-                &mut s.rates,
-                0.25 * tol,
-                &mut s.polish,
-            );
+            let done = solve_dense(s, 0.25 * tol);
             report.contact_sweeps += u32::try_from(done.sweeps).unwrap_or(u32::MAX);
             if !done.converged {
                 return Err(Error::NewtonDidNotConverge {
@@ -410,7 +404,7 @@ impl Workspace {
             m.max(self.vel[i].norm() + geometry.length * self.omega[i].norm())
         });
         let tol = 1e-12 * vscale;
-        let done = cone::solve(&s.w, &s.r0, &s.mu, &mut s.sigma, &mut s.rates, tol, &mut s.polish);
+        let done = solve_dense(&mut s, tol);
         report.contact_sweeps += u32::try_from(done.sweeps).unwrap_or(u32::MAX);
         if !done.converged {
             let worst = done.worst / vscale;
@@ -450,4 +444,25 @@ fn warm(points: &[ContactPoint], last: &[ContactPoint], last_sigma: &[f64], leng
             sigma[3 * k..3 * k + 3].copy_from_slice(&last_sigma[3 * j..3 * j + 3]);
         }
     }
+}
+
+/// The cone problem of `s` (`W` dense in `s.w`, `r₀`, `µ`) from the forces in `s.sigma`, with
+/// the active-set finish (`polish.rs`).
+fn solve_dense(s: &mut ContactScratch, tol: f64) -> cone::Solved {
+    let ContactScratch {
+        w,
+        r0,
+        mu,
+        sigma,
+        rates,
+        kept,
+        polish,
+        ..
+    } = s;
+    kept.resize(r0.len(), 0.0);
+    let mut dense = cone::Dense { w, rates: kept };
+    dense.start(r0, sigma);
+    cone::solve(&mut dense, mu, sigma, rates, tol, |d, sigma, _| {
+        super::polish::polish(w, r0, mu, sigma, d.rates, tol, polish)
+    })
 }

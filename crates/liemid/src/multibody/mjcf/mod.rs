@@ -789,7 +789,7 @@ impl<'a, 'i> State<'a, 'i> {
             ("armature", body.armature),
         ] {
             if v < 0.0 {
-                return Err(cx.err(node, format!("negative {what} {v}")));
+                return Err(cx.err(node, format!("negative {what} {}", crate::error::Num(v))));
             }
         }
         body.spring_ref = num("springref")?.map_or(0.0, unit) - reference;
