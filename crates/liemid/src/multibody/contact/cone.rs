@@ -57,9 +57,8 @@ impl Dense<'_> {
     /// Start from forces `sigma`: `rates = r₀ + W σ`.
     pub fn start(&mut self, r0: &[f64], sigma: &[f64]) {
         let m = r0.len();
-        for i in 0..m {
-            let row = &self.w[i * m..(i + 1) * m];
-            self.rates[i] = r0[i] + row.iter().zip(sigma).map(|(a, b)| a * b).sum::<f64>();
+        for ((rate, r0), row) in self.rates.iter_mut().zip(r0).zip(self.w.chunks_exact(m)) {
+            *rate = r0 + row.iter().zip(sigma).map(|(a, b)| a * b).sum::<f64>();
         }
     }
 }
@@ -311,45 +310,18 @@ mod tests {
         };
         // Pushed into the plane at 1 and along it at 0.3 with µ = 0.5: sticks.
         let (mut s, mut r) = ([0.0; 3], [0.0; 3]);
-        let done = solve(
-            &w,
-            &[-1.0, 0.3, 0.0],
-            &[0.5],
-            &mut s,
-            &mut r,
-            1e-15,
-            &mut Polish::default(),
-        );
+        let done = solve(&w, &[-1.0, 0.3, 0.0], &[0.5], &mut s, &mut r, 1e-15);
         assert!(done.converged);
         assert_eq!(s, [1.0, -0.3, 0.0]);
         // Along it at 0.8: slides, the force at µ σ_n against the motion.
         let (mut s, mut r) = ([0.0; 3], [0.0; 3]);
-        let done = solve(
-            &w,
-            &[-1.0, 0.8, 0.0],
-            &[0.5],
-            &mut s,
-            &mut r,
-            1e-15,
-            &mut Polish::default(),
-        );
+        let done = solve(&w, &[-1.0, 0.8, 0.0], &[0.5], &mut s, &mut r, 1e-15);
         assert!(done.converged);
         assert_eq!(s, [1.0, -0.5, 0.0]);
         assert!((r[1] - 0.3).abs() < 1e-15 && r[0].abs() < 1e-15);
         // Moving away: no force.
         let (mut s, mut r) = ([0.0; 3], [0.0; 3]);
-        assert!(
-            solve(
-                &w,
-                &[0.5, 0.8, 0.0],
-                &[0.5],
-                &mut s,
-                &mut r,
-                1e-15,
-                &mut Polish::default()
-            )
-            .converged
-        );
+        assert!(solve(&w, &[0.5, 0.8, 0.0], &[0.5], &mut s, &mut r, 1e-15,).converged);
         assert_eq!(s, [0.0; 3]);
     }
 }
