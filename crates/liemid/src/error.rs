@@ -93,8 +93,8 @@ pub enum Error {
     /// Newton's method for an implicit step equation did not converge.
     #[error(
         "{method}: {equation} did not converge in the step from t = {} with h = {} \
-         ({}); the step is probably too large for the rotation rate"
-    , Num(*.t), Num(*.h), Residual(*.residual, *.iterations))]
+         ({}); {}"
+    , Num(*.t), Num(*.h), Residual(*.residual, *.iterations), Hint(equation))]
     NewtonDidNotConverge {
         /// The integrator.
         method: &'static str,
@@ -302,6 +302,22 @@ impl core::fmt::Display for Num {
             write!(f, "{}", self.0)
         } else {
             write!(f, "{:e}", self.0)
+        }
+    }
+}
+
+/// What to try when `equation` does not converge.
+struct Hint<'a>(&'a str);
+
+impl core::fmt::Display for Hint<'_> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        if self.0.contains("contact") {
+            f.write_str(
+                "contacts sliding together near their friction limit, or many redundant ones (a stack), \
+                 converge slowly in this solver: a known limit (docs/theory/multibody.md §6)",
+            )
+        } else {
+            f.write_str("the step is probably too large for the rotation rate")
         }
     }
 }

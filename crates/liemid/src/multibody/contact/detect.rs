@@ -63,6 +63,14 @@ impl core::fmt::Debug for ContactGeometry {
     }
 }
 
+/// Scratch of the broad phase.
+#[derive(Clone, Debug, Default)]
+pub(in crate::multibody) struct Broad {
+    extents: Vec<f64>,
+    cells: Vec<([i64; 3], usize)>,
+    large: Vec<usize>,
+}
+
 /// One contact point of a step: the bodies, the material points and the normal.
 #[derive(Clone, Copy, Debug)]
 pub(in crate::multibody) struct ContactPoint {
@@ -265,44 +273,78 @@ impl ContactGeometry {
     }
 
     /// The contact points at `(c, R)` whose gap is below `margin(a) + margin(b)` (each
-    /// body's reach over the step; the world's 0), into `out`; `order` and `manifolds` are
+    /// body's reach over the step; the world's 0), into `out`; `broad` and `manifolds` are
     /// scratch. Returns the deepest penetration found (0 when none).
+    ///
+    /// Broad phase: a uniform grid of cells twice the 90th percentile of the shapes' reach
+    /// (bounding radius plus the body's margin), each shape tested against the shapes in
+    /// its own and the 26 neighbouring cells; the larger shapes (a bin's walls) and the
+    /// planes against every shape. Linear in the shapes for shapes of similar sizes.
     pub(in crate::multibody) fn detect(
         &self,
         c: &[Vec3],
         r: &[Mat3],
         margin: &[f64],
         out: &mut Vec<ContactPoint>,
-        order: &mut Vec<(f64, usize)>,
+        broad: &mut Broad,
         manifolds: &mut Vec<ContactManifold<(), ()>>,
     ) -> f64 {
         out.clear();
         let reach = |b: Option<usize>| b.map_or(0.0, |i| margin[i]);
         let centre = |k: &Collider| world(k.body, k.offset, c, r);
-        // Broad phase: sort the finite shapes by the lower end of their bounding spheres
-        // along x, sweep; planes against every shape.
-        order.clear();
-        for (i, k) in self.colliders.iter().enumerate() {
-            if !k.plane {
-                order.push((centre(k).x - k.radius - reach(k.body), i));
-            }
-        }
-        order.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+        let extent = |k: &Collider| k.radius + reach(k.body);
+        broad.extents.clear();
+        broad
+            .extents
+            .extend(self.colliders.iter().filter(|k| !k.plane).map(&extent));
         let mut deepest = 0.0f64;
-        for s in 0..order.len() {
-            let i = order[s].1;
-            let ki = &self.colliders[i];
-            let ci = centre(ki);
-            let hi = ci.x + ki.radius + reach(ki.body);
-            for &(lo, j) in &order[s + 1..] {
-                if lo > hi {
-                    break;
+        if !broad.extents.is_empty() {
+            let at = ((broad.extents.len() * 9) / 10).min(broad.extents.len() - 1);
+            let (_, p90, _) = broad.extents.select_nth_unstable_by(at, f64::total_cmp);
+            let cell = 2.0 * *p90;
+            broad.cells.clear();
+            broad.large.clear();
+            for (i, k) in self.colliders.iter().enumerate().filter(|(_, k)| !k.plane) {
+                if extent(k) > 0.5 * cell || cell.is_nan() || cell <= 0.0 {
+                    broad.large.push(i);
+                } else {
+                    let x = centre(k);
+                    let key = [x.x, x.y, x.z].map(|v| (v / cell).floor() as i64);
+                    broad.cells.push((key, i));
                 }
-                let kj = &self.colliders[j];
-                let cj = centre(kj);
-                let m = reach(ki.body) + reach(kj.body);
-                if (ci - cj).norm() <= ki.radius + kj.radius + m {
-                    deepest = deepest.min(self.pair(i, j, c, r, m, out, manifolds));
+            }
+            broad.cells.sort_unstable();
+            let near = |i: usize, j: usize| {
+                let (ki, kj) = (&self.colliders[i], &self.colliders[j]);
+                (centre(ki) - centre(kj)).norm() <= extent(ki) + extent(kj)
+            };
+            for s in 0..broad.cells.len() {
+                let (key, i) = broad.cells[s];
+                for d in 0..27i64 {
+                    let want = [key[0] + d % 3 - 1, key[1] + (d / 3) % 3 - 1, key[2] + d / 9 - 1];
+                    let from = broad.cells.partition_point(|&(k, _)| k < want);
+                    for &(k, j) in &broad.cells[from..] {
+                        if k != want {
+                            break;
+                        }
+                        if j > i && near(i, j) {
+                            let m = reach(self.colliders[i].body) + reach(self.colliders[j].body);
+                            deepest = deepest.min(self.pair(i, j, c, r, m, out, manifolds));
+                        }
+                    }
+                }
+            }
+            for (a, &i) in broad.large.iter().enumerate() {
+                let others = broad
+                    .cells
+                    .iter()
+                    .map(|&(_, j)| j)
+                    .chain(broad.large[a + 1..].iter().copied());
+                for j in others {
+                    if near(i, j) {
+                        let m = reach(self.colliders[i].body) + reach(self.colliders[j].body);
+                        deepest = deepest.min(self.pair(i, j, c, r, m, out, manifolds));
+                    }
                 }
             }
         }

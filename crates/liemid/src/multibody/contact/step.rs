@@ -74,6 +74,7 @@ pub(in crate::multibody) struct ContactScratch {
     active: Vec<usize>,
     rows: Vec<Rows>,
     order: Vec<(f64, usize)>,
+    broad: super::detect::Broad,
     manifolds: Vec<ContactManifold<(), ()>>,
     margin: Vec<f64>,
     w: Vec<f64>,
@@ -84,6 +85,12 @@ pub(in crate::multibody) struct ContactScratch {
     polish: super::polish::Polish,
     /// The rates the dense response keeps.
     kept: Vec<f64>,
+    /// Free bodies only (no joint rows, no armature): `W` applied body by body, never
+    /// formed (`Local`): its diagonal blocks and the velocity changes of the forces.
+    local: bool,
+    blocks: Vec<[[f64; 3]; 3]>,
+    dv: Vec<Vec3>,
+    dw: Vec<Vec3>,
     /// The last step's points and position forces (the warm start).
     last_points: Vec<ContactPoint>,
     last_sigma: Vec<f64>,
@@ -113,6 +120,8 @@ impl ContactScratch {
             base_pi: vec![Vec3::ZERO; bodies],
             linear: vec![Vec3::ZERO; bodies],
             angular: vec![Vec3::ZERO; bodies],
+            dv: vec![Vec3::ZERO; bodies],
+            dw: vec![Vec3::ZERO; bodies],
             ..ContactScratch::default()
         }
     }
@@ -137,6 +146,33 @@ impl Workspace {
                     s.w[(3 * row + i) * m + col] = rows.rate(i, &self.vel, &self.omega);
                 }
             }
+        }
+    }
+
+    /// Make `W` ready for the solves: body by body for free bodies (no joint rows, no
+    /// armature: the blocks only), else dense (`contact_response`).
+    fn prepare_response(&mut self, sys: &MultibodySystem, s: &mut ContactScratch, hh: f64, start: bool) {
+        let rows = if start { &self.rows0 } else { &self.rows1 };
+        s.local = sys.armature.is_none() && !rows.iter().any(|r| r.n > 0);
+        if !s.local {
+            self.contact_response(sys, s, hh, start);
+            return;
+        }
+        s.blocks.clear();
+        for rows in &s.rows {
+            let mut block = [[0.0; 3]; 3];
+            for (body, t) in [(rows.a, &rows.ta), (rows.b, &rows.tb)] {
+                if let Some(i) = body {
+                    let inv_m = 1.0 / sys.mass[i];
+                    let it: [Vec3; 3] = core::array::from_fn(|j| sys.inertia[i].apply_inverse(t[j]));
+                    for (r, row) in block.iter_mut().enumerate() {
+                        for (c, x) in row.iter_mut().enumerate() {
+                            *x += hh * (rows.dir[r].dot(rows.dir[c]) * inv_m + t[r].dot(it[c]));
+                        }
+                    }
+                }
+            }
+            s.blocks.push(block);
         }
     }
 
@@ -176,12 +212,12 @@ impl Workspace {
         let deepest = {
             let ContactScratch {
                 points,
-                order,
+                broad,
                 manifolds,
                 margin,
                 ..
             } = &mut s;
-            geometry.detect(&state.c, &state.rotation, margin, points, order, manifolds)
+            geometry.detect(&state.c, &state.rotation, margin, points, broad, manifolds)
         };
         report.penetration = report.penetration.max(-deepest);
         report.contacts = report.contacts.max(u32::try_from(s.points.len()).unwrap_or(u32::MAX));
@@ -241,14 +277,21 @@ impl Workspace {
             self.factor(sys, super::super::workspace::Matrix::Start)?;
             report.factorizations += 1;
         }
-        self.contact_response(sys, s, hh, true);
+        self.prepare_response(sys, s, hh, true);
         s.base_p.copy_from_slice(&self.pb);
         s.base_pi.copy_from_slice(&self.pib);
         s.sigma.clear();
         s.sigma.resize(3 * n, 0.0);
         // Warm start: a contact found at the same material points as in the last step
         // (a resting one) starts from its last force.
-        warm(&s.points, &s.last_points, &s.last_sigma, length, &mut s.sigma);
+        warm(
+            &s.points,
+            &s.last_points,
+            &s.last_sigma,
+            length,
+            &mut s.sigma,
+            &mut s.order,
+        );
         s.r0.resize(3 * n, 0.0);
         s.rates.resize(3 * n, 0.0);
         // Gap and slide to 1e-12 of the contact length: as rates over the step.
@@ -291,7 +334,7 @@ impl Workspace {
                     self.factor(sys, super::super::workspace::Matrix::Start)?;
                     report.factorizations += 1;
                 }
-                self.contact_response(sys, s, hh, true);
+                self.prepare_response(sys, s, hh, true);
             }
             for (k, p) in s.points.iter().enumerate() {
                 let (t1, t2) = p.slide(&self.c_new, &self.r_new);
@@ -319,12 +362,8 @@ impl Workspace {
                 });
             }
             // The linearised problem about the current σ: r(σ') ≈ r(σ) + W (σ' − σ).
-            let m = 3 * n;
-            for i in 0..m {
-                let row = &s.w[i * m..(i + 1) * m];
-                s.r0[i] = s.rates[i] - row.iter().zip(&s.sigma).map(|(a, b)| a * b).sum::<f64>();
-            }
-            let done = solve_dense(s, 0.25 * tol);
+            minus_w_sigma(sys, s, hh);
+            let done = solve_contacts(sys, s, hh, 0.25 * tol);
             report.contact_sweeps += u32::try_from(done.sweeps).unwrap_or(u32::MAX);
             if !done.converged {
                 return Err(Error::NewtonDidNotConverge {
@@ -396,7 +435,7 @@ impl Workspace {
                 s.r0[at] -= e * s.approach[k];
             }
         }
-        self.contact_response(sys, &mut s, hh, false);
+        self.prepare_response(sys, &mut s, hh, false);
         s.sigma.clear();
         s.sigma.resize(3 * n, 0.0);
         s.rates.resize(3 * n, 0.0);
@@ -404,7 +443,7 @@ impl Workspace {
             m.max(self.vel[i].norm() + geometry.length * self.omega[i].norm())
         });
         let tol = 1e-12 * vscale;
-        let done = solve_dense(&mut s, tol);
+        let done = solve_contacts(sys, &mut s, hh, tol);
         report.contact_sweeps += u32::try_from(done.sweeps).unwrap_or(u32::MAX);
         if !done.converged {
             let worst = done.worst / vscale;
@@ -430,18 +469,29 @@ impl Workspace {
 
 /// Start each of `points` from the force of the same contact in `last` (the same bodies and
 /// material points within `1e-9` of the contact length, the same normal): `sigma` (zero
-/// elsewhere).
-fn warm(points: &[ContactPoint], last: &[ContactPoint], last_sigma: &[f64], length: f64, sigma: &mut [f64]) {
+/// elsewhere). `order` is scratch: `last` sorted by its bodies, searched by bisection.
+fn warm(
+    points: &[ContactPoint],
+    last: &[ContactPoint],
+    last_sigma: &[f64],
+    length: f64,
+    sigma: &mut [f64],
+    order: &mut Vec<(f64, usize)>,
+) {
+    let key = |p: &ContactPoint| (p.a.unwrap_or(usize::MAX), p.b.unwrap_or(usize::MAX));
     let close = 1e-9 * length;
+    order.clear();
+    order.extend((0..last.len()).map(|j| (0.0, j)));
+    order.sort_unstable_by_key(|&(_, j)| (key(&last[j]), j));
     for (k, p) in points.iter().enumerate() {
-        if let Some(j) = last.iter().position(|q| {
-            q.a == p.a
-                && q.b == p.b
-                && (q.pa - p.pa).norm() <= close
-                && (q.pb - p.pb).norm() <= close
-                && (q.nb - p.nb).norm() <= 1e-9
-        }) {
-            sigma[3 * k..3 * k + 3].copy_from_slice(&last_sigma[3 * j..3 * j + 3]);
+        let want = key(p);
+        let from = order.partition_point(|&(_, j)| key(&last[j]) < want);
+        for &(_, j) in order[from..].iter().take_while(|&&(_, j)| key(&last[j]) == want) {
+            let q = &last[j];
+            if (q.pa - p.pa).norm() <= close && (q.pb - p.pb).norm() <= close && (q.nb - p.nb).norm() <= 1e-9 {
+                sigma[3 * k..3 * k + 3].copy_from_slice(&last_sigma[3 * j..3 * j + 3]);
+                break;
+            }
         }
     }
 }
@@ -465,4 +515,129 @@ fn solve_dense(s: &mut ContactScratch, tol: f64) -> cone::Solved {
     cone::solve(&mut dense, mu, sigma, rates, tol, |d, sigma, _| {
         super::polish::polish(w, r0, mu, sigma, d.rates, tol, polish)
     })
+}
+
+/// `W` applied body by body over free bodies: the forces' velocity changes `dv`, `dw` kept
+/// per body, each contact's rates read from its two bodies (linear in the contacts).
+struct Local<'a> {
+    rows: &'a [Rows],
+    r0: &'a [f64],
+    blocks: &'a [[[f64; 3]; 3]],
+    dv: &'a mut [Vec3],
+    dw: &'a mut [Vec3],
+    sys: &'a MultibodySystem,
+    hh: f64,
+}
+
+impl Local<'_> {
+    /// Set the velocity changes to those of the forces `sigma`.
+    fn start(&mut self, sigma: &[f64]) {
+        self.dv.iter_mut().for_each(|v| *v = Vec3::ZERO);
+        self.dw.iter_mut().for_each(|v| *v = Vec3::ZERO);
+        for k in 0..self.rows.len() {
+            self.add_unchecked(k, [sigma[3 * k], sigma[3 * k + 1], sigma[3 * k + 2]]);
+        }
+    }
+
+    fn add_unchecked(&mut self, k: usize, delta: [f64; 3]) {
+        let rows = &self.rows[k];
+        let (mut lin, mut ang_a, mut ang_b) = (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO);
+        for (i, d) in delta.iter().enumerate() {
+            lin += rows.dir[i] * (self.hh * d);
+            ang_a += rows.ta[i] * (self.hh * d);
+            ang_b += rows.tb[i] * (self.hh * d);
+        }
+        if let Some(a) = rows.a {
+            self.dv[a] += lin * (1.0 / self.sys.mass[a]);
+            self.dw[a] += self.sys.inertia[a].apply_inverse(ang_a);
+        }
+        if let Some(b) = rows.b {
+            self.dv[b] -= lin * (1.0 / self.sys.mass[b]);
+            self.dw[b] -= self.sys.inertia[b].apply_inverse(ang_b);
+        }
+    }
+}
+
+impl cone::Response for Local<'_> {
+    fn block(&self, k: usize) -> [[f64; 3]; 3] {
+        self.blocks[k]
+    }
+
+    fn rates(&self, k: usize) -> [f64; 3] {
+        core::array::from_fn(|i| self.r0[3 * k + i] + self.rows[k].rate(i, self.dv, self.dw))
+    }
+
+    fn add(&mut self, k: usize, delta: [f64; 3]) {
+        self.add_unchecked(k, delta);
+    }
+}
+
+/// `s.r0 = s.rates − W σ`: the constant of the problem linearised about the current forces.
+fn minus_w_sigma(sys: &MultibodySystem, s: &mut ContactScratch, hh: f64) {
+    let m = s.rates.len();
+    if s.local {
+        let ContactScratch {
+            rows,
+            blocks,
+            dv,
+            dw,
+            sigma,
+            r0,
+            rates,
+            ..
+        } = s;
+        r0.iter_mut().for_each(|x| *x = 0.0);
+        let mut local = Local {
+            rows,
+            r0,
+            blocks,
+            dv,
+            dw,
+            sys,
+            hh,
+        };
+        local.start(sigma);
+        for k in 0..rows.len() {
+            let ws = cone::Response::rates(&local, k);
+            for i in 0..3 {
+                rates[3 * k + i] -= ws[i];
+            }
+        }
+        r0.copy_from_slice(rates);
+        return;
+    }
+    for i in 0..m {
+        let row = &s.w[i * m..(i + 1) * m];
+        s.r0[i] = s.rates[i] - row.iter().zip(&s.sigma).map(|(a, b)| a * b).sum::<f64>();
+    }
+}
+
+/// The cone problem of `s` from the forces in `s.sigma`, by the response `s` is prepared
+/// for.
+fn solve_contacts(sys: &MultibodySystem, s: &mut ContactScratch, hh: f64, tol: f64) -> cone::Solved {
+    if !s.local {
+        return solve_dense(s, tol);
+    }
+    let ContactScratch {
+        rows,
+        blocks,
+        dv,
+        dw,
+        sigma,
+        r0,
+        rates,
+        mu,
+        ..
+    } = s;
+    let mut local = Local {
+        rows,
+        r0,
+        blocks,
+        dv,
+        dw,
+        sys,
+        hh,
+    };
+    local.start(sigma);
+    cone::solve(&mut local, mu, sigma, rates, tol, |_, _, _| false)
 }
