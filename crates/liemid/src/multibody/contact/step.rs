@@ -13,6 +13,10 @@ use super::cone;
 use super::detect::{tangents, ContactPoint};
 use parry3d_f64::query::ContactManifold;
 
+/// Contacts on free bodies from which `W` is applied body by body (`Local`) instead of
+/// formed.
+const LOCAL_FROM: usize = 64;
+
 /// Most outer iterations of the position problem (each re-runs the drift).
 const MAX_OUTER: usize = 50;
 
@@ -83,6 +87,7 @@ pub(in crate::multibody) struct ContactScratch {
     sigma: Vec<f64>,
     sigma_ok: Vec<f64>,
     polish: super::polish::Polish,
+    slide: super::polish::Slide,
     /// The rates the dense response keeps.
     kept: Vec<f64>,
     /// Free bodies only (no joint rows, no armature): `W` applied body by body, never
@@ -153,7 +158,9 @@ impl Workspace {
     /// armature: the blocks only), else dense (`contact_response`).
     fn prepare_response(&mut self, sys: &MultibodySystem, s: &mut ContactScratch, hh: f64, start: bool) {
         let rows = if start { &self.rows0 } else { &self.rows1 };
-        s.local = sys.armature.is_none() && !rows.iter().any(|r| r.n > 0);
+        // Few contacts keep the dense W even on free bodies: its finishes (`polish.rs`)
+        // need the active set's rows of W.
+        s.local = sys.armature.is_none() && !rows.iter().any(|r| r.n > 0) && s.rows.len() > LOCAL_FROM;
         if !s.local {
             self.contact_response(sys, s, hh, start);
             return;
@@ -507,6 +514,7 @@ fn solve_dense(s: &mut ContactScratch, tol: f64) -> cone::Solved {
         rates,
         kept,
         polish,
+        slide,
         ..
     } = s;
     kept.resize(r0.len(), 0.0);
@@ -514,6 +522,7 @@ fn solve_dense(s: &mut ContactScratch, tol: f64) -> cone::Solved {
     dense.start(r0, sigma);
     cone::solve(&mut dense, mu, sigma, rates, tol, |d, sigma, _| {
         super::polish::polish(w, r0, mu, sigma, d.rates, tol, polish)
+            || super::polish::slide_newton(w, r0, mu, sigma, d.rates, tol, slide)
     })
 }
 
