@@ -238,7 +238,10 @@ pub fn parse(text: &str, name_for_errors: &str) -> Result<Loaded> {
             qvel: None,
             actuators: Vec::new(),
             ctrl: None,
-            collision: Default::default(),
+            collision: super::contact::Collision {
+                shapes: built.shapes.iter().filter(|s| s.collision.is_some()).cloned().collect(),
+                ..Default::default()
+            },
         },
         ignored: ignored.into_vec(),
         merged: built.merged,
@@ -326,6 +329,24 @@ fn read_link<'a, 'i>(cx: &Ctx, node: Node<'a, 'i>, ignored: &mut Ignored) -> Res
         match c.tag_name().name() {
             "inertial" => mass = read_inertial(cx, c)?,
             "visual" => shapes.extend(read_visual(cx, c, name)?),
+            "collision" => {
+                // The contact shape (MuJoCo's URDF import: contype and conaffinity 1, friction
+                // 1), in the hidden group 3 as collision geoms are drawn; meshes do not touch.
+                if let Some(mut s) = read_visual(cx, c, name)? {
+                    if matches!(s.kind, ShapeKind::Mesh { .. }) {
+                        ignored.note("collision meshes (not simulated: meshes are drawn only)");
+                        continue;
+                    }
+                    s.group = 3;
+                    s.collision = Some(super::shapes::Collides {
+                        name: c.attribute("name").map(str::to_string),
+                        contype: 1,
+                        conaffinity: 1,
+                        friction: 1.0,
+                    });
+                    shapes.push(s);
+                }
+            }
             other => ignored.note(other),
         }
     }
@@ -343,7 +364,7 @@ fn read_link<'a, 'i>(cx: &Ctx, node: Node<'a, 'i>, ignored: &mut Ignored) -> Res
 fn read_visual(cx: &Ctx, node: Node, link: &str) -> Result<Option<Shape>> {
     let (position, rotation) = origin(cx, node)?;
     let Some(g) = child(node, "geometry").and_then(|g| g.children().find(Node::is_element)) else {
-        return Err(cx.err(node, "a <visual> needs a <geometry> with a shape"));
+        return Err(cx.err(node, "a <visual> or <collision> needs a <geometry> with a shape"));
     };
     let positive = |attr: &str| -> Result<f64> {
         let [v] = cx.array_of::<1>(g, attr, required(cx, g, attr)?)?;

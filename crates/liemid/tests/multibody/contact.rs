@@ -234,3 +234,32 @@ fn a_stack_of_ten_boxes_stays_put() {
     }
     assert!(worst <= 1e-9, "the stack moved {worst:e} m in {steps} steps");
 }
+
+#[test]
+fn a_urdf_cube_falls_onto_its_base_and_rests_there() {
+    // URDF `<collision>` shapes touch (MuJoCo's import: friction 1): a massless base link
+    // (merged into the world) with a 2 m slab whose top is at z = 0, and a floating 0.2 m
+    // cube released 0.4 m above it.
+    let text = r#"<robot name="drop">
+      <link name="base"><collision><origin xyz="0 0 -0.05"/><geometry><box size="2 2 0.1"/></geometry></collision></link>
+      <link name="cube">
+        <inertial><mass value="1"/><inertia ixx="0.0067" iyy="0.0067" izz="0.0067" ixy="0" ixz="0" iyz="0"/></inertial>
+        <collision><geometry><box size="0.2 0.2 0.2"/></geometry></collision>
+      </link>
+      <joint name="free" type="floating"><parent link="base"/><child link="cube"/><origin xyz="0 0 0.5"/></joint>
+    </robot>"#;
+    let loaded = liemid::multibody::urdf::parse(text, "drop.urdf").unwrap();
+    assert_eq!(loaded.model.collision.shapes.len(), 2);
+    assert!(loaded.model.collision.shapes.iter().all(|s| s.group == 3));
+    let prepared = Simulation::prepare(&loaded.model, MultibodyMethod::Liemid).unwrap();
+    let (mut sim, mut s) = (prepared.simulation, prepared.state);
+    let mut lowest = f64::INFINITY;
+    for _ in 0..1000 {
+        sim.step(&mut s, 1e-3).unwrap();
+        lowest = lowest.min(s.c[0].z);
+    }
+    // Plastic: it lands at t = √(2·0.4/g) = 0.29 s and stays, its centre 0.1 m above the top.
+    assert!((s.c[0].z - 0.1).abs() <= 1e-9, "rests at {} m", s.c[0].z);
+    assert!(lowest >= 0.1 - 1e-9, "went down to {lowest} m");
+    assert!(s.p[0].norm() <= 1e-9, "still moving: {:?}", s.p[0]);
+}

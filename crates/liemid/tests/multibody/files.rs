@@ -357,12 +357,21 @@ fn ros_style_arm_lumps_fixed_joints() {
             axis: Vec3::new(0.0, 0.0, 1.0)
         }
     );
-    for kind in ["material", "collision", "transmission", "joint friction"] {
+    for kind in ["material", "transmission", "joint friction"] {
         assert!(l.ignored.iter().any(|s| s == kind), "{kind} not in {:?}", l.ignored);
     }
+    // The upper arm's `<collision>` cylinder is a contact shape (hidden group 3, friction 1),
+    // alone in the model, so nothing touches.
+    assert_eq!(m.collision.shapes.len(), 1);
+    assert!(!m.collision.any());
+    let collision = &m.collision.shapes[0];
+    assert_eq!(
+        (collision.group, collision.collision.as_ref().map(|c| c.friction)),
+        (3, Some(1.0))
+    );
     // The base's visual is a mesh: `package://arm/meshes/base.stl` found as `meshes/base.stl`
     // next to the URDF, and listed among the model's files (no output may replace it).
-    assert_eq!(l.shapes.len(), 1, "{:?}", l.shapes);
+    assert_eq!(l.shapes.len(), 2, "{:?}", l.shapes);
     let ShapeKind::Mesh { file, path, scale, .. } = &l.shapes[0].kind else {
         panic!("{:?}", l.shapes[0]);
     };
