@@ -53,13 +53,18 @@ pub(super) struct Dense<'a> {
     pub rates: &'a mut [f64],
 }
 
+/// `rates = r₀ + W σ` with `W` dense (row-major, `3n × 3n`).
+pub(super) fn rates_at(w: &[f64], r0: &[f64], sigma: &[f64], rates: &mut [f64]) {
+    let m = r0.len();
+    for ((rate, r0), row) in rates.iter_mut().zip(r0).zip(w.chunks_exact(m)) {
+        *rate = r0 + row.iter().zip(sigma).map(|(a, b)| a * b).sum::<f64>();
+    }
+}
+
 impl Dense<'_> {
     /// Start from forces `sigma`: `rates = r₀ + W σ`.
     pub fn start(&mut self, r0: &[f64], sigma: &[f64]) {
-        let m = r0.len();
-        for ((rate, r0), row) in self.rates.iter_mut().zip(r0).zip(self.w.chunks_exact(m)) {
-            *rate = r0 + row.iter().zip(sigma).map(|(a, b)| a * b).sum::<f64>();
-        }
+        rates_at(self.w, r0, sigma, self.rates);
     }
 }
 

@@ -123,10 +123,7 @@ pub(super) fn polish(
         p.trial[ri] = p.x[i];
     }
     p.trial_rates.resize(m, 0.0);
-    for i in 0..m {
-        let row = &w[i * m..(i + 1) * m];
-        p.trial_rates[i] = r0[i] + row.iter().zip(&p.trial).map(|(a, b)| a * b).sum::<f64>();
-    }
+    super::cone::rates_at(w, r0, &p.trial, &mut p.trial_rates);
     let admissible = p
         .trial
         .chunks(3)
@@ -308,10 +305,7 @@ pub(super) fn slide_newton(
                 p.trial[b + 2] = mu_k * p.trial[b] * d[1];
             }
         }
-        for i in 0..m {
-            let row = &w[i * m..(i + 1) * m];
-            p.trial_rates[i] = r0[i] + row.iter().zip(&p.trial).map(|(a, b)| a * b).sum::<f64>();
-        }
+        super::cone::rates_at(w, r0, &p.trial, &mut p.trial_rates);
         let admissible = p
             .trial
             .chunks(3)

@@ -581,10 +581,14 @@ impl cone::Response for Local<'_> {
     }
 }
 
-/// `s.r0 = s.rates − W σ`: the constant of the problem linearised about the current forces.
-fn minus_w_sigma(sys: &MultibodySystem, s: &mut ContactScratch, hh: f64) {
-    let m = s.rates.len();
-    if s.local {
+impl ContactScratch {
+    /// The body-by-body response over `self`'s rows at the forces in `sigma`, with the
+    /// forces, the rates and the friction coefficients beside it.
+    fn local<'s>(
+        &'s mut self,
+        sys: &'s MultibodySystem,
+        hh: f64,
+    ) -> (Local<'s>, &'s mut [f64], &'s mut [f64], &'s [f64]) {
         let ContactScratch {
             rows,
             blocks,
@@ -593,9 +597,9 @@ fn minus_w_sigma(sys: &MultibodySystem, s: &mut ContactScratch, hh: f64) {
             sigma,
             r0,
             rates,
+            mu,
             ..
-        } = s;
-        r0.iter_mut().for_each(|x| *x = 0.0);
+        } = self;
         let mut local = Local {
             rows,
             r0,
@@ -606,13 +610,24 @@ fn minus_w_sigma(sys: &MultibodySystem, s: &mut ContactScratch, hh: f64) {
             hh,
         };
         local.start(sigma);
-        for k in 0..rows.len() {
+        (local, sigma, rates, mu)
+    }
+}
+
+/// `s.r0 = s.rates − W σ`: the constant of the problem linearised about the current forces.
+fn minus_w_sigma(sys: &MultibodySystem, s: &mut ContactScratch, hh: f64) {
+    let m = s.rates.len();
+    if s.local {
+        // With r₀ = 0 the response's rates are W σ.
+        s.r0.iter_mut().for_each(|x| *x = 0.0);
+        let (local, _, rates, _) = s.local(sys, hh);
+        for k in 0..local.rows.len() {
             let ws = cone::Response::rates(&local, k);
             for i in 0..3 {
                 rates[3 * k + i] -= ws[i];
             }
         }
-        r0.copy_from_slice(rates);
+        s.r0.copy_from_slice(&s.rates);
         return;
     }
     for i in 0..m {
@@ -627,26 +642,6 @@ fn solve_contacts(sys: &MultibodySystem, s: &mut ContactScratch, hh: f64, tol: f
     if !s.local {
         return solve_dense(s, tol);
     }
-    let ContactScratch {
-        rows,
-        blocks,
-        dv,
-        dw,
-        sigma,
-        r0,
-        rates,
-        mu,
-        ..
-    } = s;
-    let mut local = Local {
-        rows,
-        r0,
-        blocks,
-        dv,
-        dw,
-        sys,
-        hh,
-    };
-    local.start(sigma);
+    let (mut local, sigma, rates, mu) = s.local(sys, hh);
     cone::solve(&mut local, mu, sigma, rates, tol, |_, _, _| false)
 }

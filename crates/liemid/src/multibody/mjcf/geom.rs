@@ -213,24 +213,7 @@ impl<'a, 'i> State<'a, 'i> {
                 .note(&format!("{ty} geoms (not drawn: the files are not read)"));
             return Ok(None);
         }
-        let size = match g.get("size") {
-            Some(v) => cx.floats(node, "size", v, 1, 3)?,
-            None => Vec::new(),
-        };
-        let (mut position, mut rotation) = self.frame(node, &|a| g.get(a))?;
-        let mut half_length = None;
-        // MuJoCo reads `fromto` for capsules, cylinders, boxes and ellipsoids only (a class
-        // default's `fromto` does not move a plane or a sphere of that class).
-        let fromto = g
-            .get("fromto")
-            .filter(|_| matches!(ty, "capsule" | "cylinder" | "box" | "ellipsoid"));
-        if let Some(v) = fromto {
-            let f = cx.array_of::<6>(node, "fromto", v)?;
-            let (a, b) = (Vec3::new(f[0], f[1], f[2]), Vec3::new(f[3], f[4], f[5]));
-            rotation = rotation_to_z(cx.unit(node, "fromto", (b - a).to_array())?);
-            position = (a + b) * 0.5;
-            half_length = Some(0.5 * (b - a).norm());
-        }
+        let (size, position, rotation, half_length) = self.geom_frame(g, ty)?;
         let at = |k: usize| size.get(k).copied().unwrap_or(0.0);
         let kind = match ty {
             "plane" => ShapeKind::Plane { half: [at(0), at(1)] },
@@ -274,6 +257,29 @@ impl<'a, 'i> State<'a, 'i> {
             group,
             collision: self.geom_collision(g)?,
         }))
+    }
+
+    /// A geom's `size` values, its pose in the body's frame and, with `fromto`, the half
+    /// length it sets. MuJoCo reads `fromto` for capsules, cylinders, boxes and ellipsoids
+    /// only (a class default's `fromto` does not move a plane or a sphere of that class).
+    fn geom_frame(&self, g: &Elem<'a, 'i>, ty: &str) -> Result<(Vec<f64>, Vec3, Mat3, Option<f64>)> {
+        let cx = self.cx;
+        let node = g.node;
+        let size = match g.get("size") {
+            Some(v) => cx.floats(node, "size", v, 1, 3)?,
+            None => Vec::new(),
+        };
+        let (position, rotation) = self.frame(node, &|a| g.get(a))?;
+        let fromto = g
+            .get("fromto")
+            .filter(|_| matches!(ty, "capsule" | "cylinder" | "box" | "ellipsoid"));
+        let Some(v) = fromto else {
+            return Ok((size, position, rotation, None));
+        };
+        let f = cx.array_of::<6>(node, "fromto", v)?;
+        let (a, b) = (Vec3::new(f[0], f[1], f[2]), Vec3::new(f[3], f[4], f[5]));
+        let rotation = rotation_to_z(cx.unit(node, "fromto", (b - a).to_array())?);
+        Ok((size, (a + b) * 0.5, rotation, Some(0.5 * (b - a).norm())))
     }
 
     /// A geom's contact properties (`contype`, `conaffinity`, `friction`, `condim`); `None`
@@ -381,25 +387,7 @@ impl<'a, 'i> State<'a, 'i> {
             "plane" => return Err(cx.err(node, "a plane has no finite mass: planes belong in <worldbody>")),
             other => return Err(cx.err(node, format!("unknown geom type `{other}`"))),
         }
-        let size = match g.get("size") {
-            Some(v) => cx.floats(node, "size", v, 1, 3)?,
-            None => Vec::new(),
-        };
-        let (mut pos, mut rot) = self.frame(node, &|a| g.get(a))?;
-        let mut half_length = None;
-        // MuJoCo reads `fromto` for capsules, cylinders, boxes and ellipsoids only (a class
-        // default's `fromto` does not move a plane or a sphere of that class).
-        let fromto = g
-            .get("fromto")
-            .filter(|_| matches!(ty, "capsule" | "cylinder" | "box" | "ellipsoid"));
-        if let Some(v) = fromto {
-            let f = cx.array_of::<6>(node, "fromto", v)?;
-            let (a, b) = (Vec3::new(f[0], f[1], f[2]), Vec3::new(f[3], f[4], f[5]));
-            let d = b - a;
-            rot = rotation_to_z(cx.unit(node, "fromto", d.to_array())?);
-            pos = (a + b) * 0.5;
-            half_length = Some(0.5 * d.norm());
-        }
+        let (size, pos, rot, half_length) = self.geom_frame(&g, ty)?;
         let needed = match (ty, half_length) {
             ("sphere", _) => 1,
             ("capsule" | "cylinder", None) => 2,
