@@ -3,7 +3,7 @@
 //! Everything here is `Copy`, allocation free and written out component by component, so
 //! the stepping kernels compile to straight-line floating-point code.
 
-use core::ops::{Add, AddAssign, Index, Mul, Neg, Sub, SubAssign};
+use core::ops::{Add, AddAssign, Index, IndexMut, Mul, Neg, Sub, SubAssign};
 
 use crate::error::{Error, Result};
 
@@ -123,6 +123,17 @@ impl Index<usize> for Vec3 {
             0 => &self.x,
             1 => &self.y,
             2 => &self.z,
+            _ => panic!("Vec3 index {i} out of range"),
+        }
+    }
+}
+
+impl IndexMut<usize> for Vec3 {
+    fn index_mut(&mut self, i: usize) -> &mut f64 {
+        match i {
+            0 => &mut self.x,
+            1 => &mut self.y,
+            2 => &mut self.z,
             _ => panic!("Vec3 index {i} out of range"),
         }
     }

@@ -183,8 +183,8 @@ fn align<R: Response>(response: &mut R, mu: &[f64], sigma: &mut [f64], rates: &[
         let b = 3 * k;
         let bound = mu_k * sigma[b];
         let (st, rt) = ([sigma[b + 1], sigma[b + 2]], [rates[b + 1], rates[b + 2]]);
-        let rl = rt[0].hypot(rt[1]);
-        if bound > 0.0 && st[0].hypot(st[1]) >= bound * (1.0 - 1e-9) && rl > 0.0 {
+        let rl = norm2(rt[0], rt[1]);
+        if bound > 0.0 && norm2(st[0], st[1]) >= bound * (1.0 - 1e-9) && rl > 0.0 {
             let aligned = [-bound * rt[0] / rl, -bound * rt[1] / rl];
             let delta = [0.0, aligned[0] - st[0], aligned[1] - st[1]];
             if delta != [0.0; 3] {
@@ -198,6 +198,13 @@ fn align<R: Response>(response: &mut R, mu: &[f64], sigma: &mut [f64], rates: &[
     changed
 }
 
+/// `|(x, y)|` without `hypot`'s care for overflow (forces and rates are far from it; `hypot`
+/// was a quarter of a resting stack's step).
+#[inline]
+fn norm2(x: f64, y: f64) -> f64 {
+    (x * x + y * y).sqrt()
+}
+
 /// The worst violation of the law by `(rates, sigma)`.
 pub(super) fn violation(rates: &[f64], sigma: &[f64], mu: &[f64]) -> f64 {
     let mut worst = 0.0f64;
@@ -207,7 +214,7 @@ pub(super) fn violation(rates: &[f64], sigma: &[f64], mu: &[f64]) -> f64 {
         let normal = if sn > 0.0 { rn.abs() } else { (-rn).max(0.0) };
         let st = [sigma[b + 1], sigma[b + 2]];
         let rt = [rates[b + 1], rates[b + 2]];
-        let (sl, rl) = (st[0].hypot(st[1]), rt[0].hypot(rt[1]));
+        let (sl, rl) = (norm2(st[0], st[1]), norm2(rt[0], rt[1]));
         let bound = mu * sn;
         let tangential = if bound <= 0.0 {
             0.0
@@ -216,7 +223,7 @@ pub(super) fn violation(rates: &[f64], sigma: &[f64], mu: &[f64]) -> f64 {
         } else {
             // On the edge the slip opposes the force: r_t + |r_t| σ̂_t = 0.
             let u = [st[0] / sl, st[1] / sl];
-            (rt[0] + rl * u[0]).hypot(rt[1] + rl * u[1])
+            norm2(rt[0] + rl * u[0], rt[1] + rl * u[1])
         };
         worst = worst.max(normal).max(tangential);
     }
@@ -239,19 +246,19 @@ fn disc(a: [[f64; 2]; 2], b: [f64; 2], radius: f64) -> [f64; 2] {
     let det = a[0][0] * a[1][1] - a[0][1] * a[0][1];
     if det > 0.0 && a[0][0] > 0.0 {
         let x = solve(0.0);
-        if x[0].hypot(x[1]) <= radius {
+        if norm2(x[0], x[1]) <= radius {
             return x;
         }
     } else {
         // A degenerate block (a body without inertia along the plane): the force against
         // the rate, at the bound.
-        let l = b[0].hypot(b[1]);
+        let l = norm2(b[0], b[1]);
         return [-radius * b[0] / l, -radius * b[1] / l];
     }
     let mut k = 0.0f64;
     for _ in 0..60 {
         let x = solve(k);
-        let l = x[0].hypot(x[1]);
+        let l = norm2(x[0], x[1]);
         // d|x|/dκ = −xᵀ (A + κI)⁻¹ x / |x|.
         let y = {
             let (p, q, s) = (a[0][0] + k, a[0][1], a[1][1] + k);
@@ -272,7 +279,7 @@ fn disc(a: [[f64; 2]; 2], b: [f64; 2], radius: f64) -> [f64; 2] {
     }
     let x = solve(k);
     // Exactly on the edge (the last rounding).
-    let l = x[0].hypot(x[1]);
+    let l = norm2(x[0], x[1]);
     [x[0] * radius / l, x[1] * radius / l]
 }
 
@@ -289,7 +296,7 @@ mod tests {
                 a[0][0] * x[0] + a[0][1] * x[1] + b[0],
                 a[1][0] * x[0] + a[1][1] * x[1] + b[1],
             ];
-            let l = x[0].hypot(x[1]);
+            let l = norm2(x[0], x[1]);
             if l < radius * (1.0 - 1e-12) {
                 assert!(r[0].abs() + r[1].abs() < 1e-14, "stuck but r = {r:?}");
             } else {

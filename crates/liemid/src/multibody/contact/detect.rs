@@ -1,5 +1,5 @@
 //! Collision detection for the contact step: the model's touching shapes as `parry3d`
-//! shapes, a sort-and-sweep broad phase on bounding spheres, parry's contact manifolds as the
+//! shapes, a uniform grid of bounding spheres as the broad phase, parry's contact manifolds as the
 //! narrow phase, and each manifold point as a [`ContactPoint`] whose gap and slide can be
 //! evaluated at any configuration (the drift's end) without detecting again.
 //!
@@ -20,7 +20,7 @@ use parry3d_f64::shape::SharedShape;
 use crate::linalg::{Mat3, Vec3};
 
 use super::super::shapes::{Shape, ShapeKind};
-use super::Collision;
+use super::{boxes, Collision};
 
 /// One shape of the contact geometry, posed relative to its body's centre of mass.
 #[derive(Clone)]
@@ -407,23 +407,48 @@ impl ContactGeometry {
         let rb_body = *attitude(kb.body, r);
         let mut deepest = 0.0f64;
         let first = out.len();
+        // Two boxes face on face: the corners by our own clipping (`boxes.rs`).
+        let cuboids = match (ka.shape.as_cuboid(), kb.shape.as_cuboid()) {
+            (Some(x), Some(y)) => {
+                let cuboid = |k: &Collider, half: PVec| boxes::Cuboid {
+                    half: from_p(half),
+                    rotation: *attitude(k.body, r) * k.rotation,
+                    centre: world(k.body, k.offset, c, r),
+                };
+                Some((cuboid(ka, x.half_extents), cuboid(kb, y.half_extents)))
+            }
+            _ => None,
+        };
         for mf in manifolds.iter() {
+            let faces = cuboids
+                .as_ref()
+                .and_then(|(a, b)| boxes::face_contact(a, b, from_p(mf.local_n2), margin, 1e-9 * self.length));
             // Normals in the shapes' frames, outward: n1 on `a` toward `b`, n2 on `b` toward `a`.
-            let n1 = from_p(mf.local_n1);
-            let n2 = from_p(mf.local_n2);
+            let (n1, n2) = match &faces {
+                Some(f) => (f.n1, f.n2),
+                None => (from_p(mf.local_n1), from_p(mf.local_n2)),
+            };
             if n2.norm() == 0.0 {
                 continue;
             }
             let nb_body = kb.rotation * n2;
             let na_body = ka.rotation * n1;
-            for p in &mf.points {
-                if p.dist > margin {
+            let count = faces.as_ref().map_or(mf.points.len(), |f| f.len);
+            for index in 0..count {
+                let (local_p1, local_p2, dist) = match &faces {
+                    Some(f) => f.points[index],
+                    None => {
+                        let p = &mf.points[index];
+                        (from_p(p.local_p1), from_p(p.local_p2), p.dist)
+                    }
+                };
+                if dist > margin {
                     continue;
                 }
-                deepest = deepest.min(p.dist);
+                deepest = deepest.min(dist);
                 // Core points: the surface point moved inward by the rounding radius.
-                let core_a = ka.offset + ka.rotation * from_p(p.local_p1) - na_body * ka.round;
-                let core_b = kb.offset + kb.rotation * from_p(p.local_p2) - nb_body * kb.round;
+                let core_a = ka.offset + ka.rotation * local_p1 - na_body * ka.round;
+                let core_b = kb.offset + kb.rotation * local_p2 - nb_body * kb.round;
                 // The same point twice (face on face: each face's clip gives the corners
                 // the other gives) would be a redundant row.
                 let close = 1e-9 * self.length;

@@ -2,7 +2,7 @@
 //!
 //! A contact `k` between bodies `a` and `b` (either may be the world) has a gap `φ_k(q)`
 //! along its normal `n_k` (from `b` to `a`) and two tangents. Its force acts in both
-//! half-kicks of the RATTLE step (docs/theory/multibody.md §9):
+//! half-kicks of the RATTLE step (docs/theory/multibody.md §6):
 //!
 //! ```text
 //! λ-kick / drift:  φ_k(q⁺) ≥ 0,  σ_n,k ≥ 0,  φ_k(q⁺) σ_n,k = 0        (no penetration at the end)
@@ -24,21 +24,27 @@
 //! solver's tolerance, and a body on a slope below its friction angle does not creep.
 //!
 //! Collision detection (`detect.rs`) uses `parry3d` (contact manifolds for spheres, capsules,
-//! boxes, cylinders and half-spaces), a sort-and-sweep broad phase, and MuJoCo's filters:
+//! boxes, cylinders and half-spaces; two boxes face on face are clipped in `boxes.rs`), a
+//! uniform grid as the broad phase, and MuJoCo's filters:
 //! `contype`/`conaffinity`, `<contact><exclude>`, no contact between geoms of one body or
 //! between a body and its parent (unless the parent is the world). The contacts of a step
 //! are found at its start, with a margin of the distance the bodies can close over the step.
 //!
-//! What is not simulated: restitution (contacts are plastic), torsional and rolling
+//! Contacts are plastic unless the model gives Newton's restitution (global). When the
+//! Gauss–Seidel sweeps stall, `polish.rs` and `newton.rs` finish the solve on a dense `W`.
+//!
+//! What is not simulated: per-geom restitution, torsional and rolling
 //! friction, ellipsoid and mesh geoms (noted by the loader), contacts in compositions and
 //! the joint-space methods (noted: they run without contacts).
 //!
-//! Reference: docs/theory/multibody.md §9; J. J. Moreau, "Unilateral contact and dry
+//! Reference: docs/theory/multibody.md §6; J. J. Moreau, "Unilateral contact and dry
 //! friction in finite freedom dynamics", 1988; D. Stewart, J. Trinkle, IJNME 39 (1996);
 //! M. Anitescu, F. Potra, Nonlinear Dynamics 14 (1997).
 
+mod boxes;
 mod cone;
 mod detect;
+mod newton;
 mod polish;
 mod step;
 

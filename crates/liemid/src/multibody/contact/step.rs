@@ -88,6 +88,7 @@ pub(in crate::multibody) struct ContactScratch {
     sigma_ok: Vec<f64>,
     polish: super::polish::Polish,
     slide: super::polish::Slide,
+    newton: super::newton::Newton,
     /// The rates the dense response keeps.
     kept: Vec<f64>,
     /// Free bodies only (no joint rows, no armature): `W` applied body by body, never
@@ -99,6 +100,10 @@ pub(in crate::multibody) struct ContactScratch {
     /// The last step's points and position forces (the warm start).
     last_points: Vec<ContactPoint>,
     last_sigma: Vec<f64>,
+    /// The velocity solve's touching points, and the last step's with their forces.
+    end_points: Vec<ContactPoint>,
+    last_end_points: Vec<ContactPoint>,
+    last_end_sigma: Vec<f64>,
     /// Per point, the normal speed at which it would meet (restitution only).
     approach: Vec<f64>,
     lambda_ok: Vec<[f64; 6]>,
@@ -256,8 +261,17 @@ impl Workspace {
             let (x, nrm) = p.application(c, r);
             s.rows.push(Rows::at(p, c, r, x, [nrm, p.t1, p.t2]));
         }
+        // Friction holds a contact over the drift only where it touches at the start (the
+        // velocity solve's threshold): a corner that lands within the step moved along the
+        // surface before it touched (a box tipping onto its face: `g₀²/2L` toward its
+        // pivot edge), and holding that still would over-constrain the sticking rows. Its
+        // friction acts from the landing on, in the μ-kick.
         s.mu.clear();
-        s.mu.extend(s.points.iter().map(|p| p.mu));
+        s.mu.extend(
+            s.points
+                .iter()
+                .map(|p| if p.gap(c, r) <= 1e-9 * length { p.mu } else { 0.0 }),
+        );
         s.approach.clear();
         if sys.contact.as_ref().is_some_and(|g| g.restitution > 0.0) {
             // The free normal motion over the step, φ(t) = φ + v t + a t²/2 (exact under a
@@ -370,9 +384,13 @@ impl Workspace {
             }
             // The linearised problem about the current σ: r(σ') ≈ r(σ) + W (σ' − σ).
             minus_w_sigma(sys, s, hh);
-            let done = solve_contacts(sys, s, hh, 0.25 * tol);
+            // Solved only as well as the linearisation is worth (an inexact Newton step:
+            // redundant sticking rows are consistent only at the solution, where the
+            // drift's curvature leaves the linearised ones off W's range by about the
+            // current violation); the step is accepted above, on the law at the drift's end.
+            let done = solve_contacts(sys, s, hh, (0.25 * tol).max(0.1 * worst));
             report.contact_sweeps += u32::try_from(done.sweeps).unwrap_or(u32::MAX);
-            if !done.converged {
+            if !done.converged && done.worst > 0.5 * worst {
                 return Err(Error::NewtonDidNotConverge {
                     method: self.method_name,
                     equation: "the contact cone problem of the position solve (projected Gauss-Seidel)",
@@ -446,6 +464,19 @@ impl Workspace {
         s.sigma.clear();
         s.sigma.resize(3 * n, 0.0);
         s.rates.resize(3 * n, 0.0);
+        // Warm start from the last velocity solve's matching contacts (a resting stack
+        // carries the same forces step after step).
+        s.end_points.clear();
+        let points = &s.points;
+        s.end_points.extend(s.active.iter().map(|&k| points[k]));
+        warm(
+            &s.end_points,
+            &s.last_end_points,
+            &s.last_end_sigma,
+            geometry.length,
+            &mut s.sigma,
+            &mut s.order,
+        );
         let vscale = (0..sys.mass.len()).fold(sys.velocity_floor(), |m, i| {
             m.max(self.vel[i].norm() + geometry.length * self.omega[i].norm())
         });
@@ -469,6 +500,9 @@ impl Workspace {
                 rows.apply(i, s.sigma[3 * k + i], &mut self.damp_f, &mut self.damp_t);
             }
         }
+        core::mem::swap(&mut s.last_end_points, &mut s.end_points);
+        s.last_end_sigma.clear();
+        s.last_end_sigma.extend_from_slice(&s.sigma);
         self.contact = s;
         Ok(true)
     }
@@ -515,6 +549,7 @@ fn solve_dense(s: &mut ContactScratch, tol: f64) -> cone::Solved {
         kept,
         polish,
         slide,
+        newton,
         ..
     } = s;
     kept.resize(r0.len(), 0.0);
@@ -522,6 +557,7 @@ fn solve_dense(s: &mut ContactScratch, tol: f64) -> cone::Solved {
     dense.start(r0, sigma);
     cone::solve(&mut dense, mu, sigma, rates, tol, |d, sigma, _| {
         super::polish::polish(w, r0, mu, sigma, d.rates, tol, polish)
+            || super::newton::newton(w, r0, mu, sigma, d.rates, tol, newton)
             || super::polish::slide_newton(w, r0, mu, sigma, d.rates, tol, slide)
     })
 }
