@@ -371,3 +371,86 @@ fn newtons_cradle_passes_the_momentum_down_the_line() {
     // the contact law).
     assert!(rises[1] < 0.5 * rises[0], "rises {rises:?}");
 }
+
+/// Bad contact input is refused naming what is wrong, or noted when it is only not
+/// simulated: negative friction, an `<exclude>` or `<pair>` naming what the model lacks, a
+/// plane on a moving body; a mesh geom that would touch is noted (its contacts are not
+/// simulated).
+#[test]
+fn bad_contact_input_is_refused_naming_it_or_noted() {
+    let ball =
+        "<body name=\"ball\" pos=\"0 0 1\"><freejoint/><geom name=\"ball\" type=\"sphere\" size=\"0.1\"/></body>";
+    let model = |world: &str, extra: &str| format!("<mujoco><worldbody>{world}</worldbody>{extra}</mujoco>");
+    let floor = "<geom name=\"floor\" type=\"plane\" size=\"0 0 1\"/>";
+    let refused = |text: String, wanted: &[&str]| {
+        let message = match mjcf::parse(&text, "bad.xml") {
+            Ok(_) => panic!("accepted: {text}"),
+            Err(e) => e.to_string(),
+        };
+        for w in wanted {
+            assert!(message.contains(w), "{message:?} lacks {w:?}");
+        }
+    };
+    refused(
+        model(
+            &format!("<geom type=\"plane\" size=\"0 0 1\" friction=\"-0.5\"/>{ball}"),
+            "",
+        ),
+        &["friction", "negative"],
+    );
+    refused(
+        model(
+            &format!("{floor}{ball}"),
+            "<contact><exclude body1=\"world\" body2=\"nobody\"/></contact>",
+        ),
+        &["body2=\"nobody\"", "no body"],
+    );
+    refused(
+        model(
+            &format!("{floor}{ball}"),
+            "<contact><pair geom1=\"floor\" geom2=\"nothere\"/></contact>",
+        ),
+        &["geom2=\"nothere\"", "no geom"],
+    );
+    // A plane on a moving body: refused when the system is built, naming the geom.
+    let text = model(
+        &format!(
+            "<body pos=\"0 0 1\"><freejoint/><inertial pos=\"0 0 0\" mass=\"1\" diaginertia=\"0.1 0.1 0.1\"/>\
+         <geom name=\"deck\" type=\"plane\" size=\"1 1 0.1\"/></body>{ball}"
+        ),
+        "",
+    );
+    let loaded = mjcf::parse(&text, "deck.xml").unwrap();
+    let message = match Simulation::prepare(&loaded.model, MultibodyMethod::Liemid) {
+        Ok(_) => panic!("a plane on a moving body was accepted"),
+        Err(e) => e.to_string(),
+    };
+    assert!(message.contains("deck") && message.contains("plane"), "{message}");
+    // A pair naming geoms that exist is only noted; so is a mesh geom that would touch.
+    let loaded = mjcf::parse(
+        &model(
+            &format!("{floor}{ball}"),
+            "<contact><pair geom1=\"floor\" geom2=\"ball\"/></contact>",
+        ),
+        "pair.xml",
+    )
+    .unwrap();
+    assert!(
+        loaded.ignored.iter().any(|n| n.contains("contact pair")),
+        "{:?}",
+        loaded.ignored
+    );
+    let loaded = mjcf::parse(
+        "<mujoco><asset><mesh name=\"m\" file=\"missing.stl\"/></asset><worldbody>\
+         <geom type=\"plane\" size=\"0 0 1\"/><body pos=\"0 0 1\"><freejoint/>\
+         <inertial pos=\"0 0 0\" mass=\"1\" diaginertia=\"0.01 0.01 0.01\"/><geom type=\"mesh\" mesh=\"m\"/></body>\
+         </worldbody></mujoco>",
+        "mesh.xml",
+    )
+    .unwrap();
+    assert!(
+        loaded.ignored.iter().any(|n| n.contains("mesh geom contacts")),
+        "{:?}",
+        loaded.ignored
+    );
+}

@@ -1,5 +1,5 @@
 //! MJCF `<contact>`: `<exclude body1 body2>` (the pair never touches); `<pair>` is noted as
-//! not read (the geoms' own masks decide).
+//! not read (the geoms' own masks decide), and refused when it names a geom the model lacks.
 //!
 //! Reference: MuJoCo documentation, XML reference, "contact".
 
@@ -42,9 +42,24 @@ impl<'a, 'i> State<'a, 'i> {
                         };
                         out.push((body("body1")?, body("body2")?));
                     }
-                    "pair" => self
-                        .ignored
-                        .note("contact pair (not read: the geoms' contype and conaffinity decide)"),
+                    "pair" => {
+                        // Not simulated, but a pair naming a geom the model lacks is an error,
+                        // as in MuJoCo.
+                        for attr in ["geom1", "geom2"] {
+                            let Some(name) = node.attribute(attr) else {
+                                return Err(cx.err(node, format!("<pair> needs {attr}")));
+                            };
+                            let known = node
+                                .document()
+                                .descendants()
+                                .any(|g| g.has_tag_name("geom") && g.attribute("name") == Some(name));
+                            if !known {
+                                return Err(cx.err(node, format!("{attr}=\"{name}\": no geom of that name")));
+                            }
+                        }
+                        self.ignored
+                            .note("contact pair (not read: the geoms' contype and conaffinity decide)");
+                    }
                     other => self.ignored.note(&format!("contact {other}")),
                 }
             }
