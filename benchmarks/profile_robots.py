@@ -19,7 +19,9 @@ in this order:
   row products     G v and its kin (`dot_row`, `for_each_rate`, `dot6`)
   rows             the joint rows and gradients at a configuration (`JointGeometry`, `rows_at`)
   forces           gravity, springs, actuators (`forces`)
-  dampers, limits, friction   their checks and kicks
+  dampers, limits, friction   their checks and kicks (the implicit damper half-kick's
+                   conjugate gradients: their own arithmetic; the tree solves inside them count
+                   as tree solves)
   predictor        the extrapolated start of lambda (`start_multipliers`)
   copies           memcpy / memset
   timers           the library's timers (the timed run only)
@@ -79,7 +81,27 @@ CASES = [
     ("humanoid", str(MODELS / "robot_humanoid.xml"), "liemid4", 1e-2, 50, 200),
     ("quadruped", str(MODELS / "robot_quadruped.xml"), "liemid4", 1.25e-2, 40, 400),
     ("drone", str(MODELS / "robot_drone.xml"), "liemid4", 3.125e-3, 160, 200),
+    # Menagerie's own joint classes put damping 1 (panda, H1) and armature 0.1 on every hinge:
+    # the same models with them (written to a temporary directory)
+    ("arm, damping 1", "robot_arm.xml:damping", "liemid", 1e-3, 500, 60),
+    ("arm, damping 1", "robot_arm.xml:damping", "liemid", 1e-4, 5000, 6),
+    ("arm, damping 1, armature 0.1", "robot_arm.xml:armature", "liemid", 1e-3, 500, 40),
+    ("humanoid, damping 1", "robot_humanoid.xml:damping", "liemid", 1e-3, 500, 40),
+    ("humanoid, damping 1, armature 0.1", "robot_humanoid.xml:armature", "liemid", 1e-3, 500, 30),
 ]
+VARIANTS = {"damping": 'armature="0" damping="1"', "armature": 'armature="0.1" damping="1"'}
+
+
+def variant(problem, tmp):
+    """A model file with its joint class's damping (and armature) switched on, or the problem."""
+    if ":" not in problem:
+        return problem
+    name, kind = problem.split(":")
+    text = (MODELS / name).read_text()
+    assert text.count('armature="0" damping="0"') == 1, name
+    out = Path(tmp) / f"{kind}_{name}"
+    out.write_text(text.replace('armature="0" damping="0"', VARIANTS[kind]))
+    return str(out)
 
 KERNELS = [
     ("timers", ("clock_gettime", "Instant")),
@@ -159,7 +181,7 @@ def main():
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for label, problem, method, h, steps, runs in CASES:
-            args = [example, problem, method, repr(h), str(steps), str(runs)]
+            args = [example, variant(problem, tmp), method, repr(h), str(steps), str(runs)]
             own = subprocess.run(args, capture_output=True, text=True, check=True).stdout
             m = re.search(r"([\d.]+) us/step,\s+([\d.]+) us/stage,\s+([\d.]+) us/body-stage; iterations/stage ([\d.]+),"
                           r" factorizations/stage ([\d.]+)", own)
@@ -176,23 +198,23 @@ def main():
                 f" {m.group(4)} iterations/stage, {n} samples in the stage")
     say(f"\nThe step in the library (examples/profile_multibody.rs; CPU per step from the process clock;"
         f" load average {' '.join(f'{x:.2f}' for x in os.getloadavg())} at the end):")
-    say(f"  {'case':<34}{'us/step':>9}{'us/stage':>10}{'us/body-stage':>15}{'iter/stage':>12}{'solve % (timers)':>18}")
+    say(f"  {'case':<44}{'us/step':>9}{'us/stage':>10}{'us/body-stage':>15}{'iter/stage':>12}{'solve % (timers)':>18}")
     for label, method, h, g, share, *_ in rows:
-        say(f"  {f'{label} {method} h = {h:g}':<34}{g[0]:>9}{g[1]:>10}{g[2]:>15}{g[3]:>12}{share:>18}")
+        say(f"  {f'{label} {method} h = {h:g}':<44}{g[0]:>9}{g[1]:>10}{g[2]:>15}{g[3]:>12}{share:>18}")
     names = [k for k, _ in KERNELS] + ["bookkeeping"]
     say("\nShare of a stage's samples by kernel (perf, first kernel on the stack in the docstring's order), %:")
     short = {"drift Jacobian": "dJac", "factorization": "factor", "tree solves": "solves", "midpoint solves": "midpt",
              "drift, other": "drift", "impulses": "impulse", "row products": "Gv", "rows": "rows", "forces": "forces",
              "dampers": "damp", "limits": "limits", "friction": "fric", "predictor": "pred", "copies": "copies",
              "timers": "timers", "bookkeeping": "other"}
-    say(f"  {'case':<34}" + "".join(f"{short[k]:>8}" for k in names))
+    say(f"  {'case':<44}" + "".join(f"{short[k]:>8}" for k in names))
     for label, method, h, _g, _s, n, kernels, _p in rows:
-        say(f"  {f'{label} {method} h = {h:g}':<34}" + "".join(f"{100 * kernels[k] / n:>8.1f}" for k in names))
+        say(f"  {f'{label} {method} h = {h:g}':<44}" + "".join(f"{100 * kernels[k] / n:>8.1f}" for k in names))
     say("\nBy phase (the position solve includes its drifts, the velocity solve its factorization), %:")
     pn = [p for p, _ in PHASES] + ["rest of the stage"]
-    say(f"  {'case':<34}" + "".join(f"{p:>20}" for p in pn))
+    say(f"  {'case':<44}" + "".join(f"{p:>20}" for p in pn))
     for label, method, h, _g, _s, n, _k, phases in rows:
-        say(f"  {f'{label} {method} h = {h:g}':<34}" + "".join(f"{100 * phases[p] / n:>20.1f}" for p in pn))
+        say(f"  {f'{label} {method} h = {h:g}':<44}" + "".join(f"{100 * phases[p] / n:>20.1f}" for p in pn))
     (DOCS / "profile-robots.txt").write_text("\n".join(OUT) + "\n")
 
 

@@ -241,7 +241,8 @@ def liemid_curve(path, names, ref, method):
         h = T_END / n
         js, cpu, errtxt = liemid_run(path, method, h, T_END)
         if js is None:
-            return float("nan"), max(cpu - base, 1e-6), "failed: " + errtxt.splitlines()[-1][:100]
+            why = errtxt.splitlines()[-1].replace(str(ROOT) + "/", "")[:100]
+            return float("nan"), max(cpu - base, 1e-6), "failed: " + why
         wall = js["stepping_seconds"]
         for _ in range(REPEATS if wall < SHORT_RUN else 0):
             js2, c2, _ = liemid_run(path, method, h, T_END)
