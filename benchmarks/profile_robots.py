@@ -76,11 +76,12 @@ CASES = [
     ("drone", str(MODELS / "robot_drone.xml"), "liemid", 1e-4, 5000, 40),
     ("chain-10", "chain-10", "liemid", 1e-4, 5000, 16),
     ("chain-1000", "chain-1000", "liemid", 1e-4, 1000, 1),
-    # liemid4 at the step where it reaches 1e-8 m on the robots (vs-mujoco-robots.txt)
-    ("arm", str(MODELS / "robot_arm.xml"), "liemid4", 6.25e-3, 80, 200),
-    ("humanoid", str(MODELS / "robot_humanoid.xml"), "liemid4", 1e-2, 50, 200),
-    ("quadruped", str(MODELS / "robot_quadruped.xml"), "liemid4", 1.25e-2, 40, 400),
-    ("drone", str(MODELS / "robot_drone.xml"), "liemid4", 3.125e-3, 160, 200),
+    # liemid4 over t = 0.5 at about the step where it reaches 1e-8 m (vs-mujoco-robots.txt:
+    # 8.6e-9 m at 0.5/160 on the arm; the interpolated steps 0.5/61 and 0.5/36; 1.2e-8 m at 0.5/320)
+    ("arm", str(MODELS / "robot_arm.xml"), "liemid4", 0.5 / 160, 160, 100),
+    ("humanoid", str(MODELS / "robot_humanoid.xml"), "liemid4", 0.5 / 62, 62, 160),
+    ("quadruped", str(MODELS / "robot_quadruped.xml"), "liemid4", 0.5 / 36, 36, 400),
+    ("drone", str(MODELS / "robot_drone.xml"), "liemid4", 0.5 / 320, 320, 100),
     # Menagerie's own joint classes put damping 1 (panda, H1) and armature 0.1 on every hinge:
     # the same models with them (written to a temporary directory)
     ("arm, damping 1", "robot_arm.xml:damping", "liemid", 1e-3, 500, 60),
@@ -194,13 +195,13 @@ def main():
                 return
             n, kernels, phases = classify(data)
             rows.append((label, method, h, m.groups(), share.group(1), n, kernels, phases))
-            say(f"  {label} {method} h = {h:g}: {m.group(1)} us/step, {m.group(3)} us/body-stage,"
+            say(f"  {label} {method} h = {h:.4g}: {m.group(1)} us/step, {m.group(3)} us/body-stage,"
                 f" {m.group(4)} iterations/stage, {n} samples in the stage")
     say(f"\nThe step in the library (examples/profile_multibody.rs; CPU per step from the process clock;"
         f" load average {' '.join(f'{x:.2f}' for x in os.getloadavg())} at the end):")
     say(f"  {'case':<44}{'us/step':>9}{'us/stage':>10}{'us/body-stage':>15}{'iter/stage':>12}{'solve % (timers)':>18}")
     for label, method, h, g, share, *_ in rows:
-        say(f"  {f'{label} {method} h = {h:g}':<44}{g[0]:>9}{g[1]:>10}{g[2]:>15}{g[3]:>12}{share:>18}")
+        say(f"  {f'{label} {method} h = {h:.4g}':<44}{g[0]:>9}{g[1]:>10}{g[2]:>15}{g[3]:>12}{share:>18}")
     names = [k for k, _ in KERNELS] + ["bookkeeping"]
     say("\nShare of a stage's samples by kernel (perf, first kernel on the stack in the docstring's order), %:")
     short = {"drift Jacobian": "dJac", "factorization": "factor", "tree solves": "solves", "midpoint solves": "midpt",
@@ -209,12 +210,12 @@ def main():
              "timers": "timers", "bookkeeping": "other"}
     say(f"  {'case':<44}" + "".join(f"{short[k]:>8}" for k in names))
     for label, method, h, _g, _s, n, kernels, _p in rows:
-        say(f"  {f'{label} {method} h = {h:g}':<44}" + "".join(f"{100 * kernels[k] / n:>8.1f}" for k in names))
+        say(f"  {f'{label} {method} h = {h:.4g}':<44}" + "".join(f"{100 * kernels[k] / n:>8.1f}" for k in names))
     say("\nBy phase (the position solve includes its drifts, the velocity solve its factorization), %:")
     pn = [p for p, _ in PHASES] + ["rest of the stage"]
     say(f"  {'case':<44}" + "".join(f"{p:>20}" for p in pn))
     for label, method, h, _g, _s, n, _k, phases in rows:
-        say(f"  {f'{label} {method} h = {h:g}':<44}" + "".join(f"{100 * phases[p] / n:>20.1f}" for p in pn))
+        say(f"  {f'{label} {method} h = {h:.4g}':<44}" + "".join(f"{100 * phases[p] / n:>20.1f}" for p in pn))
     (DOCS / "profile-robots.txt").write_text("\n".join(OUT) + "\n")
 
 

@@ -5,7 +5,8 @@ The models are benchmarks/models/robot_*.xml, inertials only, written after MuJo
 Menagerie's files (link frames, masses, inertias, joint axes): a Panda-style 7-joint arm
 (fixed base, a welded hand, two finger slides: 11 bodies), an H1-style humanoid (free
 pelvis, 19 hinges: 20 bodies), a Spot-style quadruped (free body, 12 hinges: 13 bodies) and
-an X2-style quadrotor (free frame, four propellers on hinges: 5 bodies). No geoms (no
+an X2-style quadrotor (free frame, four propellers on hinges: 5 bodies; also run with its
+propellers still, a variant written to a temporary directory). No geoms (no
 contacts), no actuators, no armature, damping, friction or limits: both codes read the same
 file and integrate the same equations, gravity only, from the file's keyframe (which gives
 every joint a velocity) to t = 0.5 s.
@@ -74,7 +75,11 @@ ROBOTS = [
     ("humanoid", "H1-style humanoid", "robot_humanoid.xml"),
     ("quadruped", "Spot-style quadruped", "robot_quadruped.xml"),
     ("drone", "X2-style quadrotor", "robot_drone.xml"),
+    # The same quadrotor with its propellers still (rotor rates 0 in the keyframe): what the
+    # spinning propellers cost each code.
+    ("drone-still", "quadrotor, rotors still", "robot_drone.xml:still"),
 ]
+VARIANTS = {"still": ('150 -150 150 -150"', '0 0 0 0"')}
 LIE_METHODS = ("liemid", "liemid4", "liemid6", "liemid8")
 MJ_INTEGRATORS = ("rk4", "euler", "implicitfast")
 # Stages per step of each liemid method, forward evaluations per MuJoCo RK4 step.
@@ -98,11 +103,11 @@ def geometric(n0, count, factor=2.0):
 # Steps N over t = 0.5 for each method, refined until the error is below 1e-8 / 3 or a run
 # costs more than CPU_CAP.
 NS = {
-    "liemid": geometric(100, 11),  # h = 5e-3 ... 4.9e-6
+    "liemid": geometric(50, 12),  # h = 1e-2 ... 4.9e-6
     "liemid4": geometric(10, 11),  # h = 5e-2 ... 4.9e-5
-    "liemid6": geometric(5, 11),  # h = 0.1 ... 9.8e-5
-    "liemid8": geometric(5, 11),
-    "rk4": geometric(5, 14),  # h = 0.1 ... 1.2e-5
+    "liemid6": [2] + geometric(5, 11),  # h = 0.25, then 0.1 ... 9.8e-5
+    "liemid8": [2] + geometric(5, 11),
+    "rk4": [2] + geometric(5, 14),  # h = 0.25, then 0.1 ... 1.2e-5
     "euler": geometric(250, 14),  # h = 2e-3 ... 2.4e-7
     "implicitfast": geometric(250, 14),
 }
@@ -272,8 +277,21 @@ def fmt_cpu(v):
     return f"{flag}{c:.2e}"
 
 
-def robot_case(key, title, fname):
-    path = MODELS / fname
+def model_path(fname, tmp):
+    """The model file, or a variant of it (`FILE:VARIANT`) written into `tmp`."""
+    if ":" not in fname:
+        return MODELS / fname
+    name, kind = fname.split(":")
+    text = (MODELS / name).read_text()
+    a, b = VARIANTS[kind]
+    assert text.count(a) == 1, (name, a)
+    out = Path(tmp) / f"{kind}_{name}"
+    out.write_text(text.replace(a, b))
+    return out
+
+
+def robot_case(key, title, fname, tmp):
+    path = model_path(fname, tmp)
     m = mujoco.MjModel.from_xml_path(str(path))
     names = mj_names(m)
     say(f"\n== {title} ({fname}): {m.nbody - 1} bodies, nq {m.nq}, nv {m.nv}, t = {T_END} s, {load_average()}")
@@ -410,7 +428,7 @@ def figure(results, path):
     except ImportError:
         say(f"  figure: skipped (matplotlib missing), not written to {path}")
         return
-    fig, axes = plt.subplots(2, 2, figsize=(11, 8.5))
+    fig, axes = plt.subplots(2, 3, figsize=(15, 8.5))
     style = {"liemid": ("C0", "o-"), "liemid4": ("C1", "s-"), "liemid6": ("C2", "^-"), "liemid8": ("C3", "v-"),
              "mujoco-rk4": ("k", "D--"), "mujoco-euler": ("0.5", "x--"), "mujoco-implicitfast": ("C5", "+--")}
     for ax, r in zip(axes.ravel(), results):
@@ -426,6 +444,8 @@ def figure(results, path):
         ax.set_xlabel("CPU time (s)")
         ax.set_ylabel(f"final body-position error at t = {T_END} (m)")
         ax.grid(True, which="major", alpha=0.3)
+    for ax in axes.ravel()[len(results):]:
+        ax.set_visible(False)
     axes[0, 0].legend(fontsize=8)
     fig.suptitle("liemid against MuJoCo 4.0 on published-style robots (no contacts, actuators off;"
                  " reference MuJoCo RK4 h = 1e-5)", fontsize=10)
@@ -442,14 +462,15 @@ def main():
         f" Runs below {SHORT_RUN} s are repeated ({REPEATS} more) and the least kept.")
     only = os.environ.get("VS_MUJOCO_ROBOTS", "")
     results = []
-    for key, title, fname in ROBOTS:
-        if only and key not in only.split(","):
-            continue
-        r = robot_case(key, title, fname)
-        if r:
-            results.append(r)
-    summary(results)
-    cost_table(results)
+    with tempfile.TemporaryDirectory(prefix="vs_mujoco_robots_") as tmp:
+        for key, title, fname in ROBOTS:
+            if only and key not in only.split(","):
+                continue
+            r = robot_case(key, title, fname, tmp)
+            if r:
+                results.append(r)
+        summary(results)
+        cost_table(results)
     say(f"\n{load_average()} at the end")
     if PLOT:
         figure(results, PLOT)
