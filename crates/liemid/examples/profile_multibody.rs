@@ -1,9 +1,13 @@
 //! Steps the built-in multibody problems and prints, per problem and method, the CPU time
 //! per step, the position-solve iterations and factorizations per stage, the largest
 //! constraint violations and the constraint solve's share of a step: `cargo run --release
-//! -p liemid --example profile_multibody [PROBLEM [METHOD [STEP [STEPS]]]]` (for profilers:
-//! one case when arguments are given).
-use liemid::multibody::{problems, MultibodyMethod, Simulation};
+//! -p liemid --example profile_multibody [PROBLEM [METHOD [STEP [STEPS [RUNS]]]]]` (for
+//! profilers: one case when arguments are given). PROBLEM may be a model file (MJCF `.xml`,
+//! URDF `.urdf`): it is prepared as the command prepares it (`Simulation::prepare`), from its
+//! first keyframe. RUNS (default 1) repeats the STEPS steps from the start, each run with a
+//! fresh simulation built outside the timed loop: a short trajectory (a robot's 0.5 s) made
+//! long enough for the timers and a sampling profiler.
+use liemid::multibody::{mjcf, problems, urdf, Model, MultibodyMethod, MultibodyState, Simulation};
 
 fn cpu() -> f64 {
     // Process CPU time, so that a loaded machine does not inflate the figures.
@@ -20,29 +24,49 @@ extern "C" {
     fn clock_gettime(clock: i32, ts: *mut [i64; 2]) -> i32;
 }
 
-fn run(name: &str, method: MultibodyMethod, h: f64, steps: u64) {
-    let model = match name {
+fn model(name: &str) -> Model {
+    match name {
         "spacecraft" => problems::spacecraft(),
         "double-pendulum" => problems::double_pendulum(),
         "chain-10" => problems::chain(10),
         "chain-100" => problems::chain(100),
         "chain-1000" => problems::chain(1000),
+        file if file.ends_with(".urdf") => urdf::load(std::path::Path::new(file)).expect("the file loads").model,
+        file if file.ends_with(".xml") => mjcf::load(std::path::Path::new(file)).expect("the file loads").model,
         other => panic!("unknown problem {other}"),
-    };
-    let mut system = Simulation::new(&model, method).expect("the model builds");
-    let mut state = model.initial_state().expect("the model starts");
-    let (mut it, mut fac, mut pos, mut vel) = (0u64, 0u64, 0.0f64, 0.0f64);
-    let c0 = cpu();
-    for _ in 0..steps {
-        let r = system.step(&mut state, h).expect("the step converges");
-        it += u64::from(r.iterations);
-        fac += u64::from(r.factorizations);
-        pos = pos.max(r.position_violation);
-        vel = vel.max(r.velocity_violation);
     }
-    let c = cpu() - c0;
+}
+
+/// The simulation and its start as the command builds them (the keyframe's state; loops closed).
+fn start(model: &Model, method: MultibodyMethod) -> (Simulation, MultibodyState) {
+    let prepared = Simulation::prepare(model, method).expect("the model builds");
+    (prepared.simulation, prepared.state)
+}
+
+fn run(name: &str, method: MultibodyMethod, h: f64, steps: u64, runs: u64) {
+    let model = model(name);
+    let (mut it, mut fac, mut pos, mut vel) = (0u64, 0u64, 0.0f64, 0.0f64);
+    let mut c = 0.0;
+    let mut state = model.initial_state().expect("the model starts");
+    for _ in 0..runs {
+        let (mut system, start_state) = start(&model, method);
+        state = start_state;
+        let c0 = cpu();
+        for _ in 0..steps {
+            let r = system.step(&mut state, h).expect("the step converges");
+            it += u64::from(r.iterations);
+            fac += u64::from(r.factorizations);
+            pos = pos.max(r.position_violation);
+            vel = vel.max(r.velocity_violation);
+        }
+        c += cpu() - c0;
+    }
+    let steps = steps * runs;
     let stages = steps as f64 * method.scheme().map_or(1, |s| s.stages()) as f64;
     let nb = state.len() as f64;
+    let name = std::path::Path::new(name)
+        .file_name()
+        .map_or(name.into(), |f| f.to_string_lossy());
     println!(
         "{name:<16} {:<11} h = {h:.1e} {steps:>7} steps: {:>9.3} us/step, {:>7.3} us/stage, {:>7.4} us/body-stage; \
          iterations/stage {:.2}, factorizations/stage {:.2}; max violation pos {pos:.1e} vel {vel:.1e}; c0 {:.15e}",
@@ -56,13 +80,17 @@ fn run(name: &str, method: MultibodyMethod, h: f64, steps: u64) {
     );
     // The share of the constraint solves (factorizations and solves of G M⁻¹ Gᵀ) in a step,
     // from the library's own timers, in a separate run (the timers cost a little).
-    let mut system = Simulation::new(&model, method).expect("the model builds");
-    let mut state = model.initial_state().expect("the model starts");
-    system.integrator.set_profiling(true);
-    for _ in 0..steps {
-        system.step(&mut state, h).expect("the step converges");
+    let (mut solver, mut step) = (std::time::Duration::ZERO, std::time::Duration::ZERO);
+    for _ in 0..runs {
+        let (mut system, mut state) = start(&model, method);
+        system.integrator.set_profiling(true);
+        for _ in 0..steps / runs {
+            system.step(&mut state, h).expect("the step converges");
+        }
+        let (s, t) = system.integrator.profile();
+        solver += s;
+        step += t;
     }
-    let (solver, step) = system.integrator.profile();
     println!(
         "{:<16} {:<11} constraint solve {:.1} % of the step (timed run)",
         "",
@@ -84,7 +112,8 @@ fn main() {
         let m = method(args.get(1).map_or("liemid", String::as_str));
         let h = args.get(2).map_or(1e-4, |s| s.parse().expect("a step"));
         let n = args.get(3).map_or(100_000, |s| s.parse().expect("a step count"));
-        run(p, m, h, n);
+        let runs = args.get(4).map_or(1, |s| s.parse().expect("a run count"));
+        run(p, m, h, n, runs);
         return;
     }
     for (p, m, h, n) in [
@@ -97,6 +126,6 @@ fn main() {
         ("chain-100", "liemid", 1e-4, 2_000),
         ("chain-1000", "liemid", 1e-4, 200),
     ] {
-        run(p, method(m), h, n);
+        run(p, method(m), h, n, 1);
     }
 }
