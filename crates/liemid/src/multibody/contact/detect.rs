@@ -192,6 +192,19 @@ impl ContactPoint {
         (d.dot(self.t1), d.dot(self.t2))
     }
 
+    /// The same material points with the step's start at `(c, R)`, the tangents from the
+    /// normal there (a point found at a drift's end, taken into the step's problem).
+    pub(in crate::multibody) fn rebase(&mut self, c: &[Vec3], r: &[Mat3]) {
+        self.xa0 = world(self.a, self.ma, c, r);
+        self.xb0 = world(self.b, self.mb, c, r);
+        self.ca0 = self.a.map_or(Vec3::ZERO, |i| c[i]);
+        self.cb0 = self.b.map_or(Vec3::ZERO, |i| c[i]);
+        self.rota0 = *attitude(self.a, r);
+        self.rotb0 = *attitude(self.b, r);
+        let (_, n) = self.application(c, r);
+        (self.t1, self.t2) = tangents(n);
+    }
+
     /// The point where the contact's forces act at `(c, R)` and the normal there: on the
     /// normal through `a`'s contact point, halfway across the gap (both forces of the pair
     /// act at it, so they have no moment). Not halfway to `b`'s point: `b`'s point is where
@@ -382,7 +395,7 @@ impl ContactGeometry {
             return 0.0;
         }
         // The flat side is `b`: the world or a plane, else a shape that is not round.
-        let (ka, kb) = if kj.plane || (kj.body.is_none() && !ki.plane) || (ki.round > 0.0 && kj.round == 0.0) {
+        let (mut ka, mut kb) = if kj.plane || (kj.body.is_none() && !ki.plane) || (ki.round > 0.0 && kj.round == 0.0) {
             (ki, kj)
         } else {
             (kj, ki)
@@ -391,15 +404,36 @@ impl ContactGeometry {
             let rot = *attitude(k.body, r) * k.rotation;
             Pose::from_parts(to_p(world(k.body, k.offset, c, r)), rot_p(&rot))
         };
-        let (pa, pb) = (pose(ka), pose(kb));
-        let pab = pa.inv_mul(&pb);
-        manifolds.clear();
-        let mut workspace = None;
-        if DefaultQueryDispatcher
-            .contact_manifolds(&pab, &*ka.shape, &*kb.shape, margin, manifolds, &mut workspace)
-            .is_err()
-        {
+        let query = |ka: &Collider, kb: &Collider, manifolds: &mut Vec<ContactManifold<(), ()>>| {
+            let pab = pose(ka).inv_mul(&pose(kb));
+            manifolds.clear();
+            let mut workspace = None;
+            DefaultQueryDispatcher
+                .contact_manifolds(&pab, &*ka.shape, &*kb.shape, margin, manifolds, &mut workspace)
+                .is_ok()
+        };
+        if !query(ka, kb, manifolds) {
             return 0.0;
+        }
+        // Two boxes: `b` must own the face the normal is normal to (the gap's normal turns
+        // with `b`); a corner of `b` on a face of `a` is queried the other way round.
+        if ka.shape.as_cuboid().is_some() && kb.shape.as_cuboid().is_some() {
+            let alignment = |n: PVec| {
+                let l = n.length();
+                if l > 0.0 {
+                    n.x.abs().max(n.y.abs()).max(n.z.abs()) / l
+                } else {
+                    0.0
+                }
+            };
+            if let Some(mf) = manifolds.first() {
+                if alignment(mf.local_n1) > alignment(mf.local_n2) + 1e-9 {
+                    (ka, kb) = (kb, ka);
+                    if !query(ka, kb, manifolds) {
+                        return 0.0;
+                    }
+                }
+            }
         }
         let mu = ka.friction.max(kb.friction);
         let round = ka.round > 0.0 && kb.round > 0.0;

@@ -17,6 +17,9 @@ use parry3d_f64::query::ContactManifold;
 /// formed.
 const LOCAL_FROM: usize = 64;
 
+/// Most passes of the position problem with points its drift's end found (`missed_contacts`).
+const MAX_PASSES: usize = 3;
+
 /// Most outer iterations of the position problem (each re-runs the drift).
 const MAX_OUTER: usize = 50;
 
@@ -101,6 +104,12 @@ pub(in crate::multibody) struct ContactScratch {
     /// The last step's points and position forces (the warm start).
     last_points: Vec<ContactPoint>,
     last_sigma: Vec<f64>,
+    /// The momenta before the contact forces (a second pass starts from them).
+    entry_p: Vec<Vec3>,
+    entry_pi: Vec<Vec3>,
+    /// Points found at a drift's end, and the zero margins of that detection.
+    found: Vec<ContactPoint>,
+    zero_margin: Vec<f64>,
     /// Per point, the normal rate at the step's start (restitution only).
     start_normal: Vec<f64>,
     /// The velocity solve's touching points, and the last step's with their forces.
@@ -240,9 +249,69 @@ impl Workspace {
             self.contact = s;
             return positions(self, report, true);
         }
-        let result = self.contact_outer(sys, state, h, hh, geometry.length, &mut s, report, positions);
+        // The momenta before any contact force, for a second pass.
+        s.entry_p.clear();
+        s.entry_p.extend_from_slice(&self.pb);
+        s.entry_pi.clear();
+        s.entry_pi.extend_from_slice(&self.pib);
+        let mut result;
+        let mut passes = 0;
+        loop {
+            result = self.contact_outer(sys, state, h, hh, geometry.length, &mut s, report, positions);
+            // A point the drift's end penetrates that the start's detection did not give (a
+            // box turning another corner down within the step, parry's manifold holding the
+            // start's features only) joins the problem, which is solved again from the
+            // momenta before the contact forces.
+            if result.is_err() || passes >= MAX_PASSES || self.missed_contacts(geometry, state, &mut s) == 0 {
+                break;
+            }
+            passes += 1;
+            report.contacts = report.contacts.max(u32::try_from(s.points.len()).unwrap_or(u32::MAX));
+            self.pb.copy_from_slice(&s.entry_p);
+            self.pib.copy_from_slice(&s.entry_pi);
+        }
         self.contact = s;
         result
+    }
+
+    /// Detect again at the drift's end (`c_new`, `r_new`) and add to `s.points` every point
+    /// deeper than the tolerance (`1e-12` of the length) that none of them covers, rebased
+    /// to the step's start; returns how many were added.
+    fn missed_contacts(
+        &self,
+        geometry: &super::detect::ContactGeometry,
+        state: &MultibodyState,
+        s: &mut ContactScratch,
+    ) -> usize {
+        let close = 1e-9 * geometry.length;
+        s.zero_margin.clear();
+        s.zero_margin.resize(state.c.len(), 0.0);
+        {
+            let ContactScratch {
+                found,
+                broad,
+                manifolds,
+                zero_margin,
+                ..
+            } = s;
+            geometry.detect(&self.c_new, &self.r_new, zero_margin, found, broad, manifolds);
+        }
+        let before = s.points.len();
+        for k in 0..s.found.len() {
+            let p = s.found[k];
+            if p.gap(&self.c_new, &self.r_new) >= -1e-12 * geometry.length {
+                continue;
+            }
+            let covered = s.points[..before]
+                .iter()
+                .any(|q| q.a == p.a && q.b == p.b && (q.pa - p.pa).norm() <= close && (q.pb - p.pb).norm() <= close);
+            if !covered {
+                let mut p = p;
+                p.rebase(&state.c, &state.rotation);
+                s.points.push(p);
+            }
+        }
+        s.points.len() - before
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -264,16 +333,18 @@ impl Workspace {
             let (x, nrm) = p.application(c, r);
             s.rows.push(Rows::at(p, c, r, x, [nrm, p.t1, p.t2]));
         }
-        // Friction holds a contact over the drift only where it touches at the start (the
-        // velocity solve's threshold): a corner that lands within the step moved along the
-        // surface before it touched (a box tipping onto its face: `g₀²/2L` toward its
-        // pivot edge), and holding that still would over-constrain the sticking rows. Its
-        // friction acts from the landing on, in the μ-kick.
+        // Friction holds a contact over the drift only where it touches at the start: a
+        // corner that lands within the step moved along the surface before it touched (a
+        // box tipping onto its face about an edge: `g₀²/2L` toward the edge while it
+        // closes its gap `g₀`), and holding that still would over-constrain the sticking
+        // rows. Below `g₀ = 1e-6 L` that slide is under half the tolerance (`1e-12 L`), so
+        // such a contact still sticks; above, its friction acts from the landing on, in
+        // the μ-kick.
         s.mu.clear();
         s.mu.extend(
             s.points
                 .iter()
-                .map(|p| if p.gap(c, r) <= 1e-9 * length { p.mu } else { 0.0 }),
+                .map(|p| if p.gap(c, r) <= 1e-6 * length { p.mu } else { 0.0 }),
         );
         // W at the start rows, factored (the velocity solve of the last step factored them).
         if self.rows0.iter().any(|r| r.n > 0) && !self.factor_rows0 {
