@@ -246,7 +246,7 @@ fn project(mu: &[f64], sigma: &mut [f64]) {
 
 /// Cholesky in place of the lower triangle of `a` (`n × n`, row-major); false if not
 /// positive definite.
-fn cholesky(a: &mut [f64], n: usize) -> bool {
+pub(super) fn cholesky(a: &mut [f64], n: usize) -> bool {
     for j in 0..n {
         let mut d = a[j * n + j];
         for k in 0..j {
@@ -269,7 +269,7 @@ fn cholesky(a: &mut [f64], n: usize) -> bool {
 }
 
 /// Solve with the factor of [`cholesky`].
-fn cholesky_solve(a: &[f64], n: usize, x: &mut [f64]) {
+pub(super) fn cholesky_solve(a: &[f64], n: usize, x: &mut [f64]) {
     for i in 0..n {
         let mut v = x[i];
         for k in 0..i {

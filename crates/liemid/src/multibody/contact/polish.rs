@@ -61,41 +61,9 @@ pub(super) fn polish(
     for i in 0..n {
         p.a[i * n + i] += eps;
     }
-    // Cholesky in place (lower).
-    for j in 0..n {
-        let mut d = p.a[j * n + j];
-        for k in 0..j {
-            d -= p.a[j * n + k] * p.a[j * n + k];
-        }
-        if d <= 0.0 {
-            return false;
-        }
-        let d = d.sqrt();
-        p.a[j * n + j] = d;
-        for i in j + 1..n {
-            let mut v = p.a[i * n + j];
-            for k in 0..j {
-                v -= p.a[i * n + k] * p.a[j * n + k];
-            }
-            p.a[i * n + j] = v / d;
-        }
+    if !super::newton::cholesky(&mut p.a, n) {
+        return false;
     }
-    let chol_solve = |a: &[f64], x: &mut [f64]| {
-        for i in 0..n {
-            let mut v = x[i];
-            for k in 0..i {
-                v -= a[i * n + k] * x[k];
-            }
-            x[i] = v / a[i * n + i];
-        }
-        for i in (0..n).rev() {
-            let mut v = x[i];
-            for k in i + 1..n {
-                v -= a[k * n + i] * x[k];
-            }
-            x[i] = v / a[i * n + i];
-        }
-    };
     // From the Gauss–Seidel normal forces: the refinement corrects it within the range of W_AA
     // and keeps its share of the redundant rows (positive normal forces), where a
     // minimum-norm solution could trade normal for internal tangential forces.
@@ -111,8 +79,7 @@ pub(super) fn polish(
             }
             p.b[i] = v;
         }
-        let (a, b) = (&p.a, &mut p.b);
-        chol_solve(a, b);
+        super::newton::cholesky_solve(&p.a, n, &mut p.b);
         for (x, d) in p.x.iter_mut().zip(&p.b) {
             *x += d;
         }
