@@ -262,7 +262,25 @@ impl Workspace {
             // box turning another corner down within the step, parry's manifold holding the
             // start's features only) joins the problem, which is solved again from the
             // momenta before the contact forces.
-            if result.is_err() || passes >= MAX_PASSES || self.missed_contacts(geometry, state, &mut s) == 0 {
+            if result.is_err() || self.missed_contacts(geometry, state, &mut s) == 0 {
+                break;
+            }
+            if passes >= MAX_PASSES {
+                // Each pass found another point (an edge sliding along an edge, held at
+                // material points): the step is refused, not ended penetrating.
+                result = Err(Error::NewtonDidNotConverge {
+                    method: self.method_name,
+                    equation: "the contacts found again at the drift's end (a new point each pass)",
+                    t: state.t,
+                    h,
+                    residual: s
+                        .found
+                        .iter()
+                        .map(|p| -p.gap(&self.c_new, &self.r_new))
+                        .fold(0.0, f64::max)
+                        / geometry.length,
+                    iterations: u32::try_from(passes).unwrap_or(u32::MAX),
+                });
                 break;
             }
             passes += 1;
