@@ -47,6 +47,7 @@ mod cone;
 mod detect;
 mod newton;
 mod polish;
+mod response;
 mod step;
 
 pub(super) use detect::ContactGeometry;

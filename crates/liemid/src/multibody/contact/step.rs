@@ -3,7 +3,7 @@
 //! velocity problem with the μ-kick.
 
 use crate::error::{Error, Result};
-use crate::linalg::{Mat3, Vec3};
+use crate::linalg::Vec3;
 
 use super::super::method::StepReport;
 use super::super::state::MultibodyState;
@@ -11,11 +11,8 @@ use super::super::system::MultibodySystem;
 use super::super::workspace::Workspace;
 use super::cone;
 use super::detect::{tangents, ContactPoint};
+use super::response::{minus_w_sigma, solve_contacts, Rows};
 use parry3d_f64::query::ContactManifold;
-
-/// Contacts on free bodies from which `W` is applied body by body (`Local`) instead of
-/// formed.
-const LOCAL_FROM: usize = 64;
 
 /// Most passes of the position problem with points its drift's end found (`missed_contacts`).
 const MAX_PASSES: usize = 3;
@@ -23,107 +20,57 @@ const MAX_PASSES: usize = 3;
 /// Most outer iterations of the position problem (each re-runs the drift).
 const MAX_OUTER: usize = 50;
 
-/// The three rows of one contact at one configuration: directions (normal, two tangents)
-/// and the body-frame moments of a unit force along each on `a` and on `b`.
-#[derive(Clone, Copy, Debug)]
-struct Rows {
-    a: Option<usize>,
-    b: Option<usize>,
-    dir: [Vec3; 3],
-    ta: [Vec3; 3],
-    tb: [Vec3; 3],
-}
-
-impl Rows {
-    /// At `(c, R)` through `x`, along `dir`.
-    fn at(p: &ContactPoint, c: &[Vec3], r: &[Mat3], x: Vec3, dir: [Vec3; 3]) -> Rows {
-        let moment = |body: Option<usize>, d: Vec3| match body {
-            Some(i) => r[i].tr_mul_vec((x - c[i]).cross(d)),
-            None => Vec3::ZERO,
-        };
-        Rows {
-            a: p.a,
-            b: p.b,
-            dir,
-            ta: dir.map(|d| moment(p.a, d)),
-            tb: dir.map(|d| moment(p.b, d)),
-        }
-    }
-
-    fn rate(&self, i: usize, vel: &[Vec3], omega: &[Vec3]) -> f64 {
-        let mut r = 0.0;
-        if let Some(a) = self.a {
-            r += self.dir[i].dot(vel[a]) + self.ta[i].dot(omega[a]);
-        }
-        if let Some(b) = self.b {
-            r -= self.dir[i].dot(vel[b]) + self.tb[i].dot(omega[b]);
-        }
-        r
-    }
-
-    fn apply(&self, i: usize, f: f64, lin: &mut [Vec3], ang: &mut [Vec3]) {
-        if let Some(a) = self.a {
-            lin[a] += self.dir[i] * f;
-            ang[a] += self.ta[i] * f;
-        }
-        if let Some(b) = self.b {
-            lin[b] -= self.dir[i] * f;
-            ang[b] -= self.tb[i] * f;
-        }
-    }
-}
-
 /// Scratch of the contact solves, grown as contacts appear (a step with the same number of
 /// contacts as a past one allocates nothing).
 #[derive(Clone, Default)]
 pub(in crate::multibody) struct ContactScratch {
-    points: Vec<ContactPoint>,
-    active: Vec<usize>,
-    rows: Vec<Rows>,
-    order: Vec<(f64, usize)>,
-    broad: super::detect::Broad,
-    manifolds: Vec<ContactManifold<(), ()>>,
-    margin: Vec<f64>,
-    w: Vec<f64>,
-    r0: Vec<f64>,
-    rates: Vec<f64>,
-    sigma: Vec<f64>,
-    sigma_ok: Vec<f64>,
-    polish: super::polish::Polish,
-    slide: super::polish::Slide,
-    newton: super::newton::Newton,
-    cluster: super::cluster::Cluster,
+    pub(super) points: Vec<ContactPoint>,
+    pub(super) active: Vec<usize>,
+    pub(super) rows: Vec<Rows>,
+    pub(super) order: Vec<(f64, usize)>,
+    pub(super) broad: super::detect::Broad,
+    pub(super) manifolds: Vec<ContactManifold<(), ()>>,
+    pub(super) margin: Vec<f64>,
+    pub(super) w: Vec<f64>,
+    pub(super) r0: Vec<f64>,
+    pub(super) rates: Vec<f64>,
+    pub(super) sigma: Vec<f64>,
+    pub(super) sigma_ok: Vec<f64>,
+    pub(super) polish: super::polish::Polish,
+    pub(super) slide: super::polish::Slide,
+    pub(super) newton: super::newton::Newton,
+    pub(super) cluster: super::cluster::Cluster,
     /// The rates the dense response keeps.
-    kept: Vec<f64>,
+    pub(super) kept: Vec<f64>,
     /// Free bodies only (no joint rows, no armature): `W` applied body by body, never
     /// formed (`Local`): its diagonal blocks and the velocity changes of the forces.
-    local: bool,
-    blocks: Vec<[[f64; 3]; 3]>,
-    dv: Vec<Vec3>,
-    dw: Vec<Vec3>,
+    pub(super) local: bool,
+    pub(super) blocks: Vec<[[f64; 3]; 3]>,
+    pub(super) dv: Vec<Vec3>,
+    pub(super) dw: Vec<Vec3>,
     /// The last step's points and position forces (the warm start).
-    last_points: Vec<ContactPoint>,
-    last_sigma: Vec<f64>,
+    pub(super) last_points: Vec<ContactPoint>,
+    pub(super) last_sigma: Vec<f64>,
     /// The momenta before the contact forces (a second pass starts from them).
-    entry_p: Vec<Vec3>,
-    entry_pi: Vec<Vec3>,
+    pub(super) entry_p: Vec<Vec3>,
+    pub(super) entry_pi: Vec<Vec3>,
     /// Points found at a drift's end, and the zero margins of that detection.
-    found: Vec<ContactPoint>,
-    zero_margin: Vec<f64>,
+    pub(super) found: Vec<ContactPoint>,
+    pub(super) zero_margin: Vec<f64>,
     /// Per point, the normal rate at the step's start (restitution only).
-    start_normal: Vec<f64>,
+    pub(super) start_normal: Vec<f64>,
     /// The velocity solve's touching points, and the last step's with their forces.
-    end_points: Vec<ContactPoint>,
-    last_end_points: Vec<ContactPoint>,
-    last_end_sigma: Vec<f64>,
+    pub(super) end_points: Vec<ContactPoint>,
+    pub(super) last_end_points: Vec<ContactPoint>,
+    pub(super) last_end_sigma: Vec<f64>,
     /// Per point, the normal speed at which it would meet (restitution only).
-    approach: Vec<f64>,
-    lambda_ok: Vec<[f64; 6]>,
-    mu: Vec<f64>,
-    base_p: Vec<Vec3>,
-    base_pi: Vec<Vec3>,
-    linear: Vec<Vec3>,
-    angular: Vec<Vec3>,
+    pub(super) approach: Vec<f64>,
+    pub(super) lambda_ok: Vec<[f64; 6]>,
+    pub(super) mu: Vec<f64>,
+    pub(super) base_p: Vec<Vec3>,
+    pub(super) base_pi: Vec<Vec3>,
+    pub(super) linear: Vec<Vec3>,
+    pub(super) angular: Vec<Vec3>,
 }
 
 impl core::fmt::Debug for ContactScratch {
@@ -150,56 +97,6 @@ impl ContactScratch {
 }
 
 impl Workspace {
-    /// The contact problem's response `W = (h/2) D P M⁻¹ Dᵀ` over `s.rows` (row-major into
-    /// `s.w`): column by column, the rates after a half-kick by a unit force on one row,
-    /// projected on the joints (the start rows or the end rows, factored).
-    fn contact_response(&mut self, sys: &MultibodySystem, s: &mut ContactScratch, hh: f64, start: bool) {
-        let any_rows = if start { &self.rows0 } else { &self.rows1 }.iter().any(|r| r.n > 0);
-        let m = 3 * s.rows.len();
-        s.w.clear();
-        s.w.resize(m * m, 0.0);
-        for col in 0..m {
-            s.linear.iter_mut().for_each(|v| *v = Vec3::ZERO);
-            s.angular.iter_mut().for_each(|v| *v = Vec3::ZERO);
-            s.rows[col / 3].apply(col % 3, hh, &mut s.linear, &mut s.angular);
-            self.project(sys, &mut s.linear, &mut s.angular, hh, any_rows, start);
-            for (row, rows) in s.rows.iter().enumerate() {
-                for i in 0..3 {
-                    s.w[(3 * row + i) * m + col] = rows.rate(i, &self.vel, &self.omega);
-                }
-            }
-        }
-    }
-
-    /// Make `W` ready for the solves: body by body for free bodies (no joint rows, no
-    /// armature: the blocks only), else dense (`contact_response`).
-    fn prepare_response(&mut self, sys: &MultibodySystem, s: &mut ContactScratch, hh: f64, start: bool) {
-        let rows = if start { &self.rows0 } else { &self.rows1 };
-        // Few contacts keep the dense W even on free bodies: its finishes (`polish.rs`)
-        // need the active set's rows of W.
-        s.local = sys.armature.is_none() && !rows.iter().any(|r| r.n > 0) && s.rows.len() > LOCAL_FROM;
-        if !s.local {
-            self.contact_response(sys, s, hh, start);
-            return;
-        }
-        s.blocks.clear();
-        for rows in &s.rows {
-            let mut block = [[0.0; 3]; 3];
-            for (body, t) in [(rows.a, &rows.ta), (rows.b, &rows.tb)] {
-                if let Some(i) = body {
-                    let inv_m = 1.0 / sys.mass[i];
-                    let it: [Vec3; 3] = core::array::from_fn(|j| sys.inertia[i].apply_inverse(t[j]));
-                    for (r, row) in block.iter_mut().enumerate() {
-                        for (c, x) in row.iter_mut().enumerate() {
-                            *x += hh * (rows.dir[r].dot(rows.dir[c]) * inv_m + t[r].dot(it[c]));
-                        }
-                    }
-                }
-            }
-            s.blocks.push(block);
-        }
-    }
-
     /// The position half of the contact step: contacts detected at the start with the
     /// bodies' reach over the step, then the outer iteration `σ → drift → (gap, slide)/h →
     /// linearised cone problem → σ` until the law holds at the drift's end to the
@@ -663,269 +560,5 @@ fn warm(
                 break;
             }
         }
-    }
-}
-
-/// The cone problem of `s` (`W` dense in `s.w`, `r₀`, `µ`) from the forces in `s.sigma`, with
-/// the active-set finish (`polish.rs`).
-fn solve_dense(s: &mut ContactScratch, tol: f64) -> cone::Solved {
-    let ContactScratch {
-        w,
-        r0,
-        mu,
-        sigma,
-        rates,
-        kept,
-        polish,
-        slide,
-        newton,
-        ..
-    } = s;
-    kept.resize(r0.len(), 0.0);
-    let mut dense = cone::Dense { w, rates: kept };
-    dense.start(r0, sigma);
-    cone::solve(&mut dense, mu, sigma, rates, tol, |d, sigma, _| {
-        super::polish::polish(w, r0, mu, sigma, d.rates, tol, polish)
-            || super::newton::newton(w, r0, mu, sigma, d.rates, tol, newton)
-            || super::polish::slide_newton(w, r0, mu, sigma, d.rates, tol, slide)
-    })
-}
-
-/// `W` applied body by body over free bodies: the forces' velocity changes `dv`, `dw` kept
-/// per body, each contact's rates read from its two bodies (linear in the contacts).
-struct Local<'a> {
-    rows: &'a [Rows],
-    r0: &'a [f64],
-    blocks: &'a [[[f64; 3]; 3]],
-    dv: &'a mut [Vec3],
-    dw: &'a mut [Vec3],
-    sys: &'a MultibodySystem,
-    hh: f64,
-}
-
-impl Local<'_> {
-    /// Set the velocity changes to those of the forces `sigma`.
-    fn start(&mut self, sigma: &[f64]) {
-        self.dv.iter_mut().for_each(|v| *v = Vec3::ZERO);
-        self.dw.iter_mut().for_each(|v| *v = Vec3::ZERO);
-        for k in 0..self.rows.len() {
-            self.add_unchecked(k, [sigma[3 * k], sigma[3 * k + 1], sigma[3 * k + 2]]);
-        }
-    }
-
-    fn add_unchecked(&mut self, k: usize, delta: [f64; 3]) {
-        let rows = &self.rows[k];
-        let (mut lin, mut ang_a, mut ang_b) = (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO);
-        for (i, d) in delta.iter().enumerate() {
-            lin += rows.dir[i] * (self.hh * d);
-            ang_a += rows.ta[i] * (self.hh * d);
-            ang_b += rows.tb[i] * (self.hh * d);
-        }
-        if let Some(a) = rows.a {
-            self.dv[a] += lin * (1.0 / self.sys.mass[a]);
-            self.dw[a] += self.sys.inertia[a].apply_inverse(ang_a);
-        }
-        if let Some(b) = rows.b {
-            self.dv[b] -= lin * (1.0 / self.sys.mass[b]);
-            self.dw[b] -= self.sys.inertia[b].apply_inverse(ang_b);
-        }
-    }
-}
-
-impl cone::Response for Local<'_> {
-    fn block(&self, k: usize) -> [[f64; 3]; 3] {
-        self.blocks[k]
-    }
-
-    fn rates(&self, k: usize) -> [f64; 3] {
-        core::array::from_fn(|i| self.r0[3 * k + i] + self.rows[k].rate(i, self.dv, self.dw))
-    }
-
-    fn add(&mut self, k: usize, delta: [f64; 3]) {
-        self.add_unchecked(k, delta);
-    }
-}
-
-impl super::cluster::Coupled for Local<'_> {
-    fn bodies(&self, k: usize) -> [Option<usize>; 2] {
-        [self.rows[k].a, self.rows[k].b]
-    }
-
-    fn coupling(&self, i: usize, j: usize) -> [[f64; 3]; 3] {
-        let (ri, rj) = (&self.rows[i], &self.rows[j]);
-        let mut block = [[0.0; 3]; 3];
-        // Each body the two contacts share, with the sign of each contact's force on it.
-        for (body_i, sign_i, ti) in [(ri.a, 1.0, &ri.ta), (ri.b, -1.0, &ri.tb)] {
-            for (body_j, sign_j, tj) in [(rj.a, 1.0, &rj.ta), (rj.b, -1.0, &rj.tb)] {
-                let (Some(bi), Some(bj)) = (body_i, body_j) else {
-                    continue;
-                };
-                if bi != bj {
-                    continue;
-                }
-                let inv_m = 1.0 / self.sys.mass[bi];
-                let it: [Vec3; 3] = core::array::from_fn(|c| self.sys.inertia[bi].apply_inverse(tj[c]));
-                let scale = self.hh * sign_i * sign_j;
-                for (r, row) in block.iter_mut().enumerate() {
-                    for (c, x) in row.iter_mut().enumerate() {
-                        *x += scale * (ri.dir[r].dot(rj.dir[c]) * inv_m + ti[r].dot(it[c]));
-                    }
-                }
-            }
-        }
-        block
-    }
-}
-
-impl ContactScratch {
-    /// The body-by-body response over `self`'s rows at the forces in `sigma`, with the
-    /// forces, the rates and the friction coefficients beside it.
-    fn local<'s>(
-        &'s mut self,
-        sys: &'s MultibodySystem,
-        hh: f64,
-    ) -> (Local<'s>, &'s mut [f64], &'s mut [f64], &'s [f64]) {
-        let ContactScratch {
-            rows,
-            blocks,
-            dv,
-            dw,
-            sigma,
-            r0,
-            rates,
-            mu,
-            ..
-        } = self;
-        let mut local = Local {
-            rows,
-            r0,
-            blocks,
-            dv,
-            dw,
-            sys,
-            hh,
-        };
-        local.start(sigma);
-        (local, sigma, rates, mu)
-    }
-}
-
-/// `s.r0 = s.rates − W σ`: the constant of the problem linearised about the current forces.
-fn minus_w_sigma(sys: &MultibodySystem, s: &mut ContactScratch, hh: f64) {
-    let m = s.rates.len();
-    if s.local {
-        // With r₀ = 0 the response's rates are W σ.
-        s.r0.iter_mut().for_each(|x| *x = 0.0);
-        let (local, _, rates, _) = s.local(sys, hh);
-        for k in 0..local.rows.len() {
-            let ws = cone::Response::rates(&local, k);
-            for i in 0..3 {
-                rates[3 * k + i] -= ws[i];
-            }
-        }
-        s.r0.copy_from_slice(&s.rates);
-        return;
-    }
-    for i in 0..m {
-        let row = &s.w[i * m..(i + 1) * m];
-        s.r0[i] = s.rates[i] - row.iter().zip(&s.sigma).map(|(a, b)| a * b).sum::<f64>();
-    }
-}
-
-/// The cone problem of `s` from the forces in `s.sigma`, by the response `s` is prepared
-/// for.
-fn solve_contacts(sys: &MultibodySystem, s: &mut ContactScratch, hh: f64, tol: f64) -> cone::Solved {
-    if !s.local {
-        return solve_dense(s, tol);
-    }
-    let mut cluster = core::mem::take(&mut s.cluster);
-    let (mut local, sigma, rates, mu) = s.local(sys, hh);
-    let bodies = sys.mass.len();
-    let done = cone::solve(&mut local, mu, sigma, rates, tol, |response, sigma, rates| {
-        super::cluster::finish(response, bodies, mu, sigma, rates, tol, &mut cluster)
-    });
-    s.cluster = cluster;
-    done
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::multibody::{mjcf, MultibodyMethod, Simulation};
-    use cone::Response;
-
-    /// The cluster finish's coupling blocks are the body-by-body response itself: `W_ij`
-    /// column by column from a unit force on contact `j` (two columns of spheres on a floor,
-    /// and a box leaning across them).
-    #[test]
-    fn the_coupling_blocks_are_the_responses_columns() {
-        let mut bodies = String::new();
-        for (k, (x, z)) in [(0.0, 0.1), (0.0, 0.3), (0.0, 0.5), (0.25, 0.1), (0.25, 0.3)]
-            .iter()
-            .enumerate()
-        {
-            bodies += &format!(
-                "<body name=\"s{k}\" pos=\"{x} 0 {z}\"><freejoint/><geom type=\"sphere\" size=\"0.1\" mass=\"{m}\"/></body>",
-                m = 1.0 + k as f64
-            );
-        }
-        bodies += "<body name=\"lid\" pos=\"0.125 0 0.65\" quat=\"0.99 0 0.1 0\"><freejoint/>\
-                   <geom type=\"box\" size=\"0.3 0.1 0.05\" mass=\"2\"/></body>";
-        let text = format!("<mujoco><worldbody><geom type=\"plane\" size=\"0 0 1\"/>{bodies}</worldbody></mujoco>");
-        let model = mjcf::parse(&text, "columns.xml").unwrap().model;
-        let prepared = Simulation::prepare(&model, MultibodyMethod::Liemid).unwrap();
-        let (sys, state) = (&prepared.simulation.system, &prepared.state);
-        let geometry = sys.contact.as_ref().unwrap();
-        let (mut points, mut broad, mut manifolds) = (Vec::new(), super::super::detect::Broad::default(), Vec::new());
-        let margin = vec![0.05; sys.mass.len()];
-        geometry.detect(
-            &state.c,
-            &state.rotation,
-            &margin,
-            &mut points,
-            &mut broad,
-            &mut manifolds,
-        );
-        assert!(points.len() >= 6, "{} points", points.len());
-        let (c, r) = (&state.c, &state.rotation);
-        let rows: Vec<Rows> = points
-            .iter()
-            .map(|p| {
-                let (x, n) = p.application(c, r);
-                Rows::at(p, c, r, x, [n, p.t1, p.t2])
-            })
-            .collect();
-        let n = rows.len();
-        let r0 = vec![0.0; 3 * n];
-        let (mut dv, mut dw) = (vec![Vec3::ZERO; sys.mass.len()], vec![Vec3::ZERO; sys.mass.len()]);
-        let hh = 5e-4;
-        let mut local = Local {
-            rows: &rows,
-            r0: &r0,
-            blocks: &[],
-            dv: &mut dv,
-            dw: &mut dw,
-            sys,
-            hh,
-        };
-        let mut worst: f64 = 0.0;
-        let mut scale: f64 = 0.0;
-        for j in 0..n {
-            for col in 0..3 {
-                local.start(&vec![0.0; 3 * n]);
-                let mut unit = [0.0; 3];
-                unit[col] = 1.0;
-                local.add(j, unit);
-                for i in 0..n {
-                    let rates = local.rates(i);
-                    let block = super::super::cluster::Coupled::coupling(&local, i, j);
-                    for row in 0..3 {
-                        worst = worst.max((rates[row] - block[row][col]).abs());
-                        scale = scale.max(rates[row].abs());
-                    }
-                }
-            }
-        }
-        assert!(scale > 0.0 && worst <= 1e-15 * scale, "worst {worst:e} of {scale:e}");
     }
 }
