@@ -48,10 +48,11 @@ mod detect;
 mod newton;
 mod polish;
 mod response;
+mod scratch;
 mod step;
 
 pub(super) use detect::ContactGeometry;
-pub(super) use step::ContactScratch;
+pub(super) use scratch::ContactScratch;
 
 use super::shapes::Shape;
 

@@ -5,67 +5,16 @@
 //!
 //! Reference: docs/theory/multibody.md §6.
 
-use crate::linalg::{Mat3, Vec3};
+use crate::linalg::Vec3;
 
 use super::super::system::MultibodySystem;
 use super::super::workspace::Workspace;
 use super::cone;
-use super::detect::ContactPoint;
-use super::step::ContactScratch;
+use super::scratch::{ContactScratch, Rows};
 
 /// Contacts on free bodies from which `W` is applied body by body (`Local`) instead of
 /// formed.
 const LOCAL_FROM: usize = 64;
-
-/// The three rows of one contact at one configuration: directions (normal, two tangents)
-/// and the body-frame moments of a unit force along each on `a` and on `b`.
-#[derive(Clone, Copy, Debug)]
-pub(super) struct Rows {
-    a: Option<usize>,
-    b: Option<usize>,
-    dir: [Vec3; 3],
-    ta: [Vec3; 3],
-    tb: [Vec3; 3],
-}
-
-impl Rows {
-    /// At `(c, R)` through `x`, along `dir`.
-    pub(super) fn at(p: &ContactPoint, c: &[Vec3], r: &[Mat3], x: Vec3, dir: [Vec3; 3]) -> Rows {
-        let moment = |body: Option<usize>, d: Vec3| match body {
-            Some(i) => r[i].tr_mul_vec((x - c[i]).cross(d)),
-            None => Vec3::ZERO,
-        };
-        Rows {
-            a: p.a,
-            b: p.b,
-            dir,
-            ta: dir.map(|d| moment(p.a, d)),
-            tb: dir.map(|d| moment(p.b, d)),
-        }
-    }
-
-    pub(super) fn rate(&self, i: usize, vel: &[Vec3], omega: &[Vec3]) -> f64 {
-        let mut r = 0.0;
-        if let Some(a) = self.a {
-            r += self.dir[i].dot(vel[a]) + self.ta[i].dot(omega[a]);
-        }
-        if let Some(b) = self.b {
-            r -= self.dir[i].dot(vel[b]) + self.tb[i].dot(omega[b]);
-        }
-        r
-    }
-
-    pub(super) fn apply(&self, i: usize, f: f64, lin: &mut [Vec3], ang: &mut [Vec3]) {
-        if let Some(a) = self.a {
-            lin[a] += self.dir[i] * f;
-            ang[a] += self.ta[i] * f;
-        }
-        if let Some(b) = self.b {
-            lin[b] -= self.dir[i] * f;
-            ang[b] -= self.tb[i] * f;
-        }
-    }
-}
 
 impl Workspace {
     /// The contact problem's response `W = (h/2) D P M⁻¹ Dᵀ` over `s.rows` (row-major into

@@ -1,9 +1,9 @@
-//! The contact forces in the step's two half-kicks (module docs of `contact`): the rows,
-//! the response matrix `W`, the position problem's outer iteration around the drift and the
-//! velocity problem with the μ-kick.
+//! The contact forces in the step's two half-kicks (module docs of `contact`): the position
+//! problem's outer iteration around the drift, the second detection at its end, and the
+//! velocity problem with the μ-kick (the rows and `W` in `response.rs`, their data in
+//! `scratch.rs`).
 
 use crate::error::{Error, Result};
-use crate::linalg::Vec3;
 
 use super::super::method::StepReport;
 use super::super::state::MultibodyState;
@@ -11,90 +11,14 @@ use super::super::system::MultibodySystem;
 use super::super::workspace::Workspace;
 use super::cone;
 use super::detect::{tangents, ContactPoint};
-use super::response::{minus_w_sigma, solve_contacts, Rows};
-use parry3d_f64::query::ContactManifold;
+use super::response::{minus_w_sigma, solve_contacts};
+use super::scratch::{ContactScratch, Rows};
 
 /// Most passes of the position problem with points its drift's end found (`missed_contacts`).
 const MAX_PASSES: usize = 3;
 
 /// Most outer iterations of the position problem (each re-runs the drift).
 const MAX_OUTER: usize = 50;
-
-/// Scratch of the contact solves, grown as contacts appear (a step with the same number of
-/// contacts as a past one allocates nothing).
-#[derive(Clone, Default)]
-pub(in crate::multibody) struct ContactScratch {
-    pub(super) points: Vec<ContactPoint>,
-    pub(super) active: Vec<usize>,
-    pub(super) rows: Vec<Rows>,
-    pub(super) order: Vec<(f64, usize)>,
-    pub(super) broad: super::detect::Broad,
-    pub(super) manifolds: Vec<ContactManifold<(), ()>>,
-    pub(super) margin: Vec<f64>,
-    pub(super) w: Vec<f64>,
-    pub(super) r0: Vec<f64>,
-    pub(super) rates: Vec<f64>,
-    pub(super) sigma: Vec<f64>,
-    pub(super) sigma_ok: Vec<f64>,
-    pub(super) polish: super::polish::Polish,
-    pub(super) slide: super::polish::Slide,
-    pub(super) newton: super::newton::Newton,
-    pub(super) cluster: super::cluster::Cluster,
-    /// The rates the dense response keeps.
-    pub(super) kept: Vec<f64>,
-    /// Free bodies only (no joint rows, no armature): `W` applied body by body, never
-    /// formed (`Local`): its diagonal blocks and the velocity changes of the forces.
-    pub(super) local: bool,
-    pub(super) blocks: Vec<[[f64; 3]; 3]>,
-    pub(super) dv: Vec<Vec3>,
-    pub(super) dw: Vec<Vec3>,
-    /// The last step's points and position forces (the warm start).
-    pub(super) last_points: Vec<ContactPoint>,
-    pub(super) last_sigma: Vec<f64>,
-    /// The momenta before the contact forces (a second pass starts from them).
-    pub(super) entry_p: Vec<Vec3>,
-    pub(super) entry_pi: Vec<Vec3>,
-    /// Points found at a drift's end, and the zero margins of that detection.
-    pub(super) found: Vec<ContactPoint>,
-    pub(super) zero_margin: Vec<f64>,
-    /// Per point, the normal rate at the step's start (restitution only).
-    pub(super) start_normal: Vec<f64>,
-    /// The velocity solve's touching points, and the last step's with their forces.
-    pub(super) end_points: Vec<ContactPoint>,
-    pub(super) last_end_points: Vec<ContactPoint>,
-    pub(super) last_end_sigma: Vec<f64>,
-    /// Per point, the normal speed at which it would meet (restitution only).
-    pub(super) approach: Vec<f64>,
-    pub(super) lambda_ok: Vec<[f64; 6]>,
-    pub(super) mu: Vec<f64>,
-    pub(super) base_p: Vec<Vec3>,
-    pub(super) base_pi: Vec<Vec3>,
-    pub(super) linear: Vec<Vec3>,
-    pub(super) angular: Vec<Vec3>,
-}
-
-impl core::fmt::Debug for ContactScratch {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        f.debug_struct("ContactScratch")
-            .field("points", &self.points.len())
-            .finish_non_exhaustive()
-    }
-}
-
-impl ContactScratch {
-    pub(in crate::multibody) fn new(bodies: usize) -> Self {
-        ContactScratch {
-            margin: vec![0.0; bodies],
-            base_p: vec![Vec3::ZERO; bodies],
-            base_pi: vec![Vec3::ZERO; bodies],
-            linear: vec![Vec3::ZERO; bodies],
-            angular: vec![Vec3::ZERO; bodies],
-            dv: vec![Vec3::ZERO; bodies],
-            dw: vec![Vec3::ZERO; bodies],
-            ..ContactScratch::default()
-        }
-    }
-}
 
 impl Workspace {
     /// The position half of the contact step: contacts detected at the start with the
