@@ -476,3 +476,64 @@ fn a_falling_pile_never_starts_a_step_penetrating() {
     assert!(most >= 100, "{most} points");
     assert!(deepest <= 1e-12, "penetration {deepest:e} m");
 }
+
+/// A mesh geom that touches is its file's convex hull (as MuJoCo collides meshes): a cube
+/// written as an ASCII STL (twelve triangles, half-edge 0.05 m), its body dropped tilted onto
+/// the floor, lands on its hull's corners and rests on a face at its exact height.
+#[test]
+fn a_mesh_cube_touches_as_its_convex_hull_and_rests_on_a_face() {
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("contact_mesh");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let a = 0.05;
+    let corner = |i: usize| [[-a, a][i & 1], [-a, a][(i >> 1) & 1], [-a, a][(i >> 2) & 1]];
+    // Each face as two triangles of its four corners (the hull needs the points only).
+    let faces = [
+        [0, 1, 3, 2],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 3, 7, 6],
+        [0, 2, 6, 4],
+        [1, 3, 7, 5],
+    ];
+    let mut stl = String::from("solid cube\n");
+    for f in faces {
+        for tri in [[f[0], f[1], f[2]], [f[0], f[2], f[3]]] {
+            stl += "facet normal 0 0 0\nouter loop\n";
+            for v in tri {
+                let p = corner(v);
+                stl += &format!("vertex {} {} {}\n", p[0], p[1], p[2]);
+            }
+            stl += "endloop\nendfacet\n";
+        }
+    }
+    stl += "endsolid cube\n";
+    std::fs::write(dir.join("cube.stl"), stl).unwrap();
+    let model_path = dir.join("cube.xml");
+    std::fs::write(
+        &model_path,
+        "<mujoco><asset><mesh name=\"cube\" file=\"cube.stl\"/></asset><worldbody>\
+         <geom type=\"plane\" size=\"0 0 1\"/>\
+         <body pos=\"0 0 0.2\" quat=\"0.98 0.15 0.1 0\"><freejoint/>\
+         <inertial pos=\"0 0 0\" mass=\"1\" diaginertia=\"0.00167 0.00167 0.00167\"/>\
+         <geom type=\"mesh\" mesh=\"cube\"/></body></worldbody></mujoco>",
+    )
+    .unwrap();
+    let loaded = mjcf::load(&model_path).unwrap();
+    assert!(
+        !loaded.ignored.iter().any(|n| n.contains("mesh geom contacts")),
+        "{:?}",
+        loaded.ignored
+    );
+    let prepared = Simulation::prepare(&loaded.model, MultibodyMethod::Liemid).unwrap();
+    let (mut sim, mut s) = (prepared.simulation, prepared.state);
+    let mut most = 0;
+    for _ in 0..1000 {
+        let report = sim.step(&mut s, 1e-3).unwrap();
+        most = most.max(report.contacts);
+    }
+    assert!(most >= 3, "{most} points");
+    assert!((s.c[0].z - a).abs() <= 1e-9, "rests at {}", s.c[0].z);
+    let up = (0..3).map(|i| s.rotation[0][(2, i)].abs()).fold(0.0, f64::max);
+    assert!((1.0 - up).abs() <= 1e-9, "tilted by {}", up.acos());
+}

@@ -560,6 +560,27 @@ fn collider(s: &Shape, com: &[Vec3]) -> Option<Collider> {
             Vec3::from_array(*half).norm(),
             false,
         ),
+        ShapeKind::Mesh {
+            path: Ok(path), scale, ..
+        } => {
+            // The convex hull of the file's scaled vertices, in the geom's frame (MuJoCo
+            // re-centres a mesh on its principal axes and folds the same offset into the
+            // geom's frame: the two cancel, docs/multibody.md).
+            let mesh = super::super::mesh::Mesh::read(path).ok()?;
+            let points: Vec<PVec> = mesh
+                .vertices
+                .iter()
+                .map(|v| {
+                    PVec::new(
+                        f64::from(v[0]) * scale[0],
+                        f64::from(v[1]) * scale[1],
+                        f64::from(v[2]) * scale[2],
+                    )
+                })
+                .collect();
+            let radius = points.iter().map(|p| p.length()).fold(0.0, f64::max);
+            (SharedShape::convex_hull(&points)?, s.rotation, 0.0, radius, false)
+        }
         ShapeKind::Ellipsoid { .. } | ShapeKind::Mesh { .. } => return None,
     };
     Some(Collider {

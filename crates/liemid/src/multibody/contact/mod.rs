@@ -34,7 +34,8 @@
 //! Gauss–Seidel sweeps stall, `polish.rs` and `newton.rs` finish the solve on a dense `W`.
 //!
 //! What is not simulated: per-geom restitution, torsional and rolling
-//! friction, ellipsoid and mesh geoms (noted by the loader), contacts in compositions and
+//! friction, ellipsoid geoms and mesh geoms without their file (noted by the loader; a mesh
+//! with its file touches as its convex hull), contacts in compositions and
 //! the joint-space methods (noted: they run without contacts).
 //!
 //! Reference: docs/theory/multibody.md §6; J. J. Moreau, "Unilateral contact and dry

@@ -178,9 +178,13 @@ impl<'a, 'i> State<'a, 'i> {
             (size.len() == 3 && size.iter().all(|s| s.is_finite() && *s > 0.0)).then(|| [size[0], size[1], size[2]]);
         let (position, rotation) = self.frame(node, &|a| g.get(a))?;
         let (rgba, group) = self.appearance(g)?;
-        if self.geom_collision(g)?.is_some() {
+        // A mesh that touches is its file's convex hull (as MuJoCo collides meshes); without
+        // its file it does not touch, noted.
+        let mut collision = self.geom_collision(g)?;
+        if collision.is_some() && path.is_err() {
             self.ignored
-                .note("mesh geom contacts (not simulated: meshes are drawn only)");
+                .note("mesh geom contacts (not simulated where the mesh file is not read)");
+            collision = None;
         }
         Ok(Shape {
             body: None,
@@ -195,7 +199,7 @@ impl<'a, 'i> State<'a, 'i> {
             rotation,
             rgba,
             group,
-            collision: None,
+            collision,
         })
     }
 
