@@ -524,6 +524,52 @@ pub(crate) fn symmetric_eigen(m: &Mat3) -> Result<([f64; 3], Mat3)> {
     })
 }
 
+/// Cholesky factorization `A = L Lᵀ` in place of the lower triangle of `a` (`n × n`,
+/// row-major; the upper triangle is left as it was and never read). On failure, the pivot's
+/// index and value (not positive, or not finite).
+///
+/// Reference: G. H. Golub, C. F. Van Loan, "Matrix Computations" (4th ed., 2013), §4.2.
+pub(crate) fn cholesky_in_place(a: &mut [f64], n: usize) -> core::result::Result<(), (usize, f64)> {
+    for j in 0..n {
+        let mut d = a[j * n + j];
+        for k in 0..j {
+            d -= a[j * n + k] * a[j * n + k];
+        }
+        if !(d > 0.0 && d.is_finite()) {
+            return Err((j, d));
+        }
+        let d = d.sqrt();
+        a[j * n + j] = d;
+        for i in j + 1..n {
+            let mut v = a[i * n + j];
+            for k in 0..j {
+                v -= a[i * n + k] * a[j * n + k];
+            }
+            a[i * n + j] = v / d;
+        }
+    }
+    Ok(())
+}
+
+/// `x ← (L Lᵀ)⁻¹ x` with the factor of [`cholesky_in_place`] (forward, then back
+/// substitution).
+pub(crate) fn cholesky_solve(l: &[f64], n: usize, x: &mut [f64]) {
+    for i in 0..n {
+        let mut v = x[i];
+        for k in 0..i {
+            v -= l[i * n + k] * x[k];
+        }
+        x[i] = v / l[i * n + i];
+    }
+    for i in (0..n).rev() {
+        let mut v = x[i];
+        for k in i + 1..n {
+            v -= l[k * n + i] * x[k];
+        }
+        x[i] = v / l[i * n + i];
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -62,26 +62,15 @@ impl MassMatrix {
                 }
             }
         }
-        let mut l = vec![0.0; n * n];
-        for j in 0..n {
-            let mut d = entries[j * n + j];
-            for k in 0..j {
-                d -= l[j * n + k] * l[j * n + k];
-            }
-            if !(d > 0.0 && d.is_finite()) {
-                return Err(Error::InvalidMass {
-                    reason: format!("not positive definite (Cholesky pivot {j} = {d:e})"),
-                });
-            }
-            let d = d.sqrt();
-            l[j * n + j] = d;
-            for i in (j + 1)..n {
-                let mut s = entries[i * n + j];
-                for k in 0..j {
-                    s -= l[i * n + k] * l[j * n + k];
-                }
-                l[i * n + j] = s / d;
-            }
+        let mut l = entries.to_vec();
+        if let Err((j, d)) = crate::linalg::cholesky_in_place(&mut l, n) {
+            return Err(Error::InvalidMass {
+                reason: format!("not positive definite (Cholesky pivot {j} = {d:e})"),
+            });
+        }
+        // The factor alone: zero above the diagonal.
+        for i in 0..n {
+            l[i * n + i + 1..(i + 1) * n].fill(0.0);
         }
         Ok(MassMatrix::Dense { n, cholesky: l })
     }
@@ -99,23 +88,7 @@ impl MassMatrix {
     pub fn solve_in_place(&self, x: &mut [f64]) {
         match self {
             MassMatrix::Diagonal(d) => x.iter_mut().zip(d).for_each(|(x, m)| *x /= m),
-            MassMatrix::Dense { n, cholesky: l } => {
-                let n = *n;
-                for i in 0..n {
-                    let mut s = x[i];
-                    for k in 0..i {
-                        s -= l[i * n + k] * x[k];
-                    }
-                    x[i] = s / l[i * n + i];
-                }
-                for i in (0..n).rev() {
-                    let mut s = x[i];
-                    for k in (i + 1)..n {
-                        s -= l[k * n + i] * x[k];
-                    }
-                    x[i] = s / l[i * n + i];
-                }
-            }
+            MassMatrix::Dense { n, cholesky: l } => crate::linalg::cholesky_solve(l, *n, x),
         }
     }
 

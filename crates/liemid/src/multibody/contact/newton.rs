@@ -203,10 +203,10 @@ pub(super) fn newton(
         for i in 0..m {
             normal[i * m + i] += 1e-12 * diag;
         }
-        if !cholesky(normal, m) {
+        if crate::linalg::cholesky_in_place(normal, m).is_err() {
             return false;
         }
-        cholesky_solve(normal, m, &mut s.step);
+        crate::linalg::cholesky_solve(normal, m, &mut s.step);
         // Backtracking on ½|F|² (the direction descends: it is −(JᵀJ + λI)⁻¹ ∇(½|F|²)).
         let mut t = 1.0;
         loop {
@@ -241,48 +241,6 @@ fn project(mu: &[f64], sigma: &mut [f64]) {
             c[1] *= f;
             c[2] *= f;
         }
-    }
-}
-
-/// Cholesky in place of the lower triangle of `a` (`n × n`, row-major); false if not
-/// positive definite.
-pub(super) fn cholesky(a: &mut [f64], n: usize) -> bool {
-    for j in 0..n {
-        let mut d = a[j * n + j];
-        for k in 0..j {
-            d -= a[j * n + k] * a[j * n + k];
-        }
-        if d.is_nan() || d <= 0.0 {
-            return false;
-        }
-        let d = d.sqrt();
-        a[j * n + j] = d;
-        for i in j + 1..n {
-            let mut v = a[i * n + j];
-            for k in 0..j {
-                v -= a[i * n + k] * a[j * n + k];
-            }
-            a[i * n + j] = v / d;
-        }
-    }
-    true
-}
-
-/// Solve with the factor of [`cholesky`].
-pub(super) fn cholesky_solve(a: &[f64], n: usize, x: &mut [f64]) {
-    for i in 0..n {
-        let mut v = x[i];
-        for k in 0..i {
-            v -= a[i * n + k] * x[k];
-        }
-        x[i] = v / a[i * n + i];
-    }
-    for i in (0..n).rev() {
-        let mut v = x[i];
-        for k in i + 1..n {
-            v -= a[k * n + i] * x[k];
-        }
-        x[i] = v / a[i * n + i];
     }
 }
 

@@ -61,7 +61,7 @@ pub(super) fn polish(
     for i in 0..n {
         p.a[i * n + i] += eps;
     }
-    if !super::newton::cholesky(&mut p.a, n) {
+    if crate::linalg::cholesky_in_place(&mut p.a, n).is_err() {
         return false;
     }
     // From the Gauss–Seidel normal forces: the refinement corrects it within the range of W_AA
@@ -79,7 +79,7 @@ pub(super) fn polish(
             }
             p.b[i] = v;
         }
-        super::newton::cholesky_solve(&p.a, n, &mut p.b);
+        crate::linalg::cholesky_solve(&p.a, n, &mut p.b);
         for (x, d) in p.x.iter_mut().zip(&p.b) {
             *x += d;
         }
