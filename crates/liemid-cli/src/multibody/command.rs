@@ -469,6 +469,9 @@ fn run_maximal(
                 "deepest_penetration": run.max_penetration,
                 "position_iterations": run.contact_iterations,
                 "solver_sweeps": run.contact_sweeps,
+                "split_steps": run.split_steps,
+                "loose_steps": run.loose_steps,
+                "max_loose_violation": run.max_loose_violation,
             })
         } else {
             json!(null)

@@ -47,6 +47,13 @@ pub struct MultibodyRun {
     pub contact_iterations: u64,
     /// See `contact_iterations`.
     pub contact_sweeps: u64,
+    /// Contact steps redone as two half steps because their solve failed (all levels).
+    pub split_steps: u64,
+    /// Contact stages taken at the looser tolerance (`StepReport::loose_steps`), and the
+    /// largest violation among them (relative to the contact length).
+    pub loose_steps: u64,
+    /// See `loose_steps`.
+    pub max_loose_violation: f64,
 }
 
 impl MultibodyRun {
@@ -61,6 +68,9 @@ impl MultibodyRun {
         self.max_penetration = self.max_penetration.max(report.penetration);
         self.contact_iterations += u64::from(report.contact_iterations);
         self.contact_sweeps += u64::from(report.contact_sweeps);
+        self.split_steps += u64::from(report.split_steps);
+        self.loose_steps += u64::from(report.loose_steps);
+        self.max_loose_violation = self.max_loose_violation.max(report.loose_violation);
     }
 }
 

@@ -117,6 +117,15 @@ pub struct StepReport {
     pub contact_sweeps: u32,
     /// The deepest penetration found at a stage's start (m; 0 when none).
     pub penetration: f64,
+    /// Contact steps whose solve failed and were redone as two half steps (each half
+    /// split again where it fails, to `h / 16`), over all levels.
+    pub split_steps: u32,
+    /// Contact stages taken with the position problem's law holding to `1e-8` of the
+    /// contact length where its iteration stopped short of `1e-12` (`contact/step.rs`),
+    /// and the largest such violation (relative to the length).
+    pub loose_steps: u32,
+    /// See `loose_steps`.
+    pub loose_violation: f64,
 }
 
 /// State of one joint limit.

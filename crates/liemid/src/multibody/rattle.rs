@@ -222,6 +222,14 @@ impl Rattle {
         let start = w.profiling.then(std::time::Instant::now);
         let mut report = StepReport::default();
         match self.method.scheme() {
+            None if system.contact.is_some() => {
+                w.backup.copy_from(state);
+                if let Err(e) = w.split_stage(system, state, h, &mut report, 0) {
+                    state.copy_from(&w.backup);
+                    w.cache_valid = false;
+                    return Err(e);
+                }
+            }
             None => w.stage(system, state, h, &mut report, None)?,
             Some(s) => {
                 w.backup.copy_from(state);
@@ -250,7 +258,51 @@ impl Rattle {
     }
 }
 
+/// Most halvings of a contact step whose solve failed (`Workspace::split_stage`).
+const MAX_SPLITS: u32 = 4;
+
 impl Workspace {
+    /// A contact step from `state` over `h`; where its solve fails (a cone problem that
+    /// stalls, a contact impulse that turns a light body beyond the midpoint equation's
+    /// reach), the step is redone as two steps of `h/2` from the same start, each split
+    /// again where it fails, `MAX_SPLITS` times at most (to `h/16`). A contact step is
+    /// dissipative and first order at an impact, so its step size is not part of any
+    /// structure the method keeps; the run keeps its output times. `depth` counts the
+    /// halvings so far. On error `state` may hold the first halves (the caller restores).
+    fn split_stage(
+        &mut self,
+        sys: &MultibodySystem,
+        state: &mut MultibodyState,
+        h: f64,
+        report: &mut StepReport,
+        depth: u32,
+    ) -> Result<()> {
+        self.split_lambda.copy_from_slice(&self.lambda);
+        self.split_lambda_prev.copy_from_slice(&self.lambda_prev);
+        self.split_limit.copy_from_slice(&self.limit);
+        let e = match self.stage(sys, state, h, report, None) {
+            Ok(()) => return Ok(()),
+            Err(e) => e,
+        };
+        let numerical = matches!(
+            e,
+            Error::NewtonDidNotConverge { .. } | Error::StepTooLarge { .. } | Error::NonFiniteResult { .. }
+        );
+        if !numerical || depth >= MAX_SPLITS {
+            return Err(e);
+        }
+        self.lambda.copy_from_slice(&self.split_lambda);
+        self.lambda_prev.copy_from_slice(&self.split_lambda_prev);
+        self.limit.copy_from_slice(&self.split_limit);
+        self.cache_valid = false;
+        report.split_steps += 1;
+        let t0 = state.t;
+        self.split_stage(sys, state, 0.5 * h, report, depth + 1)?;
+        self.split_stage(sys, state, 0.5 * h, report, depth + 1)?;
+        self.set_time(state, t0 + h);
+        Ok(())
+    }
+
     /// One RATTLE/EA stage (the whole step of [`MultibodyMethod::Liemid`]); `stage` is the
     /// stage's index in a composition and the composed step.
     fn stage(

@@ -97,6 +97,12 @@ impl MultibodySystem {
         self.contact.is_some()
     }
 
+    /// The contact length scale `L` the contact solves' tolerances are relative to (m;
+    /// `None` without contacts; docs/theory/multibody.md §6).
+    pub fn contact_length(&self) -> Option<f64> {
+        self.contact.as_ref().map(|g| g.length)
+    }
+
     /// Build the system of a model: validate it, precompute the joint geometry and the
     /// force parameters.
     ///

@@ -165,6 +165,11 @@ pub(super) struct Workspace {
     pub(super) omega: Vec<Vec3>,
     pub(super) solver: TreeSolver,
     pub(super) backup: MultibodyState,
+    /// The multipliers and limit states before a contact step, restored when it fails and
+    /// is redone as two half steps (`rattle.rs`).
+    pub(super) split_lambda: Vec<[f64; 6]>,
+    pub(super) split_lambda_prev: Vec<[[f64; 6]; 3]>,
+    pub(super) split_limit: Vec<LimitState>,
     // The drift's midpoint data per body (Ψ₁, Ψ₂, P, Π_a) and the effective inertia blocks
     // `h (∂θ⁺/∂P)⁻¹` of the exact drift Jacobian.
     pub(super) psi1: Vec<Vec3>,
@@ -228,6 +233,9 @@ impl Workspace {
             lambda: vec![[0.0; 6]; nj],
             lambda_prev: vec![[[0.0; 6]; 3]; nj],
             lambda_steps: [f64::NAN; 4],
+            split_lambda: vec![[0.0; 6]; nj],
+            split_lambda_prev: vec![[[0.0; 6]; 3]; nj],
+            split_limit: vec![LimitState::Inactive; nj],
             stage_lambda: vec![[[0.0; 6]; HISTORY]; stages * nj],
             scheme_steps: [f64::NAN; HISTORY],
             delta: vec![[0.0; 6]; nj],

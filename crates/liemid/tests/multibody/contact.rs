@@ -455,26 +455,35 @@ fn bad_contact_input_is_refused_naming_it_or_noted() {
     );
 }
 
-/// A pile of 100 boxes and spheres falling into a bin, to t = 0.296 s (136 points): no step
-/// starts with a point deeper than 1e-12 m. parry's manifold holds the features of the
+/// A pile of 100 boxes and spheres falling into a bin, to t = 0.36 s (more than 136
+/// points): no step starts with a point deeper than the position problem's acceptance
+/// (`1e-8` of the contact length, 5.1e-9 m here). parry's manifold holds the features of the
 /// step's start only; a box that turns another corner or edge down within the step is
 /// found by detecting again at the drift's end (1.45e-5 m deep at t = 0.28 before that,
 /// with the gap of a box's corner on another box's face measured along the wrong box's
-/// normal).
+/// normal). The step from t = 0.298 failed before stalled solves were taken at that
+/// acceptance and failed steps split: both are counted, and the steps taken loosely hold
+/// the law to the acceptance.
 #[test]
 fn a_falling_pile_never_starts_a_step_penetrating() {
     let text = include_str!("../data/pile_boxes_spheres.xml");
     let model = mjcf::parse(text, "pile_boxes_spheres.xml").unwrap().model;
     let prepared = Simulation::prepare(&model, MultibodyMethod::Liemid).unwrap();
     let (mut sim, mut s) = (prepared.simulation, prepared.state);
-    let (mut deepest, mut most): (f64, u32) = (0.0, 0);
-    for _ in 0..296 {
-        let report = sim.step(&mut s, 1e-3).unwrap();
+    let length = sim.system.contact_length().unwrap();
+    let (mut deepest, mut most, mut loose, mut split, mut looseness): (f64, u32, u32, u32, f64) = (0.0, 0, 0, 0, 0.0);
+    for k in 0..360 {
+        let report = sim.step(&mut s, 1e-3).unwrap_or_else(|e| panic!("step {k}: {e}"));
         deepest = deepest.max(report.penetration);
         most = most.max(report.contacts);
+        loose += report.loose_steps;
+        split += report.split_steps;
+        looseness = looseness.max(report.loose_violation);
     }
+    eprintln!("most {most} points, deepest {deepest:e} m, {loose} loose steps (worst {looseness:e}), {split} split");
     assert!(most >= 100, "{most} points");
-    assert!(deepest <= 1e-12, "penetration {deepest:e} m");
+    assert!(deepest <= 1e-8 * length, "penetration {deepest:e} m");
+    assert!(looseness <= 1e-8, "loose violation {looseness:e}");
 }
 
 /// A mesh geom that touches is its file's convex hull (as MuJoCo collides meshes): a cube

@@ -75,6 +75,8 @@ pub(in crate::multibody) struct ContactScratch {
     pub(super) rates: Vec<f64>,
     pub(super) sigma: Vec<f64>,
     pub(super) sigma_ok: Vec<f64>,
+    /// The forces with the least violation of the position problem's iteration so far.
+    pub(super) sigma_best: Vec<f64>,
     pub(super) polish: super::polish::Polish,
     pub(super) slide: super::polish::Slide,
     pub(super) newton: super::newton::Newton,
