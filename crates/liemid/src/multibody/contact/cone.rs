@@ -113,6 +113,7 @@ pub(super) fn solve<R: Response>(
     let n = mu.len();
     let mut sweeps = 0;
     let mut finished = 0;
+    let (mut interval, mut next_finish) = (FINISH_EVERY, FINISH_EVERY);
     // The violation last halved and when: a solve that has not halved it in
     // `STALL_SWEEPS` sweeps is stalled (cycling near a cone's edge) and stops.
     let (mut anchor, mut anchor_sweep) = (f64::INFINITY, 0);
@@ -138,13 +139,19 @@ pub(super) fn solve<R: Response>(
                 converged: false,
             };
         }
-        if sweeps > 0 && sweeps % FINISH_EVERY == 0 && finished != sweeps {
+        if sweeps > 0 && sweeps == next_finish && finished != sweeps {
             // Once per such sweep count (each may change the forces, then the rates are
-            // measured again).
+            // measured again); after a finish that changed nothing the next waits twice
+            // as long (a pile's stalled solves spent most of their time in finishes that
+            // failed every 20 sweeps).
             finished = sweeps;
             if finish(response, sigma, rates) || align(response, mu, sigma, rates) {
+                interval = FINISH_EVERY;
+                next_finish = sweeps + interval;
                 continue;
             }
+            interval *= 2;
+            next_finish = sweeps + interval;
         }
         sweeps += 1;
         for (k, &mu_k) in mu.iter().enumerate() {

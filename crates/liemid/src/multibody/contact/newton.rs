@@ -48,6 +48,8 @@ pub(super) struct Newton {
     trial_f: Vec<f64>,
     /// Per contact `[ρ_n, ρ_t]`.
     scale: Vec<[f64; 2]>,
+    /// The columns of one row of `J` that are not zero.
+    nonzero: Vec<usize>,
 }
 
 /// Alart–Curnier's `F` at `sigma` with `rates = r₀ + W σ` (written into `f`); with
@@ -188,13 +190,25 @@ pub(super) fn newton(
             rates.copy_from_slice(&s.trial_rates);
             return true;
         }
-        // (JᵀJ + λ I) Δ = −Jᵀ F, the lower triangle.
+        // (JᵀJ + λ I) Δ = −Jᵀ F, the lower triangle, row by row of J over its nonzeros
+        // (a row of J is a row of W or a unit row: sparse where the contacts share few
+        // bodies).
         let (jac, normal) = (&s.jac, &mut s.normal);
-        for i in 0..m {
-            for j in 0..=i {
-                normal[i * m + j] = (0..m).map(|e| jac[e * m + i] * jac[e * m + j]).sum();
+        normal.fill(0.0);
+        s.step.fill(0.0);
+        for e in 0..m {
+            let row = &jac[e * m..(e + 1) * m];
+            s.nonzero.clear();
+            s.nonzero.extend((0..m).filter(|&i| row[i] != 0.0));
+            let fe = s.f[e];
+            for (a, &i) in s.nonzero.iter().enumerate() {
+                let ji = row[i];
+                s.step[i] -= ji * fe;
+                let target = &mut normal[i * m..i * m + i + 1];
+                for &j in &s.nonzero[..=a] {
+                    target[j] += ji * row[j];
+                }
             }
-            s.step[i] = -(0..m).map(|e| jac[e * m + i] * s.f[e]).sum::<f64>();
         }
         let diag = (0..m).fold(0.0f64, |x, i| x.max(normal[i * m + i]));
         if diag.is_nan() || diag <= 0.0 {

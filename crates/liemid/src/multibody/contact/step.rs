@@ -20,6 +20,10 @@ const MAX_PASSES: usize = 3;
 /// Most outer iterations of the position problem (each re-runs the drift).
 const MAX_OUTER: usize = 50;
 
+/// A point found at the drift's end within this distance (relative to the contact length)
+/// of one of the problem's, with the same normal, is that contact slid (`missed_contacts`).
+const SAME_CONTACT: f64 = 1e-3;
+
 /// The law's violation (gap and slide over the step, relative to the contact length) a
 /// step is taken at where the position problem's iteration stops short of its tolerance
 /// (`1e-12`): a few contacts sliding together near their friction limit, whose cone
@@ -150,9 +154,23 @@ impl Workspace {
             if p.gap(&self.c_new, &self.r_new) >= -1e-12 * geometry.length {
                 continue;
             }
-            let covered = s.points[..before]
-                .iter()
-                .any(|q| q.a == p.a && q.b == p.b && (q.pa - p.pa).norm() <= close && (q.pb - p.pb).norm() <= close);
+            // The same contact slid within the step (a ball's point on a floor, a capsule
+            // along another): the same pair, its point and normal at the drift's end where
+            // one of the problem's is. Its depth differs from that point's by the slide's
+            // second-order term, and the next step detects it afresh; adding it would
+            // give the problem two nearly equal rows with different gaps, on which
+            // Gauss–Seidel stalls (a falling humanoid's capsules, piles).
+            let (x, nrm) = p.application(&self.c_new, &self.r_new);
+            let covered = s.points[..before].iter().any(|q| {
+                if q.a != p.a || q.b != p.b {
+                    return false;
+                }
+                if (q.pa - p.pa).norm() <= close && (q.pb - p.pb).norm() <= close {
+                    return true;
+                }
+                let (xq, nq) = q.application(&self.c_new, &self.r_new);
+                (xq - x).norm() <= SAME_CONTACT * geometry.length && nq.dot(nrm) >= 1.0 - 1e-6
+            });
             if !covered {
                 let mut p = p;
                 p.rebase(&state.c, &state.rotation);
