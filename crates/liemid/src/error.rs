@@ -313,8 +313,10 @@ impl core::fmt::Display for Hint<'_> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         if self.0.contains("contact") {
             f.write_str(
-                "contacts sliding together near their friction limit, or box edges sliding along each \
-                 other, converge slowly or not at all in this solver: a known limit (docs/theory/multibody.md §6)",
+                "the step was split down to h/16 and its law still missed the acceptance (1e-8 of the \
+                 contact length): redundant contacts of bodies resting on several others, or contacts \
+                 sliding together near their friction limit, stall this solver: a known limit \
+                 (docs/theory/multibody.md §6)",
             )
         } else {
             f.write_str("the step is probably too large for the rotation rate")
