@@ -237,6 +237,8 @@ fn multibody_run<'py>(
     let mut stopped: Option<PyErr> = None;
     let mut samples = Samples::default();
     let (mut max_pos, mut max_vel) = (0.0f64, 0.0f64);
+    // The contact statistics of a maximal-coordinate run of a model with contacts.
+    let mut contacts = None;
     let notes;
     let name = match method {
         Method::Liemid(m) => {
@@ -289,6 +291,9 @@ fn multibody_run<'py>(
             }
             let run = run.map_err(|e| py_error(py, &e, &sc.name))?;
             (max_pos, max_vel) = (run.max_position_violation, run.max_velocity_violation);
+            if sim.system.has_contacts() {
+                contacts = Some(run);
+            }
             m.name().to_string()
         }
         Method::Rk4 => {
@@ -357,6 +362,21 @@ fn multibody_run<'py>(
     d.set_item("max_position_constraint_violation", max_pos)?;
     d.set_item("max_velocity_constraint_violation", max_vel)?;
     d.set_item("notes", notes.iter().map(ToString::to_string).collect::<Vec<_>>())?;
+    match contacts {
+        Some(run) => {
+            // As the command's JSON summary names them.
+            let c = PyDict::new(py);
+            c.set_item("most_points", run.max_contacts)?;
+            c.set_item("deepest_penetration", run.max_penetration)?;
+            c.set_item("position_iterations", run.contact_iterations)?;
+            c.set_item("solver_sweeps", run.contact_sweeps)?;
+            c.set_item("split_steps", run.split_steps)?;
+            c.set_item("loose_steps", run.loose_steps)?;
+            c.set_item("max_loose_violation", run.max_loose_violation)?;
+            d.set_item("contacts", c)?;
+        }
+        None => d.set_item("contacts", py.None())?,
+    }
     Ok(d)
 }
 

@@ -140,3 +140,24 @@ def test_the_view_page_never_replaces_a_file_the_model_was_read_from(tmp_path: P
         with pytest.raises(ValueError, match="input"):
             run.view(str(tmp_path / target))
         assert (tmp_path / target).read_bytes() == before
+
+
+def test_a_run_with_contacts_says_its_contact_statistics(tmp_path: Path) -> None:
+    # A box (half-edge 0.1 m) dropped flat from 1 cm onto a floor lands on its four corners
+    # and rests at its exact height; the run's contact statistics are the command's.
+    xml = tmp_path / "box.xml"
+    xml.write_text(
+        """<mujoco model="box"><worldbody><geom name="floor" type="plane" size="0 0 1"/>
+        <body name="box" pos="0 0 0.11"><freejoint/>
+        <geom type="box" size="0.1 0.1 0.1" mass="1"/></body></worldbody></mujoco>"""
+    )
+    run = multibody.load(xml).run("liemid", step=1e-3, t_end=0.5, every=500)
+    c = run.contacts
+    assert c is not None
+    assert c["most_points"] >= 4
+    assert 0.0 <= c["deepest_penetration"] <= 1e-9
+    assert c["position_iterations"] > 0 and c["solver_sweeps"] > 0
+    assert c["split_steps"] == 0 and c["loose_steps"] == 0 and c["max_loose_violation"] == 0.0
+    assert abs(run.xpos[-1, 0, 2] - 0.1) < 1e-9
+    # Without contacts, or by the joint-space method: no statistics.
+    assert multibody.problem("double-pendulum").run(step=1e-3, t_end=0.01).contacts is None

@@ -25,7 +25,7 @@ from __future__ import annotations
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, List, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 from numpy.typing import NDArray
@@ -51,7 +51,12 @@ class MultibodyRun:
     ``joints`` (n, k) the hinge angles and slide offsets named by ``joint_names``;
     ``notes`` what the run left out or changed (joint armature dropped by the
     maximal-coordinate methods, limits by the joint-space ones, a start projected onto its
-    loop-closing joints), as the command prints them."""
+    loop-closing joints), as the command prints them; ``contacts`` the contact statistics
+    of a model with contacts run by ``liemid`` (``None`` otherwise), named as in the
+    command's JSON summary: ``most_points``, ``deepest_penetration`` (m),
+    ``position_iterations``, ``solver_sweeps``, ``split_steps`` (steps whose contact solve
+    failed, redone as two half steps), ``loose_steps`` and ``max_loose_violation`` (steps
+    taken where a stalled solve held the law to 1e-8 of the contact length)."""
 
     method: str
     steps: int
@@ -65,6 +70,7 @@ class MultibodyRun:
     max_velocity_constraint_violation: float
     notes: List[str] = field(default_factory=list)
     model: Any = field(default=None, repr=False, compare=False)
+    contacts: Optional[Dict[str, float]] = None
 
     def view(self, path: Optional[str] = None) -> str:
         """The run as a self-contained 3-D page (a box per body with its inertia's
@@ -182,6 +188,7 @@ class Model:
             max_velocity_constraint_violation=float(out["max_velocity_constraint_violation"]),
             notes=notes,
             model=self._core,
+            contacts=out["contacts"],
         )
 
     def simulator(self, method: str = "liemid", step: Optional[float] = None, drift: str = "midpoint") -> Simulator:
