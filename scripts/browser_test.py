@@ -240,6 +240,9 @@ def make_pages(liemid: Path, work: Path) -> List[Tuple[str, Path]]:
         # both links and the wrist's motor turns it).
         "multibody-humanoid": ["multibody", str(ex / "multibody" / "humanoid_scene.xml"), "--t-end", "1"],
         "multibody-arm": ["multibody", str(ex / "multibody" / "arm_scene.xml"), "--t-end", "1", "--ctrl", "1.5,-0.5,3"],
+        # Contacts: a cube dropped tilted lands on an edge and falls onto a face; the page
+        # draws its touching contacts and their forces.
+        "multibody-contact": ["multibody", str(ROOT / "benchmarks" / "models" / "contact_tilted_cube.xml"), "--t-end", "1"],
     }
     pages = []
     for name, args in runs.items():

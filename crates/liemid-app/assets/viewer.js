@@ -361,18 +361,65 @@
       for (let j = 0; j < n; j++) box.expandByPoint(tmpV.set(frames[7 * j], frames[7 * j + 1], frames[7 * j + 2]));
       let ext = 0;
       for (let j = 0; j < stat.length; j++) ext = Math.max(ext, stat[j]);
+      // The touching contacts after the bodies in each frame: a red point each and its
+      // force on the first body as a red line, the largest force of the run a fifth of the
+      // view's size.
+      const slots = sc.contact_slots || 0, C = 7 * n;
+      let contactPoints = null, contactLines = null, fmax = 0;
+      if (slots > 0) {
+        for (let i = 0; i < F; i++) {
+          for (let c = 0; c < slots; c++) {
+            const k = P * i + C + 6 * c;
+            if (Number.isNaN(frames[k])) break;
+            fmax = Math.max(fmax, Math.hypot(frames[k + 3], frames[k + 4], frames[k + 5]));
+          }
+        }
+        const pts = new THREE.BufferGeometry();
+        pts.setAttribute('position', new THREE.BufferAttribute(new Float32Array(3 * slots), 3));
+        contactPoints = new THREE.Points(pts, new THREE.PointsMaterial({ color: 0xe03030, size: 6, sizeAttenuation: false, depthTest: false }));
+        const segs = new THREE.BufferGeometry();
+        segs.setAttribute('position', new THREE.BufferAttribute(new Float32Array(6 * slots), 3));
+        contactLines = new THREE.LineSegments(segs, new THREE.LineBasicMaterial({ color: 0xe03030, depthTest: false }));
+        contactPoints.frustumCulled = false;
+        contactLines.frustumCulled = false;
+        // Drawn over the bodies: a contact is under or inside them.
+        contactPoints.renderOrder = contactLines.renderOrder = 1;
+        scene.add(contactPoints, contactLines);
+        toggle('contact points and forces', [contactPoints, contactLines], true);
+        document.body.dataset.contacts = String(slots);
+      }
       const pos = new THREE.Vector3(), scale = new THREE.Vector3();
       const anchor = (f, body, a) => {
         if (body === null || body === undefined) return tmpV.set(...a);
         const k = 7 * body;
         return tmpV.set(...a).applyQuaternion(quat(f, k + 3)).add(pos.set(f[k], f[k + 1], f[k + 2]));
       };
+      const radius = Math.max(0.8 * box.getSize(new THREE.Vector3()).length(), 4 * ext, 1);
+      const forceScale = fmax > 0 ? 0.2 * radius / fmax : 0;
       return {
-        radius: Math.max(0.8 * box.getSize(new THREE.Vector3()).length(), 4 * ext, 1),
+        radius,
         centre: box.getCenter(new THREE.Vector3()),
         zUp: true,
         update(i) {
           const f = frames.subarray(P * i, P * i + P);
+          if (slots > 0) {
+            const pp = contactPoints.geometry.attributes.position.array, lp = contactLines.geometry.attributes.position.array;
+            let m = 0;
+            for (; m < slots; m++) {
+              const k = C + 6 * m;
+              if (Number.isNaN(f[k])) break;
+              pp[3 * m] = f[k]; pp[3 * m + 1] = f[k + 1]; pp[3 * m + 2] = f[k + 2];
+              lp[6 * m] = f[k]; lp[6 * m + 1] = f[k + 1]; lp[6 * m + 2] = f[k + 2];
+              lp[6 * m + 3] = f[k] + forceScale * f[k + 3];
+              lp[6 * m + 4] = f[k + 1] + forceScale * f[k + 4];
+              lp[6 * m + 5] = f[k + 2] + forceScale * f[k + 5];
+            }
+            contactPoints.geometry.setDrawRange(0, m);
+            contactLines.geometry.setDrawRange(0, 2 * m);
+            contactPoints.geometry.attributes.position.needsUpdate = true;
+            contactLines.geometry.attributes.position.needsUpdate = true;
+            document.body.dataset.touching = String(m);
+          }
           for (let j = 0; j < n; j++) {
             const k = 7 * j;
             pos.set(f[k], f[k + 1], f[k + 2]);

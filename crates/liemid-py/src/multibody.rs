@@ -257,7 +257,7 @@ fn multibody_run<'py>(
             samples.push_maximal(system, &state, joints);
             let run = match &callback {
                 None => py.detach(|| {
-                    sim.integrator.integrate(system, &mut state, t_end, step, |k, state, _| {
+                    sim.integrator.integrate(system, &mut state, t_end, step, |k, state, _, _| {
                         if k % every == 0 || k == n {
                             samples.push_maximal(system, state, joints);
                         }
@@ -275,7 +275,7 @@ fn multibody_run<'py>(
                         let (q, v) = maximal_coordinates(system, state, joints);
                         call_control(py, f, state.t, q, v, u, &mut raised)
                     },
-                    |k, system, state, _| {
+                    |k, system, state, _, _| {
                         if k % every == 0 || k == n {
                             samples.push_maximal(system, state, joints);
                         }
@@ -636,6 +636,8 @@ fn multibody_view(
             let c = view::centre(x, q, body.com);
             frame.extend(c.iter().chain(&q).map(|&v| v as f32));
         }
+        // A run's samples hold no contacts: the page's contact slots stay empty.
+        frame.extend(std::iter::repeat_n(f32::NAN, 6 * page.scene().contact_slots()));
         page.push_frame(times[k], &frame);
         page.energy_error(times[k], energy[k]);
     }

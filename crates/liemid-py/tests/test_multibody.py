@@ -159,5 +159,8 @@ def test_a_run_with_contacts_says_its_contact_statistics(tmp_path: Path) -> None
     assert c["position_iterations"] > 0 and c["solver_sweeps"] > 0
     assert c["split_steps"] == 0 and c["loose_steps"] == 0 and c["max_loose_violation"] == 0.0
     assert abs(run.xpos[-1, 0, 2] - 0.1) < 1e-9
+    # Its page holds every sample (the contact slots empty: a run's samples hold no contacts).
+    page = Path(run.view(str(tmp_path / "box.html"))).read_text()
+    assert '"contact_slots":64' in page and "2 frames of 500 steps" in page
     # Without contacts, or by the joint-space method: no statistics.
     assert multibody.problem("double-pendulum").run(step=1e-3, t_end=0.01).contacts is None

@@ -29,7 +29,7 @@ fn main() -> Result<(), liemid::Error> {
         let (mut first, mut last) = (0.0f64, 0.0f64);
         let tenth = steps / 10;
         let started = Instant::now();
-        let run = integrator.integrate(&system, &mut state, h * steps as f64, h, |k, s, _| {
+        let run = integrator.integrate(&system, &mut state, h * steps as f64, h, |k, s, _, _| {
             if k % 100 == 0 {
                 let e = ((system.energy(s) - e0) / e0).abs();
                 if k <= tenth {

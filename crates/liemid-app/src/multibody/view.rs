@@ -217,6 +217,12 @@ pub fn page(sc: &MultibodyScenario) -> (ViewPage, Vec<ModelNote>) {
             joints,
             shapes,
             meshes,
+            // A model with contacts: its touching contacts and their forces in each frame.
+            contact_slots: if model.collision.any() {
+                crate::shared::view::MAX_DRAWN_CONTACTS
+            } else {
+                0
+            },
         },
         &sc.name,
     );

@@ -166,8 +166,16 @@ pub enum Scene {
         /// The meshes the shapes draw (in the page as numbers, not in its JSON).
         #[serde(default, skip_serializing)]
         meshes: Vec<ViewMesh>,
+        /// Contacts a frame holds after the bodies (0 for a model without contacts), each
+        /// its point and the force on its first body, `x, y, z, f_x, f_y, f_z`; the
+        /// touching ones first, the rest NaN.
+        #[serde(default)]
+        contact_slots: usize,
     },
 }
+
+/// Contacts an articulated page draws at most per frame (the first ones a step gives).
+pub const MAX_DRAWN_CONTACTS: usize = 64;
 
 impl Scene {
     /// Numbers in one frame.
@@ -177,13 +185,25 @@ impl Scene {
             Scene::Bodies { count, .. } => 7 * count,
             Scene::Beam { nodes, .. } => 7 * nodes,
             Scene::Spins { sites } => 3 * sites.len(),
-            Scene::Articulated { half_extents, .. } => 7 * half_extents.len(),
+            Scene::Articulated {
+                half_extents,
+                contact_slots,
+                ..
+            } => 7 * half_extents.len() + 6 * contact_slots,
+        }
+    }
+
+    /// The contact slots of a frame ([`Scene::Articulated`]'s; 0 for the others).
+    pub fn contact_slots(&self) -> usize {
+        match self {
+            Scene::Articulated { contact_slots, .. } => *contact_slots,
+            _ => 0,
         }
     }
 
     /// A one-line description of what the page draws.
     fn caption(&self) -> String {
-        match self {
+        let main = match self {
             Scene::RigidBody { .. } => {
                 "the body as a box with its principal axes (red, green, blue) and the angular momentum \
                  (yellow)"
@@ -215,6 +235,12 @@ impl Scene {
                 half_extents.len(),
                 shapes.len()
             ),
+        };
+        match self.contact_slots() {
+            0 => main,
+            slots => {
+                format!("{main}; the touching contacts (up to {slots}) as red points with their forces as red lines")
+            }
         }
     }
 }

@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use clap::Args;
 use liemid::error::Num;
-use liemid::multibody::{MultibodyState, MultibodySystem, Prepared, Simulation};
+use liemid::multibody::{MultibodyState, MultibodySystem, Prepared, Rattle, Simulation};
 use serde_json::json;
 
 use super::scenario::{self, Method, MultibodyScenario};
@@ -304,6 +304,7 @@ struct Maximal<'a> {
     system: &'a MultibodySystem,
     state: &'a MultibodyState,
     joints: usize,
+    integrator: &'a Rattle,
 }
 
 impl Poses for Maximal<'_> {
@@ -316,6 +317,9 @@ impl Poses for Maximal<'_> {
     fn pose(&mut self, i: usize) -> ([f64; 3], [f64; 4]) {
         let x = self.system.frame_origin(self.state, i);
         ([x.x, x.y, x.z], self.system.quaternion(self.state, i))
+    }
+    fn contacts(&mut self, out: &mut Vec<[f64; 6]>) {
+        self.integrator.contact_forces(self.state, out);
     }
     fn hinge_and_slide(&mut self, out: &mut Vec<f64>) {
         for k in 0..self.joints {
@@ -371,35 +375,44 @@ fn run_maximal(
         system: &sim.system,
         state: &state,
         joints,
+        integrator: &sim.integrator,
     })?;
     let interrupt = Interrupt::install();
     let bar = progress(n, "steps", n >= 200_000);
     let started = Instant::now();
     // The observer's own outcome: a failed write or a signal ends the run through it.
     let mut stop: Option<Halt> = None;
-    let observer = |k: u64, system: &MultibodySystem, state: &MultibodyState| -> Result<(), String> {
-        if k % every == 0 || k == n {
-            let observed = sink.observe(&mut Maximal { system, state, joints });
-            if let Err(failure) = observed {
-                stop = Some(Halt::Output(failure));
-                return Err("the output failed".into());
+    let observer =
+        |k: u64, system: &MultibodySystem, state: &MultibodyState, integrator: &Rattle| -> Result<(), String> {
+            if k % every == 0 || k == n {
+                let observed = sink.observe(&mut Maximal {
+                    system,
+                    state,
+                    joints,
+                    integrator,
+                });
+                if let Err(failure) = observed {
+                    stop = Some(Halt::Output(failure));
+                    return Err("the output failed".into());
+                }
             }
-        }
-        bar.inc(1);
-        match interrupt.requested() {
-            Some(signal) if k < n => {
-                stop = Some(Halt::Signal(signal, k));
-                Err("interrupted".into())
+            bar.inc(1);
+            match interrupt.requested() {
+                Some(signal) if k < n => {
+                    stop = Some(Halt::Signal(signal, k));
+                    Err("interrupted".into())
+                }
+                _ => Ok(()),
             }
-            _ => Ok(()),
-        }
-    };
+        };
     let outcome = match table {
         None => {
             let mut observer = observer;
             let system = &sim.system;
             sim.integrator
-                .integrate(system, &mut state, t_end, h, |k, state, _| observer(k, system, state))
+                .integrate(system, &mut state, t_end, h, |k, state, _, integrator| {
+                    observer(k, system, state, integrator)
+                })
         }
         // A table's control, held over each step from its start (docs/theory/multibody.md §8).
         Some(table) => {
@@ -412,7 +425,7 @@ fn run_maximal(
                     u.copy_from_slice(table.at(state.t));
                     Ok(())
                 },
-                |k, system, state, _| observer(k, system, state),
+                |k, system, state, _, integrator| observer(k, system, state, integrator),
             )
         }
     };

@@ -53,6 +53,9 @@ pub(super) trait Poses {
     /// Body `i`'s frame origin and attitude quaternion `w, x, y, z`.
     fn pose(&mut self, i: usize) -> ([f64; 3], [f64; 4]);
     fn hinge_and_slide(&mut self, out: &mut Vec<f64>);
+    /// The contacts touching at this state and their forces, `[x, y, z, f_x, f_y, f_z]`
+    /// (none by default).
+    fn contacts(&mut self, _out: &mut Vec<[f64; 6]>) {}
 }
 
 /// Where a run's observations go: the trajectory file, the plot's record and the view page.
@@ -63,6 +66,7 @@ pub(super) struct Sink {
     centres: Vec<liemid::Vec3>,
     row: Vec<f64>,
     frame: Vec<f32>,
+    contacts: Vec<[f64; 6]>,
     e0: f64,
 }
 
@@ -83,6 +87,7 @@ impl Sink {
             centres: sc.model.bodies.iter().map(|b| b.com).collect(),
             row: Vec::new(),
             frame: Vec::new(),
+            contacts: Vec::new(),
             e0: f64::NAN,
         })
     }
@@ -115,6 +120,18 @@ impl Sink {
                     let (x, q) = p.pose(i);
                     let centre = super::view::centre(x, q, *s);
                     self.frame.extend(centre.iter().chain(&q).map(|&v| v as f32));
+                }
+                // The contact slots: the touching contacts first (as many as fit), then NaN.
+                let slots = page.scene().contact_slots();
+                if slots > 0 {
+                    self.contacts.clear();
+                    p.contacts(&mut self.contacts);
+                    for k in 0..slots {
+                        match self.contacts.get(k) {
+                            Some(c) => self.frame.extend(c.iter().map(|&v| v as f32)),
+                            None => self.frame.extend([f32::NAN; 6]),
+                        }
+                    }
                 }
             }
             page.push_frame(t, &self.frame);

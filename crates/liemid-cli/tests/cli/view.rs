@@ -254,3 +254,51 @@ fn multibody_page_draws_a_mesh_from_its_file_and_notes_a_missing_one() {
         assert_eq!(std::fs::read(dir.join(target)).unwrap(), before);
     }
 }
+
+/// A model with contacts: each frame holds, after the bodies, 64 contact slots (point and
+/// force, NaN when unused). A 1 kg box resting flat on a floor shows its four corners on
+/// the floor, and their forces on the box add up to its weight, upward.
+#[test]
+fn multibody_page_holds_the_touching_contacts_and_their_forces() {
+    let dir = scratch("view-contacts");
+    std::fs::write(
+        dir.join("box.xml"),
+        r#"<mujoco><worldbody><geom name="floor" type="plane" size="0 0 1"/>
+        <body name="box" pos="0 0 0.1"><freejoint/><geom type="box" size="0.1 0.1 0.1" mass="1"/></body>
+        </worldbody></mujoco>"#,
+    )
+    .unwrap();
+    let o = run_in(
+        &dir,
+        &["multibody", "box.xml", "--t-end", "0.05", "--view", "page.html"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let html = std::fs::read_to_string(dir.join("page.html")).unwrap();
+    assert!(
+        html.contains("\"contact_slots\":64"),
+        "the scene does not say its contact slots"
+    );
+    let frames = page_floats(&html, "data-frames");
+    let per_frame = 7 + 6 * 64;
+    assert_eq!(frames.len() % per_frame, 0);
+    let last = &frames[frames.len() - per_frame..];
+    let slots: Vec<&[f32]> = last[7..].chunks_exact(6).collect();
+    let touching: Vec<&&[f32]> = slots.iter().filter(|c| !c[0].is_nan()).collect();
+    assert_eq!(touching.len(), 4, "{} contacts drawn", touching.len());
+    assert!(slots[4..].iter().all(|c| c.iter().all(|v| v.is_nan())));
+    let mut total = [0.0f64; 3];
+    for c in &touching {
+        assert!(
+            c[2].abs() < 1e-6 && (c[0].abs() - 0.1).abs() < 1e-6 && (c[1].abs() - 0.1).abs() < 1e-6,
+            "{c:?}"
+        );
+        for (t, f) in total.iter_mut().zip(&c[3..6]) {
+            *t += f64::from(*f);
+        }
+    }
+    // The closing half-kick's forces hold the box against gravity (9.81 N, f32 in the page).
+    assert!(
+        (total[2] - 9.81).abs() < 1e-4 && total[0].abs() < 1e-4 && total[1].abs() < 1e-4,
+        "{total:?}"
+    );
+}

@@ -213,7 +213,8 @@ pub fn joint_space_notes(model: &Model) -> Vec<ModelNote> {
 
 impl Rattle {
     /// Integrate from `state.t` to `t_end` with step `h` (the last step lands on `t_end`),
-    /// calling `observer(k, state, report)` after every step; returns the extremes.
+    /// calling `observer(k, state, report, integrator)` after every step (the integrator
+    /// for what the step left, as [`Rattle::contact_forces`]); returns the extremes.
     ///
     /// # Errors
     /// The step's errors, [`crate::rigid::driver::step_count`]'s,
@@ -230,7 +231,7 @@ impl Rattle {
         mut observer: O,
     ) -> Result<MultibodyRun>
     where
-        O: FnMut(u64, &MultibodyState, &StepReport) -> core::result::Result<(), String>,
+        O: FnMut(u64, &MultibodyState, &StepReport, &Rattle) -> core::result::Result<(), String>,
     {
         let t0 = state.t;
         let n = crate::rigid::driver::step_count(t0, t_end, h)?;
@@ -256,7 +257,7 @@ impl Rattle {
             run.max_linear_momentum_change = run.max_linear_momentum_change.max(dp);
             let dl = (system.angular_momentum(state) - l0).norm();
             run.max_angular_momentum_change = run.max_angular_momentum_change.max(dl);
-            observer(k, state, &report).map_err(|reason| Error::ObserverFailed { t: state.t, reason })?;
+            observer(k, state, &report, self).map_err(|reason| Error::ObserverFailed { t: state.t, reason })?;
         }
         Ok(run)
     }
@@ -395,7 +396,7 @@ impl Simulation {
     /// [`Rattle::integrate`]'s errors.
     pub fn integrate<O>(&mut self, state: &mut MultibodyState, t_end: f64, h: f64, observer: O) -> Result<MultibodyRun>
     where
-        O: FnMut(u64, &MultibodyState, &StepReport) -> core::result::Result<(), String>,
+        O: FnMut(u64, &MultibodyState, &StepReport, &Rattle) -> core::result::Result<(), String>,
     {
         self.check_step(state, h)?;
         self.integrator.integrate(&self.system, state, t_end, h, observer)
@@ -416,7 +417,7 @@ impl Simulation {
     /// `state.t` into `ctrl` (which holds the previous step's; one buffer for the run),
     /// then [`MultibodySystem::set_ctrl`] checks it (its length, finite values) — the
     /// control of a Python callback, a table ([`super::control::ControlTable`], held) or a
-    /// constant. `observer(k, system, state, report)` after every step.
+    /// constant. `observer(k, system, state, report, integrator)` after every step.
     ///
     /// # Errors
     /// [`Rattle::integrate`]'s; [`Error::ObserverFailed`] when `control` returns an error;
@@ -433,7 +434,7 @@ impl Simulation {
     ) -> Result<MultibodyRun>
     where
         C: FnMut(&MultibodySystem, &MultibodyState, &mut [f64]) -> core::result::Result<(), String>,
-        O: FnMut(u64, &MultibodySystem, &MultibodyState, &StepReport) -> core::result::Result<(), String>,
+        O: FnMut(u64, &MultibodySystem, &MultibodyState, &StepReport, &Rattle) -> core::result::Result<(), String>,
     {
         let t0 = state.t;
         let n = crate::rigid::driver::step_count(t0, t_end, h)?;
@@ -463,7 +464,8 @@ impl Simulation {
             run.max_linear_momentum_change = run.max_linear_momentum_change.max(dp);
             let dl = (self.system.angular_momentum(state) - l0).norm();
             run.max_angular_momentum_change = run.max_angular_momentum_change.max(dl);
-            observer(k, &self.system, state, &report).map_err(|reason| Error::ObserverFailed { t: state.t, reason })?;
+            observer(k, &self.system, state, &report, &self.integrator)
+                .map_err(|reason| Error::ObserverFailed { t: state.t, reason })?;
         }
         Ok(run)
     }

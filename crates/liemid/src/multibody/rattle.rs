@@ -187,6 +187,15 @@ impl Rattle {
         system.constraint_violation_with(state, &self.work.limit)
     }
 
+    /// The contacts touching at the end of the last step, with `state` that step's end:
+    /// each contact's point and the force of the step's closing half-kick (the μ-kick) on
+    /// its first body from its second (or the world), `[x, y, z, f_x, f_y, f_z]` (m, N),
+    /// appended to `out`. Nothing before a step, without contacts, or after a composition
+    /// (which runs without contacts). Reference: docs/theory/multibody.md §6.
+    pub fn contact_forces(&self, state: &MultibodyState, out: &mut Vec<[f64; 6]>) {
+        self.work.contact_forces(&state.c, &state.rotation, out);
+    }
+
     /// Set the state's time to `t` (a driver's exact step times) keeping the cache of the
     /// start-of-step forces and rows.
     pub fn set_time(&mut self, state: &mut MultibodyState, t: f64) {

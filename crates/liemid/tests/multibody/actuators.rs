@@ -66,7 +66,7 @@ fn a_position_actuator_holds_the_arm_at_its_keyframe_control() {
     let prepared = Simulation::prepare(&model, MultibodyMethod::Liemid).unwrap();
     let (mut sim, mut s) = (prepared.simulation, prepared.state);
     let h = 1e-3;
-    sim.integrate(&mut s, 3.0, h, |_, _, _| Ok(())).unwrap();
+    sim.integrate(&mut s, 3.0, h, |_, _, _, _| Ok(())).unwrap();
     let q = angle(&sim, &s);
     // Statics about y: gravity's torque on the rod at angle q is −m g l cos q... about +y a
     // positive q lowers the tip (x → −z), so the torque is m g 0.5 cos q.
@@ -94,7 +94,7 @@ fn clamps_apply_in_mujocos_order() {
     let prepared = Simulation::prepare(&zero_g, MultibodyMethod::Liemid).unwrap();
     let (mut sim, mut s) = (prepared.simulation, prepared.state);
     let h = 1e-3;
-    sim.integrate(&mut s, 0.1, h, |_, _, _| Ok(())).unwrap();
+    sim.integrate(&mut s, 0.1, h, |_, _, _, _| Ok(())).unwrap();
     // τ = min(3 + 2·1, 4) = 4 on I = 0.26: q = ½ (4/0.26) t², to the step's O(h²) (the
     // centre of mass turns on a circle).
     let expected = 0.5 * 4.0 / 0.26 * 0.01;
@@ -183,7 +183,7 @@ fn rows_the_method_cannot_hold_are_refused_before_the_first_step() {
     let (mut sim, mut s) = (prepared.simulation, prepared.state);
     let start = s.clone();
     let err = sim
-        .integrate(&mut s, 0.1, 2e-3, |_, _, _| Ok(()))
+        .integrate(&mut s, 0.1, 2e-3, |_, _, _, _| Ok(()))
         .unwrap_err()
         .to_string();
     assert!(err.contains("`shoulder`") && err.contains("largest step"), "{err}");
@@ -199,14 +199,14 @@ fn rows_the_method_cannot_hold_are_refused_before_the_first_step() {
         .unwrap();
     let omega = (1e6f64 / 0.26).sqrt();
     assert!(largest < 2.0 / omega && largest > 0.95 * 2.0 / omega, "{largest}");
-    sim.integrate(&mut s, 0.1, 0.9 * largest, |_, _, _| Ok(())).unwrap();
+    sim.integrate(&mut s, 0.1, 0.9 * largest, |_, _, _, _| Ok(())).unwrap();
     // A stiff damper (kv = 500, x = h d / (2 I) ≈ 1 at h = 1e-3) with liemid4: the negative
     // sub-step has no solution; refused, and liemid holds it.
     let model = arm("<velocity joint=\"shoulder\" kv=\"500\"/>", "ctrl=\"0\"", "");
     let prepared = Simulation::prepare(&model, MultibodyMethod::Liemid4).unwrap();
     let (mut sim, mut s) = (prepared.simulation, prepared.state);
     let err = sim
-        .integrate(&mut s, 0.1, 1e-2, |_, _, _| Ok(()))
+        .integrate(&mut s, 0.1, 1e-2, |_, _, _, _| Ok(()))
         .unwrap_err()
         .to_string();
     assert!(
@@ -215,7 +215,7 @@ fn rows_the_method_cannot_hold_are_refused_before_the_first_step() {
     );
     let prepared = Simulation::prepare(&model, MultibodyMethod::Liemid).unwrap();
     let (mut sim, mut s) = (prepared.simulation, prepared.state);
-    sim.integrate(&mut s, 0.1, 1e-2, |_, _, _| Ok(())).unwrap();
+    sim.integrate(&mut s, 0.1, 1e-2, |_, _, _, _| Ok(())).unwrap();
 }
 
 #[test]

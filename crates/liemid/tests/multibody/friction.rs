@@ -67,16 +67,16 @@ fn a_pendulum_held_by_friction_stays_and_a_pushed_one_stops() {
     let model = mjcf::parse(&text(5.0, 0.0), "rod.xml").unwrap().model;
     let prepared = Simulation::prepare(&model, MultibodyMethod::Liemid).unwrap();
     let (mut sim, mut s) = (prepared.simulation, prepared.state);
-    sim.integrate(&mut s, 2.0, 1e-3, |_, _, _| Ok(())).unwrap();
+    sim.integrate(&mut s, 2.0, 1e-3, |_, _, _, _| Ok(())).unwrap();
     let q = sim.system.joint_coordinate(&s, 0).unwrap();
     assert!((q - 0.3).abs() < 1e-12, "held: {q}");
     // Pushed at 3 rad/s against friction 20 N m: it slows, stops and sticks.
     let model = mjcf::parse(&text(20.0, 3.0), "rod.xml").unwrap().model;
     let prepared = Simulation::prepare(&model, MultibodyMethod::Liemid).unwrap();
     let (mut sim, mut s) = (prepared.simulation, prepared.state);
-    sim.integrate(&mut s, 1.0, 1e-3, |_, _, _| Ok(())).unwrap();
+    sim.integrate(&mut s, 1.0, 1e-3, |_, _, _, _| Ok(())).unwrap();
     let q1 = sim.system.joint_coordinate(&s, 0).unwrap();
-    sim.integrate(&mut s, 2.0, 1e-3, |_, _, _| Ok(())).unwrap();
+    sim.integrate(&mut s, 2.0, 1e-3, |_, _, _, _| Ok(())).unwrap();
     let q2 = sim.system.joint_coordinate(&s, 0).unwrap();
     assert!(q1 > 0.35 && (q2 - q1).abs() < 1e-12, "q1 {q1}, q2 {q2}");
     // The joint-space methods refuse friction, naming the joint.

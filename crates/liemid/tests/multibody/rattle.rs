@@ -283,7 +283,7 @@ fn long_run(model: &Model, h: f64, steps: u64) -> (f64, f64, f64) {
     let mut scale = 0.0f64;
     let t_end = steps as f64 * h;
     let summary = sys
-        .integrate(&mut s, t_end, h, |k, state, report| {
+        .integrate(&mut s, t_end, h, |k, state, report, _| {
             pos = pos.max(report.position_violation);
             vel = vel.max(report.velocity_violation);
             let _ = state;
@@ -682,7 +682,7 @@ fn four_bar_velocity_projection_and_compositions() {
         assert!(before > 0.1 && pos < 1e-15 && vel < 1e-14, "{before} {pos:e} {vel:e}");
         let mut worst = 0.0f64;
         let summary = sys
-            .integrate(&mut s, 0.5, 1e-3, |_, _, r| {
+            .integrate(&mut s, 0.5, 1e-3, |_, _, r, _| {
                 worst = worst.max(r.position_violation.max(r.velocity_violation));
                 Ok(())
             })

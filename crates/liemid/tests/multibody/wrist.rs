@@ -131,7 +131,10 @@ fn without_armature_the_stiff_wrist_is_refused_before_the_first_step() {
     let prepared = Simulation::prepare(&model, MultibodyMethod::Liemid4).unwrap();
     let (mut sim, mut s) = (prepared.simulation, prepared.state);
     let start = s.clone();
-    let err = sim.integrate(&mut s, 0.2, h, |_, _, _| Ok(())).unwrap_err().to_string();
+    let err = sim
+        .integrate(&mut s, 0.2, h, |_, _, _, _| Ok(()))
+        .unwrap_err()
+        .to_string();
     println!("{err}");
     assert!(
         err.contains("MB-LIEMID4") && err.contains("`wrist_") && err.contains("largest step"),

@@ -104,6 +104,9 @@ pub(in crate::multibody) struct ContactScratch {
     pub(super) end_points: Vec<ContactPoint>,
     pub(super) last_end_points: Vec<ContactPoint>,
     pub(super) last_end_sigma: Vec<f64>,
+    /// How many of `last_end_points` touched at the end of the last step (0 when none did:
+    /// the warm start keeps older ones).
+    pub(super) end_count: usize,
     /// Per point, the normal speed at which it would meet (restitution only).
     pub(super) approach: Vec<f64>,
     pub(super) lambda_ok: Vec<[f64; 6]>,

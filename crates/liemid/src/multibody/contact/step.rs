@@ -4,6 +4,7 @@
 //! `scratch.rs`).
 
 use crate::error::{Error, Result};
+use crate::linalg::{Mat3, Vec3};
 
 use super::super::method::StepReport;
 use super::super::state::MultibodyState;
@@ -434,6 +435,7 @@ impl Workspace {
             }
         }
         if s.rows.is_empty() {
+            s.end_count = 0;
             self.contact = s;
             return Ok(false);
         }
@@ -512,8 +514,23 @@ impl Workspace {
         core::mem::swap(&mut s.last_end_points, &mut s.end_points);
         s.last_end_sigma.clear();
         s.last_end_sigma.extend_from_slice(&s.sigma);
+        s.end_count = n;
         self.contact = s;
         Ok(true)
+    }
+
+    /// The contacts touching at the end of the last step at `(c, R)` (its end), each as
+    /// its point and the force of the step's closing half-kick on body `a` (from `b`; N),
+    /// `[x, y, z, f_x, f_y, f_z]`, appended to `out`.
+    pub(in crate::multibody) fn contact_forces(&self, c: &[Vec3], r: &[Mat3], out: &mut Vec<[f64; 6]>) {
+        let s = &self.contact;
+        let n = s.end_count.min(s.last_end_points.len());
+        for (p, sigma) in s.last_end_points[..n].iter().zip(s.last_end_sigma.chunks_exact(3)) {
+            let (x, nrm) = p.application(c, r);
+            let (t1, t2) = tangents(nrm);
+            let f = nrm * sigma[0] + t1 * sigma[1] + t2 * sigma[2];
+            out.push([x.x, x.y, x.z, f.x, f.y, f.z]);
+        }
     }
 }
 
