@@ -11,7 +11,7 @@ use liemid::multibody::{MultibodyState, MultibodySystem, Prepared, Rattle, Simul
 use serde_json::json;
 
 use super::scenario::{self, Method, MultibodyScenario};
-use super::sink::{Halt, Poses, Record, Sink};
+use super::sink::{after_step, Halt, Poses, Record, Sink};
 use crate::shared::command::{check_positive, emit_json, CmdResult, Failure};
 use crate::shared::interrupt::{progress, Interrupt};
 use crate::shared::output::OutputPlan;
@@ -396,14 +396,7 @@ fn run_maximal(
                     return Err("the output failed".into());
                 }
             }
-            bar.inc(1);
-            match interrupt.requested() {
-                Some(signal) if k < n => {
-                    stop = Some(Halt::Signal(signal, k));
-                    Err("interrupted".into())
-                }
-                _ => Ok(()),
-            }
+            after_step(k, n, &bar, &interrupt, &mut stop)
         };
     let outcome = match table {
         None => {

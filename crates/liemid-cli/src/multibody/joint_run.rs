@@ -19,7 +19,7 @@ use ode_solvers::{DVector, System};
 use serde_json::json;
 
 use super::scenario::MultibodyScenario;
-use super::sink::{Halt, Poses, Sink};
+use super::sink::{after_step, Halt, Poses, Sink};
 use crate::shared::command::Failure;
 use crate::shared::interrupt::{progress, Interrupt};
 
@@ -165,14 +165,7 @@ pub(super) fn rk4(
                 return Err("the output failed".into());
             }
         }
-        bar.inc(1);
-        match interrupt.requested() {
-            Some(signal) if k < n => {
-                stop = Some(Halt::Signal(signal, k));
-                Err("interrupted".into())
-            }
-            _ => Ok(()),
-        }
+        after_step(k, n, &bar, &interrupt, &mut stop)
     };
     // A table's control, held over each step from its start (docs/theory/multibody.md §8).
     let outcome = match table {

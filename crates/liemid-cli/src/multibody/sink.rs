@@ -8,6 +8,7 @@ use liemid::error::Num;
 
 use super::scenario::MultibodyScenario;
 use crate::shared::command::Failure;
+use crate::shared::interrupt::Interrupt;
 use crate::shared::output::{Format, TrajectoryWriter};
 use crate::shared::view::ViewPage;
 
@@ -188,4 +189,23 @@ pub(super) enum Halt {
     Output(Failure),
     /// `SIGINT` or `SIGTERM` (its name and exit code) after `steps` steps.
     Signal((&'static str, u8), u64),
+}
+
+/// What an observer does after step `k` of `n` besides observing: the progress bar, and a
+/// pending signal ends the run before the last step (kept in `stop`).
+pub(super) fn after_step(
+    k: u64,
+    n: u64,
+    bar: &indicatif::ProgressBar,
+    interrupt: &Interrupt,
+    stop: &mut Option<Halt>,
+) -> Result<(), String> {
+    bar.inc(1);
+    match interrupt.requested() {
+        Some(signal) if k < n => {
+            *stop = Some(Halt::Signal(signal, k));
+            Err("interrupted".into())
+        }
+        _ => Ok(()),
+    }
 }

@@ -140,13 +140,7 @@ impl JointGeometry {
             Link::World => (None, j.anchor_parent),
             Link::Body(p) => (Some(p), j.anchor_parent - model.bodies[p].com),
         };
-        let (u_child, u_parent) = match j.kind {
-            JointKind::Universal { first, second } => (second, j.reference_rotation * first),
-            kind => {
-                let u = kind.axis().unwrap_or(Vec3::new(0.0, 0.0, 1.0));
-                (u, j.reference_rotation * u)
-            }
-        };
+        let (u_child, u_parent) = j.axes();
         JointGeometry {
             kind: j.kind,
             parent,

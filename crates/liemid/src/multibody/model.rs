@@ -111,6 +111,21 @@ pub struct Joint {
     pub actuator_force_range: Option<(f64, f64)>,
 }
 
+impl Joint {
+    /// The joint's axis in the child's frame and in the parent's (the reference rotation
+    /// applied): a universal joint's second and first axes, `z` for a joint without one.
+    #[must_use]
+    pub fn axes(&self) -> (Vec3, Vec3) {
+        match self.kind {
+            JointKind::Universal { first, second } => (second, self.reference_rotation * first),
+            kind => {
+                let u = kind.axis().unwrap_or(Vec3::new(0.0, 0.0, 1.0));
+                (u, self.reference_rotation * u)
+            }
+        }
+    }
+}
+
 /// An actuator on a hinge or slide joint, as MuJoCo defines it with a joint transmission:
 /// length `L = gear · qpos`, velocity `V = gear · q̇`, the control clamped to `ctrl_range`,
 /// the scalar force `f = (g₀ + g₁ L + g₂ V) u + b₀ + b₁ L + b₂ V` clamped to `force_range`,
@@ -775,13 +790,18 @@ impl Model {
             if a == 0.0 || !matches!(self.joints[k].kind, JointKind::Hinge { .. }) {
                 continue;
             }
-            let g = super::constraints::JointGeometry::new(self, k);
+            let joint = &self.joints[k];
+            let (u_child, u_parent) = joint.axes();
+            let parent = match joint.parent {
+                Link::World => None,
+                Link::Body(p) => Some(p),
+            };
             let body_rate = |i: usize| state.rotation[i].tr_mul_vec(w[i]);
-            let wp = g.parent.map_or(Vec3::ZERO, body_rate);
-            let rate = g.u_child.dot(body_rate(g.child)) - g.u_parent.dot(wp);
-            state.pi[g.child] += g.u_child * (a * rate);
-            if let Some(p) = g.parent {
-                state.pi[p] -= g.u_parent * (a * rate);
+            let wp = parent.map_or(Vec3::ZERO, body_rate);
+            let rate = u_child.dot(body_rate(joint.child)) - u_parent.dot(wp);
+            state.pi[joint.child] += u_child * (a * rate);
+            if let Some(p) = parent {
+                state.pi[p] -= u_parent * (a * rate);
             }
         }
         Ok(state)

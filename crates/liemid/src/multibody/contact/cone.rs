@@ -112,7 +112,6 @@ pub(super) fn solve<R: Response>(
 ) -> Solved {
     let n = mu.len();
     let mut sweeps = 0;
-    let mut finished = 0;
     let (mut interval, mut next_finish) = (FINISH_EVERY, FINISH_EVERY);
     // The violation last halved and when: a solve that has not halved it in
     // `STALL_SWEEPS` sweeps is stalled (cycling near a cone's edge) and stops.
@@ -139,12 +138,11 @@ pub(super) fn solve<R: Response>(
                 converged: false,
             };
         }
-        if sweeps > 0 && sweeps == next_finish && finished != sweeps {
+        if sweeps == next_finish {
             // Once per such sweep count (each may change the forces, then the rates are
-            // measured again); after a finish that changed nothing the next waits twice
-            // as long (a pile's stalled solves spent most of their time in finishes that
-            // failed every 20 sweeps).
-            finished = sweeps;
+            // measured again; `next_finish` moves on either way); after a finish that
+            // changed nothing the next waits twice as long (a pile's stalled solves spent
+            // most of their time in finishes that failed every 20 sweeps).
             if finish(response, sigma, rates) || align(response, mu, sigma, rates) {
                 interval = FINISH_EVERY;
                 next_finish = sweeps + interval;
