@@ -321,7 +321,7 @@ mod tests {
                 rates: &mut kept,
             };
             dense.start(&r0, &sigma);
-            let done = cone::solve(&mut dense, &mu, &mut sigma, &mut rates, 1e-13, |d, sigma, _| {
+            let done = cone::solve(&mut dense, &mu, &mut sigma, &mut rates, 1e-13, None, |d, sigma, _| {
                 newton(&w, &r0, &mu, sigma, d.rates, 1e-13, &mut scratch)
             });
             assert!(
@@ -528,17 +528,26 @@ mod tests {
     const STALLED_TOL: f64 = 3.132091952673165e-12;
 
     #[test]
-    fn newton_finishes_in_one_call_a_problem_that_takes_gauss_seidel_a_hundred_sweeps() {
+    fn newton_finishes_in_one_call_a_problem_that_takes_gauss_seidel_dozens_of_sweeps() {
         let mu = [0.6; 4];
-        // Gauss–Seidel alone from its own forces.
+        // Gauss–Seidel alone from its own forces: 46 sweeps with its extrapolation (more
+        // than 100 without, which is what this problem was dumped for).
         let (mut sigma, mut rates, mut kept) = (STALLED_SIGMA.to_vec(), vec![0.0; 12], vec![0.0; 12]);
         let mut dense = cone::Dense {
             w: &STALLED_W,
             rates: &mut kept,
         };
         dense.start(&STALLED_R0, &sigma);
-        let alone = cone::solve(&mut dense, &mu, &mut sigma, &mut rates, STALLED_TOL, |_, _, _| false);
-        assert!(alone.converged && alone.sweeps > 100, "{alone:?}");
+        let alone = cone::solve(
+            &mut dense,
+            &mu,
+            &mut sigma,
+            &mut rates,
+            STALLED_TOL,
+            Some(&mut Vec::new()),
+            |_, _, _| false,
+        );
+        assert!(alone.converged && (40..60).contains(&alone.sweeps), "{alone:?}");
         // Newton from the same forces, in a few iterations.
         let mut sigma = STALLED_SIGMA.to_vec();
         let mut scratch = Newton::default();

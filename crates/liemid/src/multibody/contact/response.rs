@@ -86,7 +86,7 @@ fn solve_dense(s: &mut ContactScratch, tol: f64) -> cone::Solved {
     kept.resize(r0.len(), 0.0);
     let mut dense = cone::Dense { w, rates: kept };
     dense.start(r0, sigma);
-    cone::solve(&mut dense, mu, sigma, rates, tol, |d, sigma, _| {
+    cone::solve(&mut dense, mu, sigma, rates, tol, None, |d, sigma, _| {
         super::polish::polish(w, r0, mu, sigma, d.rates, tol, polish)
             || super::newton::newton(w, r0, mu, sigma, d.rates, tol, newton)
             || super::polish::slide_newton(w, r0, mu, sigma, d.rates, tol, slide)
@@ -241,12 +241,20 @@ pub(super) fn solve_contacts(sys: &MultibodySystem, s: &mut ContactScratch, hh: 
         return solve_dense(s, tol);
     }
     let mut cluster = core::mem::take(&mut s.cluster);
+    let mut previous = core::mem::take(&mut s.previous);
     let (mut local, sigma, rates, mu) = s.local(sys, hh);
     let bodies = sys.mass.len();
-    let done = cone::solve(&mut local, mu, sigma, rates, tol, |response, sigma, rates| {
-        super::cluster::finish(response, bodies, mu, sigma, rates, tol, &mut cluster)
-    });
+    let done = cone::solve(
+        &mut local,
+        mu,
+        sigma,
+        rates,
+        tol,
+        Some(&mut previous),
+        |response, sigma, rates| super::cluster::finish(response, bodies, mu, sigma, rates, tol, &mut cluster),
+    );
     s.cluster = cluster;
+    s.previous = previous;
     done
 }
 
