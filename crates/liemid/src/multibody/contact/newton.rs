@@ -321,9 +321,18 @@ mod tests {
                 rates: &mut kept,
             };
             dense.start(&r0, &sigma);
-            let done = cone::solve(&mut dense, &mu, &mut sigma, &mut rates, 1e-13, None, |d, sigma, _| {
-                newton(&w, &r0, &mu, sigma, d.rates, 1e-13, &mut scratch)
-            });
+            let done = cone::solve(
+                &mut dense,
+                &mu,
+                &mut sigma,
+                &mut rates,
+                cone::Tolerance {
+                    exact: 1e-13,
+                    loose: 0.0,
+                },
+                None,
+                |d, sigma, _| newton(&w, &r0, &mu, sigma, d.rates, 1e-13, &mut scratch),
+            );
             assert!(
                 done.converged && cone::violation(&rates, &sigma, &mu) <= 1e-13,
                 "v = {v:?}, ω = {omega:?}"

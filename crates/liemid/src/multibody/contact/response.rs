@@ -70,7 +70,8 @@ impl Workspace {
 
 /// The cone problem of `s` (`W` dense in `s.w`, `r₀`, `µ`) from the forces in `s.sigma`, with
 /// the active-set finish (`polish.rs`).
-fn solve_dense(s: &mut ContactScratch, tol: f64) -> cone::Solved {
+fn solve_dense(s: &mut ContactScratch, tolerance: cone::Tolerance) -> cone::Solved {
+    let tol = tolerance.exact;
     let ContactScratch {
         w,
         r0,
@@ -86,7 +87,7 @@ fn solve_dense(s: &mut ContactScratch, tol: f64) -> cone::Solved {
     kept.resize(r0.len(), 0.0);
     let mut dense = cone::Dense { w, rates: kept };
     dense.start(r0, sigma);
-    cone::solve(&mut dense, mu, sigma, rates, tol, None, |d, sigma, _| {
+    cone::solve(&mut dense, mu, sigma, rates, tolerance, None, |d, sigma, _| {
         super::polish::polish(w, r0, mu, sigma, d.rates, tol, polish)
             || super::newton::newton(w, r0, mu, sigma, d.rates, tol, newton)
             || super::polish::slide_newton(w, r0, mu, sigma, d.rates, tol, slide)
@@ -236,10 +237,16 @@ pub(super) fn minus_w_sigma(sys: &MultibodySystem, s: &mut ContactScratch, hh: f
 
 /// The cone problem of `s` from the forces in `s.sigma`, by the response `s` is prepared
 /// for.
-pub(super) fn solve_contacts(sys: &MultibodySystem, s: &mut ContactScratch, hh: f64, tol: f64) -> cone::Solved {
+pub(super) fn solve_contacts(
+    sys: &MultibodySystem,
+    s: &mut ContactScratch,
+    hh: f64,
+    tolerance: cone::Tolerance,
+) -> cone::Solved {
     if !s.local {
-        return solve_dense(s, tol);
+        return solve_dense(s, tolerance);
     }
+    let tol = tolerance.exact;
     let mut cluster = core::mem::take(&mut s.cluster);
     let mut previous = core::mem::take(&mut s.previous);
     let (mut local, sigma, rates, mu) = s.local(sys, hh);
@@ -249,7 +256,7 @@ pub(super) fn solve_contacts(sys: &MultibodySystem, s: &mut ContactScratch, hh: 
         mu,
         sigma,
         rates,
-        tol,
+        tolerance,
         Some(&mut previous),
         |response, sigma, rates| super::cluster::finish(response, bodies, mu, sigma, rates, tol, &mut cluster),
     );

@@ -399,7 +399,11 @@ impl Workspace {
             // curvature leaving the linearised ones off W's range; a tenth made the standing
             // quadruped take 5 drifts a step, a thousandth 1.9, the full tolerance stalls
             // piles sooner); the step is accepted above, on the law at the drift's end.
-            let done = solve_contacts(sys, s, hh, (0.25 * tol).max(1e-3 * worst));
+            let inner = cone::Tolerance {
+                exact: (0.25 * tol).max(1e-3 * worst),
+                loose: 0.0,
+            };
+            let done = solve_contacts(sys, s, hh, inner);
             report.contact_sweeps += u32::try_from(done.sweeps).unwrap_or(u32::MAX);
             if !done.converged {
                 stalled = Some((done, worst));
@@ -485,12 +489,15 @@ impl Workspace {
         let vscale = (0..sys.mass.len()).fold(sys.velocity_floor(), |m, i| {
             m.max(self.vel[i].norm() + geometry.length * self.omega[i].norm())
         });
-        let tol = 1e-12 * vscale;
-        let done = solve_contacts(sys, &mut s, hh, tol);
-        report.contact_sweeps += u32::try_from(done.sweeps).unwrap_or(u32::MAX);
         // A solve that stalls is taken where what it leaves would move a contact by at most
         // `ACCEPT` of the length over a step (the position problem's acceptance), counted.
         let accept = ACCEPT * geometry.length / (2.0 * hh);
+        let tolerance = cone::Tolerance {
+            exact: 1e-12 * vscale,
+            loose: accept,
+        };
+        let done = solve_contacts(sys, &mut s, hh, tolerance);
+        report.contact_sweeps += u32::try_from(done.sweeps).unwrap_or(u32::MAX);
         if !done.converged && done.worst <= accept {
             report.loose_steps += 1;
             report.loose_violation = report.loose_violation.max(done.worst * 2.0 * hh / geometry.length);
