@@ -552,7 +552,10 @@ mod tests {
             &mu,
             &mut sigma,
             &mut rates,
-            STALLED_TOL,
+            cone::Tolerance {
+                exact: STALLED_TOL,
+                loose: 0.0,
+            },
             Some(&mut Vec::new()),
             |_, _, _| false,
         );
