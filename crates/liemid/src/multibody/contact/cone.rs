@@ -399,6 +399,60 @@ mod tests {
         }
     }
 
+    /// Two frictionless contacts whose normals differ by a hair (`W`'s eigenvalues 2 and
+    /// 1e-5): Gauss–Seidel contracts by `1 − 2e-5` a sweep along their difference. Aiming
+    /// at the law exactly, the solve stops as stalled after [`STALL_SWEEPS`]; told that its
+    /// caller accepts the violation it has, after [`LOOSE_STALL_SWEEPS`].
+    #[test]
+    fn a_stalled_solve_inside_its_acceptance_stops_sooner() {
+        let c = 1.0 - 1e-5;
+        let mut w = [0.0; 36];
+        for (i, j, v) in [
+            (0, 0, 1.0),
+            (3, 3, 1.0),
+            (0, 3, c),
+            (3, 0, c),
+            (1, 1, 1.0),
+            (2, 2, 1.0),
+            (4, 4, 1.0),
+            (5, 5, 1.0),
+        ] {
+            w[i * 6 + j] = v;
+        }
+        // r₀ = −W (1, 1): both pressed, σ_n = 1 each at the solution.
+        let r0 = [-(1.0 + c), 0.0, 0.0, -(1.0 + c), 0.0, 0.0];
+        let run = |loose: f64| {
+            let (mut sigma, mut rates, mut kept) = ([0.0; 6], [0.0; 6], [0.0; 6]);
+            let mut dense = Dense {
+                w: &w,
+                rates: &mut kept,
+            };
+            dense.start(&r0, &sigma);
+            let tolerance = Tolerance { exact: 1e-14, loose };
+            solve(
+                &mut dense,
+                &[0.0; 2],
+                &mut sigma,
+                &mut rates,
+                tolerance,
+                None,
+                |_, _, _| false,
+            )
+        };
+        let exact = run(0.0);
+        let loose = run(1.0);
+        assert!(!exact.converged && !loose.converged);
+        assert!(exact.worst < 1.0 && loose.worst < 1.0, "{exact:?} {loose:?}");
+        assert!(
+            exact.sweeps >= STALL_SWEEPS && exact.sweeps < STALL_SWEEPS + 10,
+            "{exact:?}"
+        );
+        assert!(
+            loose.sweeps >= LOOSE_STALL_SWEEPS && loose.sweeps < LOOSE_STALL_SWEEPS + 10,
+            "{loose:?}"
+        );
+    }
+
     #[test]
     fn one_contact_sticks_below_the_cone_and_slides_on_it() {
         // A point of unit mass on a plane: W = I (per unit force over the half-kick).
