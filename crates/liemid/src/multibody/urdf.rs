@@ -20,7 +20,10 @@
 //!   refused (naming the link) when it would move.
 //! - A `revolute` or `prismatic` joint without `<limit lower/upper>` is taken as unlimited
 //!   (the specification requires the limit; this is noted in [`Loaded::ignored`]).
-//! - Visuals are drawn (mesh files found as [`mesh_path`] says); collisions, materials, transmissions, Gazebo tags, joint friction, effort and
+//! - Visuals are drawn (mesh files found as [`mesh_path`] says). Collisions touch (MuJoCo's
+//!   import: friction 1) and are drawn hidden, in group 3; a collision mesh touches as its
+//!   file's convex hull, as MuJoCo collides meshes, when [`load`] finds the file (not in a
+//!   model parsed from text: noted). Materials, transmissions, Gazebo tags, effort and
 //!   velocity limits, mimic, calibration and safety controllers are noted as ignored.
 
 use std::collections::HashMap;
@@ -39,14 +42,16 @@ use crate::linalg::{Mat3, Vec3};
 
 pub use super::xml::Loaded;
 
-/// Loads a URDF file (at most 64 MiB); its visuals' mesh files are found (see
-/// [`mesh_path`]) and listed in [`Loaded::files`], not read.
+/// Loads a URDF file (at most 64 MiB); its visuals' and collisions' mesh files are found
+/// (see [`mesh_path`]) and listed in [`Loaded::files`], not read. A collision mesh whose
+/// file is not found does not touch (noted in [`Loaded::ignored`]).
 pub fn load(path: &Path) -> Result<Loaded> {
     let text = read_bounded(path)?;
-    let mut loaded = parse(&text, &path.display().to_string())?;
+    let mut loaded = parse_unresolved(&text, &path.display().to_string())?;
     loaded.files = vec![path.to_path_buf()];
     let dir = path.parent().unwrap_or(Path::new(""));
-    for shape in &mut loaded.shapes {
+    let shapes = loaded.shapes.iter_mut().chain(&mut loaded.model.collision.shapes);
+    for shape in shapes {
         if let ShapeKind::Mesh { file, path, .. } = &mut shape.kind {
             *path = mesh_path(dir, file);
             if let Ok(p) = path {
@@ -56,7 +61,29 @@ pub fn load(path: &Path) -> Result<Loaded> {
             }
         }
     }
+    drop_unfound_collision_meshes(&mut loaded);
     Ok(loaded)
+}
+
+/// Collision meshes without a file found (all of them in a model parsed from text) do not
+/// touch: removed from the contact shapes (the drawn shapes keep them), and noted.
+fn drop_unfound_collision_meshes(loaded: &mut Loaded) {
+    let unfound = |s: &Shape| match &s.kind {
+        ShapeKind::Mesh { path, .. } => !path.as_ref().is_ok_and(|p| p.is_file()),
+        _ => false,
+    };
+    let shapes = &mut loaded.model.collision.shapes;
+    let before = shapes.len();
+    shapes.retain(|s| !unfound(s));
+    if shapes.len() < before {
+        let note = "collision meshes (not simulated where the mesh file is not found)";
+        if !loaded.ignored.iter().any(|n| n == note) {
+            loaded.ignored.push(note.to_string());
+        }
+    }
+    for s in loaded.shapes.iter_mut().filter(|s| s.collision.is_some() && unfound(s)) {
+        s.collision = None;
+    }
 }
 
 /// How many directories above the URDF's a `package://` path is looked for in.
@@ -92,8 +119,16 @@ pub fn mesh_path(dir: &Path, filename: &str) -> std::result::Result<std::path::P
     Ok(if p.is_absolute() { p.to_path_buf() } else { dir.join(p) })
 }
 
-/// Parses URDF text; `name_for_errors` names the file in error messages.
+/// Parses URDF text; `name_for_errors` names the file in error messages. Without a
+/// directory to find mesh files in, collision meshes do not touch (noted; see [`load`]).
 pub fn parse(text: &str, name_for_errors: &str) -> Result<Loaded> {
+    let mut loaded = parse_unresolved(text, name_for_errors)?;
+    drop_unfound_collision_meshes(&mut loaded);
+    Ok(loaded)
+}
+
+/// [`parse`] with its collision meshes kept, for [`load`] to find their files.
+fn parse_unresolved(text: &str, name_for_errors: &str) -> Result<Loaded> {
     let doc = parse_document(text, name_for_errors, Sources::NONE)?;
     let lines = line_starts(text);
     let cx = Ctx::new(name_for_errors, Sources::NONE, &lines);
@@ -331,12 +366,9 @@ fn read_link<'a, 'i>(cx: &Ctx, node: Node<'a, 'i>, ignored: &mut Ignored) -> Res
             "visual" => shapes.extend(read_visual(cx, c, name)?),
             "collision" => {
                 // The contact shape (MuJoCo's URDF import: contype and conaffinity 1, friction
-                // 1), in the hidden group 3 as collision geoms are drawn; meshes do not touch.
+                // 1), in the hidden group 3 as collision geoms are drawn; a mesh touches as
+                // its file's convex hull once `load` has found the file.
                 if let Some(mut s) = read_visual(cx, c, name)? {
-                    if matches!(s.kind, ShapeKind::Mesh { .. }) {
-                        ignored.note("collision meshes (not simulated: meshes are drawn only)");
-                        continue;
-                    }
                     s.group = 3;
                     s.collision = Some(super::shapes::Collides {
                         name: c.attribute("name").map(str::to_string),

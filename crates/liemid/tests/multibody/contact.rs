@@ -496,29 +496,7 @@ fn a_mesh_cube_touches_as_its_convex_hull_and_rests_on_a_face() {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let a = 0.05;
-    let corner = |i: usize| [[-a, a][i & 1], [-a, a][(i >> 1) & 1], [-a, a][(i >> 2) & 1]];
-    // Each face as two triangles of its four corners (the hull needs the points only).
-    let faces = [
-        [0, 1, 3, 2],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 3, 7, 6],
-        [0, 2, 6, 4],
-        [1, 3, 7, 5],
-    ];
-    let mut stl = String::from("solid cube\n");
-    for f in faces {
-        for tri in [[f[0], f[1], f[2]], [f[0], f[2], f[3]]] {
-            stl += "facet normal 0 0 0\nouter loop\n";
-            for v in tri {
-                let p = corner(v);
-                stl += &format!("vertex {} {} {}\n", p[0], p[1], p[2]);
-            }
-            stl += "endloop\nendfacet\n";
-        }
-    }
-    stl += "endsolid cube\n";
-    std::fs::write(dir.join("cube.stl"), stl).unwrap();
+    write_cube_stl(&dir.join("cube.stl"), a);
     let model_path = dir.join("cube.xml");
     std::fs::write(
         &model_path,
@@ -589,4 +567,91 @@ fn a_humanoid_falls_over_onto_the_floor_and_lies_there() {
         height < 0.3 && speed < 1e-2,
         "torso at {height} m moving at {speed} m/s (length {length})"
     );
+}
+
+/// A cube of half-edge `a` about the origin as an ASCII STL (twelve triangles).
+fn write_cube_stl(path: &std::path::Path, a: f64) {
+    let corner = |i: usize| [[-a, a][i & 1], [-a, a][(i >> 1) & 1], [-a, a][(i >> 2) & 1]];
+    // Each face as two triangles of its four corners (the hull needs the points only).
+    let faces = [
+        [0, 1, 3, 2],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 3, 7, 6],
+        [0, 2, 6, 4],
+        [1, 3, 7, 5],
+    ];
+    let mut stl = String::from("solid cube\n");
+    for f in faces {
+        for tri in [[f[0], f[1], f[2]], [f[0], f[2], f[3]]] {
+            stl += "facet normal 0 0 0\nouter loop\n";
+            for v in tri {
+                let p = corner(v);
+                stl += &format!("vertex {} {} {}\n", p[0], p[1], p[2]);
+            }
+            stl += "endloop\nendfacet\n";
+        }
+    }
+    stl += "endsolid cube\n";
+    std::fs::write(path, stl).unwrap();
+}
+
+/// A URDF `<collision>` mesh touches as its file's convex hull (MuJoCo's import): the cube
+/// of `a_urdf_cube_falls_onto_its_base_and_rests_there` with its collision a mesh (the STL
+/// cube of half-edge 0.05 m, `scale="2 2 2"`), found next to the file by `urdf::load`, rests
+/// on the slab at its exact height (its single-precision vertices' height). Without the file (parsed from text, or a missing file)
+/// the mesh does not touch, and the loader says so.
+#[test]
+fn a_urdf_collision_mesh_touches_as_its_convex_hull() {
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("contact_urdf_mesh");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    write_cube_stl(&dir.join("cube.stl"), 0.05);
+    let urdf = |file: &str| {
+        format!(
+            r#"<robot name="drop">
+      <link name="base"><collision><origin xyz="0 0 -0.05"/><geometry><box size="2 2 0.1"/></geometry></collision></link>
+      <link name="cube">
+        <inertial><mass value="1"/><inertia ixx="0.0067" iyy="0.0067" izz="0.0067" ixy="0" ixz="0" iyz="0"/></inertial>
+        <collision><geometry><mesh filename="{file}" scale="2 2 2"/></geometry></collision>
+      </link>
+      <joint name="free" type="floating"><parent link="base"/><child link="cube"/><origin xyz="0 0 0.5"/></joint>
+    </robot>"#
+        )
+    };
+    let note = |loaded: &liemid::multibody::Loaded| loaded.ignored.iter().any(|n| n.contains("collision meshes"));
+    let path = dir.join("drop.urdf");
+    std::fs::write(&path, urdf("cube.stl")).unwrap();
+    let loaded = liemid::multibody::urdf::load(&path).unwrap();
+    assert_eq!(loaded.model.collision.shapes.len(), 2);
+    assert!(!note(&loaded), "{:?}", loaded.ignored);
+    assert!(loaded.files.contains(&dir.join("cube.stl")), "{:?}", loaded.files);
+    let prepared = Simulation::prepare(&loaded.model, MultibodyMethod::Liemid).unwrap();
+    let (mut sim, mut s) = (prepared.simulation, prepared.state);
+    let mut lowest = f64::INFINITY;
+    for _ in 0..1000 {
+        sim.step(&mut s, 1e-3).unwrap();
+        lowest = lowest.min(s.c[0].z);
+    }
+    // The STL holds single-precision vertices: the hull's half-edge is 2 × 0.05f32 =
+    // 0.1 + 1.49e-9 m, and the cube rests at exactly that height.
+    let height = 2.0 * f64::from(0.05_f32);
+    assert!(
+        (s.c[0].z - height).abs() <= 1e-12,
+        "rests at {} m, not {height}",
+        s.c[0].z
+    );
+    assert!(lowest >= height - 1e-12, "went down to {lowest} m");
+    // From text, and with the file missing: only the slab touches, noted.
+    let from_text = liemid::multibody::urdf::parse(&urdf("cube.stl"), "drop.urdf").unwrap();
+    std::fs::write(&path, urdf("missing.stl")).unwrap();
+    let missing = liemid::multibody::urdf::load(&path).unwrap();
+    for loaded in [from_text, missing] {
+        assert_eq!(loaded.model.collision.shapes.len(), 1);
+        assert!(note(&loaded), "{:?}", loaded.ignored);
+        assert!(loaded
+            .shapes
+            .iter()
+            .all(|s| s.collision.is_none() || !matches!(s.kind, liemid::multibody::ShapeKind::Mesh { .. })));
+    }
 }
