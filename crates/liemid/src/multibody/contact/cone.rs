@@ -19,7 +19,7 @@
 //! cones, and the extrapolation restarts from 0 whenever the worst violation grows (an
 //! adaptive restart). The tolerance is checked at the extrapolated forces, so what is
 //! accepted obeys the law as before; measured on 100 spheres falling into a bin (to
-//! t = 1.2 s), 314,002 → 138,096 sweeps and 18.7 → 7.7 s. On jointed bodies (the dense
+//! t = 1.2 s), 314,002 → 109,229 sweeps and 18.7 → 5.2 s. On jointed bodies (the dense
 //! `W`) it is not used: on the falling humanoid it made a position solve stall above the
 //! acceptance where plain sweeps do not.
 //!
@@ -127,7 +127,7 @@ impl Response for Dense<'_> {
 
 /// Solve for `sigma` (started from its content, with `response` at those forces) with
 /// friction `mu`; `rates` receives the final rates. Stops when the worst violation is at
-/// most `tol.exact`; every [`FINISH_EVERY`] sweeps `finish` may complete the solve (it returns
+/// most `tolerance.exact`; every [`FINISH_EVERY`] sweeps `finish` may complete the solve (it returns
 /// whether it changed `sigma` and the response). With `previous` (scratch: the last
 /// sweep's forces) the sweeps are extrapolated (module docs).
 pub(super) fn solve<R: Response>(
