@@ -38,6 +38,19 @@ pub struct Mesh {
     pub triangles: Vec<[u32; 3]>,
 }
 
+/// The extension of `path`, lower case (empty without one).
+fn extension(path: &Path) -> String {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase()
+}
+
+/// Whether [`Mesh::read`] reads the format of `path` (STL or OBJ, by its extension).
+pub(crate) fn format_is_read(path: &Path) -> bool {
+    matches!(extension(path).as_str(), "stl" | "obj")
+}
+
 impl Mesh {
     /// Reads the mesh file `path` (`.stl` or `.obj`, by its extension, in any case).
     ///
@@ -45,12 +58,8 @@ impl Mesh {
     /// Why the file gives no mesh, in words (without the file's name): it cannot be read,
     /// is not a regular file, is too large, has another format, or holds no valid triangle.
     pub fn read(path: &Path) -> Result<Mesh, String> {
-        let ext = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .unwrap_or("")
-            .to_ascii_lowercase();
-        if !matches!(ext.as_str(), "stl" | "obj") {
+        let ext = extension(path);
+        if !format_is_read(path) {
             return Err(format!("the .{ext} format is not read (STL and OBJ meshes are)"));
         }
         let bytes = read_bounded_bytes(path, MAX_MESH_FILE_BYTES, "a mesh file").map_err(|e| match e {

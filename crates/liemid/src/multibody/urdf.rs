@@ -65,18 +65,21 @@ pub fn load(path: &Path) -> Result<Loaded> {
     Ok(loaded)
 }
 
-/// Collision meshes without a file found (all of them in a model parsed from text) do not
-/// touch: removed from the contact shapes (the drawn shapes keep them), and noted.
+/// Collision meshes without a file found in a format that is read (STL, OBJ; none in a
+/// model parsed from text) do not touch: removed from the contact shapes (the drawn shapes
+/// keep them), and noted.
 fn drop_unfound_collision_meshes(loaded: &mut Loaded) {
     let unfound = |s: &Shape| match &s.kind {
-        ShapeKind::Mesh { path, .. } => !path.as_ref().is_ok_and(|p| p.is_file()),
+        ShapeKind::Mesh { path, .. } => !path
+            .as_ref()
+            .is_ok_and(|p| p.is_file() && super::mesh::format_is_read(p)),
         _ => false,
     };
     let shapes = &mut loaded.model.collision.shapes;
     let before = shapes.len();
     shapes.retain(|s| !unfound(s));
     if shapes.len() < before {
-        let note = "collision meshes (not simulated where the mesh file is not found)";
+        let note = "collision meshes (not simulated where the mesh file is not found or is not STL or OBJ)";
         if !loaded.ignored.iter().any(|n| n == note) {
             loaded.ignored.push(note.to_string());
         }
