@@ -46,9 +46,14 @@ fn extension(path: &Path) -> String {
         .to_ascii_lowercase()
 }
 
+/// Whether [`Mesh::read`] reads files of the (lower-case) extension `ext`.
+fn reads(ext: &str) -> bool {
+    matches!(ext, "stl" | "obj")
+}
+
 /// Whether [`Mesh::read`] reads the format of `path` (STL or OBJ, by its extension).
 pub(crate) fn format_is_read(path: &Path) -> bool {
-    matches!(extension(path).as_str(), "stl" | "obj")
+    reads(&extension(path))
 }
 
 impl Mesh {
@@ -59,7 +64,7 @@ impl Mesh {
     /// is not a regular file, is too large, has another format, or holds no valid triangle.
     pub fn read(path: &Path) -> Result<Mesh, String> {
         let ext = extension(path);
-        if !format_is_read(path) {
+        if !reads(&ext) {
             return Err(format!("the .{ext} format is not read (STL and OBJ meshes are)"));
         }
         let bytes = read_bounded_bytes(path, MAX_MESH_FILE_BYTES, "a mesh file").map_err(|e| match e {

@@ -258,13 +258,7 @@ fn a_urdf_cube_falls_onto_its_base_and_rests_there() {
     let loaded = liemid::multibody::urdf::parse(text, "drop.urdf").unwrap();
     assert_eq!(loaded.model.collision.shapes.len(), 2);
     assert!(loaded.model.collision.shapes.iter().all(|s| s.group == 3));
-    let prepared = Simulation::prepare(&loaded.model, MultibodyMethod::Liemid).unwrap();
-    let (mut sim, mut s) = (prepared.simulation, prepared.state);
-    let mut lowest = f64::INFINITY;
-    for _ in 0..1000 {
-        sim.step(&mut s, 1e-3).unwrap();
-        lowest = lowest.min(s.c[0].z);
-    }
+    let (_, s, lowest) = drop_for_a_second(&loaded.model);
     // Plastic: it lands at t = √(2·0.4/g) = 0.29 s and stays, its centre 0.1 m above the top.
     assert!((s.c[0].z - 0.1).abs() <= 1e-9, "rests at {} m", s.c[0].z);
     assert!(lowest >= 0.1 - 1e-9, "went down to {lowest} m");
@@ -569,6 +563,19 @@ fn a_humanoid_falls_over_onto_the_floor_and_lies_there() {
     );
 }
 
+/// `model` (one free body first) run 1000 steps of 1e-3 s with liemid from its start: the
+/// simulation, the final state and the lowest height of body 0's centre along the way.
+fn drop_for_a_second(model: &Model) -> (Simulation, liemid::multibody::MultibodyState, f64) {
+    let prepared = Simulation::prepare(model, MultibodyMethod::Liemid).unwrap();
+    let (mut sim, mut s) = (prepared.simulation, prepared.state);
+    let mut lowest = f64::INFINITY;
+    for _ in 0..1000 {
+        sim.step(&mut s, 1e-3).unwrap();
+        lowest = lowest.min(s.c[0].z);
+    }
+    (sim, s, lowest)
+}
+
 /// A cube of half-edge `a` about the origin as an ASCII STL (twelve triangles).
 fn write_cube_stl(path: &std::path::Path, a: f64) {
     let corner = |i: usize| [[-a, a][i & 1], [-a, a][(i >> 1) & 1], [-a, a][(i >> 2) & 1]];
@@ -627,13 +634,7 @@ fn a_urdf_collision_mesh_touches_as_its_convex_hull() {
     assert_eq!(loaded.model.collision.shapes.len(), 2);
     assert!(!note(&loaded), "{:?}", loaded.ignored);
     assert!(loaded.files.contains(&dir.join("cube.stl")), "{:?}", loaded.files);
-    let prepared = Simulation::prepare(&loaded.model, MultibodyMethod::Liemid).unwrap();
-    let (mut sim, mut s) = (prepared.simulation, prepared.state);
-    let mut lowest = f64::INFINITY;
-    for _ in 0..1000 {
-        sim.step(&mut s, 1e-3).unwrap();
-        lowest = lowest.min(s.c[0].z);
-    }
+    let (sim, s, lowest) = drop_for_a_second(&loaded.model);
     // The STL holds single-precision vertices: the hull's half-edge is 2 × 0.05f32 =
     // 0.1 + 1.49e-9 m, and the cube rests at that height to the position solve's
     // tolerance, 1e-12 of the contact length.
