@@ -371,6 +371,7 @@ fn multibody_run<'py>(
             c.set_item("position_iterations", run.contact_iterations)?;
             c.set_item("solver_sweeps", run.contact_sweeps)?;
             c.set_item("split_steps", run.split_steps)?;
+            c.set_item("frictionless_drifts", run.frictionless_drifts)?;
             c.set_item("loose_steps", run.loose_steps)?;
             c.set_item("max_loose_violation", run.max_loose_violation)?;
             d.set_item("contacts", c)?;

@@ -158,6 +158,7 @@ def test_a_run_with_contacts_says_its_contact_statistics(tmp_path: Path) -> None
     assert 0.0 <= c["deepest_penetration"] <= 1e-9
     assert c["position_iterations"] > 0 and c["solver_sweeps"] > 0
     assert c["split_steps"] == 0 and c["loose_steps"] == 0 and c["max_loose_violation"] == 0.0
+    assert c["frictionless_drifts"] == 0
     assert abs(run.xpos[-1, 0, 2] - 0.1) < 1e-9
     # Its page holds every sample (the contact slots empty: a run's samples hold no contacts).
     page = Path(run.view(str(tmp_path / "box.html"))).read_text()

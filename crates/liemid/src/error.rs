@@ -313,8 +313,8 @@ impl core::fmt::Display for Hint<'_> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         if self.0.contains("contact") {
             f.write_str(
-                "the step was split down to h/16 and its law still missed the acceptance (1e-8 of the \
-                 contact length): redundant contacts of bodies resting on several others, or contacts \
+                "the step was split down to h/16, tried there with friction in the closing kick only, \
+                 and its law still missed the acceptance (1e-8 of the contact length): redundant contacts of bodies resting on several others, or contacts \
                  sliding together near their friction limit, stall this solver: a known limit \
                  (docs/theory/multibody.md §6)",
             )

@@ -476,6 +476,7 @@ fn run_maximal(
                 "position_iterations": run.contact_iterations,
                 "solver_sweeps": run.contact_sweeps,
                 "split_steps": run.split_steps,
+                "frictionless_drifts": run.frictionless_drifts,
                 "loose_steps": run.loose_steps,
                 "max_loose_violation": run.max_loose_violation,
             })

@@ -49,6 +49,9 @@ pub struct MultibodyRun {
     pub contact_sweeps: u64,
     /// Contact steps redone as two half steps because their solve failed (all levels).
     pub split_steps: u64,
+    /// Contact stages whose drift held no contact by friction
+    /// (`StepReport::frictionless_drifts`).
+    pub frictionless_drifts: u64,
     /// Contact stages taken at the looser tolerance (`StepReport::loose_steps`), and the
     /// largest violation among them (relative to the contact length).
     pub loose_steps: u64,
@@ -69,6 +72,7 @@ impl MultibodyRun {
         self.contact_iterations += u64::from(report.contact_iterations);
         self.contact_sweeps += u64::from(report.contact_sweeps);
         self.split_steps += u64::from(report.split_steps);
+        self.frictionless_drifts += u64::from(report.frictionless_drifts);
         self.loose_steps += u64::from(report.loose_steps);
         self.max_loose_violation = self.max_loose_violation.max(report.loose_violation);
     }

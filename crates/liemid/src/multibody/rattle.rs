@@ -274,7 +274,8 @@ impl Workspace {
     /// A contact step from `state` over `h`; where its solve fails (a cone problem that
     /// stalls, a contact impulse that turns a light body beyond the midpoint equation's
     /// reach), the step is redone as two steps of `h/2` from the same start, each split
-    /// again where it fails, `MAX_SPLITS` times at most (to `h/16`). A contact step is
+    /// again where it fails, `MAX_SPLITS` times at most (to `h/16`), where it is tried once
+    /// more with friction in the closing kick only (below). A contact step is
     /// dissipative and first order at an impact, so its step size is not part of any
     /// structure the method keeps; the run keeps its output times. `depth` counts the
     /// halvings so far. On error `state` may hold the first halves (the caller restores).
@@ -297,7 +298,27 @@ impl Workspace {
             e,
             Error::NewtonDidNotConverge { .. } | Error::StepTooLarge { .. } | Error::NonFiniteResult { .. }
         );
-        if !numerical || depth >= MAX_SPLITS {
+        if !numerical {
+            return Err(e);
+        }
+        if depth >= MAX_SPLITS {
+            // The last resort, at h/16: the drift holds no contact by friction, and friction
+            // acts in the closing μ-kick only, as in velocity-level contact methods (a
+            // sticking contact slides `h² a_t / 2` within such a step, where `a_t` is its
+            // tangential acceleration). Its position problem has normal rows only, a
+            // problem Gauss–Seidel converges on; the velocity solve still holds Coulomb's
+            // law exactly. Counted (`StepReport::frictionless_drifts`).
+            self.lambda.copy_from_slice(&self.split_lambda);
+            self.lambda_prev.copy_from_slice(&self.split_lambda_prev);
+            self.limit.copy_from_slice(&self.split_limit);
+            self.cache_valid = false;
+            self.contact.frictionless_drift = true;
+            let retry = self.stage(sys, state, h, report, None);
+            self.contact.frictionless_drift = false;
+            if retry.is_ok() {
+                report.frictionless_drifts += 1;
+                return Ok(());
+            }
             return Err(e);
         }
         self.lambda.copy_from_slice(&self.split_lambda);

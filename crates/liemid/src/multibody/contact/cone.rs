@@ -216,7 +216,14 @@ pub(super) fn solve<R: Response>(
             // (a box corner's normal force turns the box and so moves the corner along the
             // plane: one pass each would leave that coupling to the outer sweeps).
             let mut new = old;
-            for _ in 0..BLOCK_PASSES {
+            let passes = match stick(w, rho, mu_k) {
+                Some(x) => {
+                    new = x;
+                    0
+                }
+                None => BLOCK_PASSES,
+            };
+            for _ in 0..passes {
                 let sn = if w[0][0] > 0.0 {
                     (-(rho[0] + w[0][1] * new[1] + w[0][2] * new[2]) / w[0][0]).max(0.0)
                 } else {
@@ -262,6 +269,39 @@ pub(super) fn solve<R: Response>(
             }
         }
     }
+}
+
+/// The contact's sticking force `σ = −W_kk⁻¹ ρ` (its rates all zero) where it lies inside
+/// the cone (`σ_n > 0`, `|σ_t| < µ σ_n`), else `None`: the fixed point the alternation of
+/// normal and friction force converges to on a sticking contact, in one 3x3 solve.
+#[inline]
+fn stick(w: [[f64; 3]; 3], rho: [f64; 3], mu: f64) -> Option<[f64; 3]> {
+    if mu <= 0.0 {
+        return None;
+    }
+    // Cofactors of the symmetric block.
+    let c00 = w[1][1] * w[2][2] - w[1][2] * w[2][1];
+    let c01 = w[1][2] * w[2][0] - w[1][0] * w[2][2];
+    let c02 = w[1][0] * w[2][1] - w[1][1] * w[2][0];
+    let det = w[0][0] * c00 + w[0][1] * c01 + w[0][2] * c02;
+    let scale = w[0][0] * w[1][1] * w[2][2];
+    // (Written so that a NaN determinant falls back to the alternation.)
+    if det.is_nan() || det <= 1e-12 * scale {
+        return None;
+    }
+    let c11 = w[0][0] * w[2][2] - w[0][2] * w[2][0];
+    let c12 = w[0][1] * w[2][0] - w[0][0] * w[2][1];
+    let c22 = w[0][0] * w[1][1] - w[0][1] * w[1][0];
+    let c10 = w[0][2] * w[2][1] - w[0][1] * w[2][2];
+    let c20 = w[0][1] * w[1][2] - w[0][2] * w[1][1];
+    let c21 = w[0][2] * w[1][0] - w[0][0] * w[1][2];
+    let inv = 1.0 / det;
+    let x = [
+        -(c00 * rho[0] + c10 * rho[1] + c20 * rho[2]) * inv,
+        -(c01 * rho[0] + c11 * rho[1] + c21 * rho[2]) * inv,
+        -(c02 * rho[0] + c12 * rho[1] + c22 * rho[2]) * inv,
+    ];
+    (x[0] > 0.0 && norm2(x[1], x[2]) < mu * x[0] * (1.0 - 1e-9)).then_some(x)
 }
 
 /// Turn every sliding contact's friction force against its slip rate, `σ_t = −µ σ_n r̂_t`
@@ -325,53 +365,60 @@ pub(super) fn violation(rates: &[f64], sigma: &[f64], mu: &[f64]) -> f64 {
 
 /// The minimiser of `½ xᵀ A x + bᵀ x` over `|x| ≤ radius` (`A` 2x2 symmetric positive
 /// definite): the free minimiser when inside, else `x(κ) = −(A + κ I)⁻¹ b` with `|x(κ)| =
-/// radius`, κ by Newton's method on `1/|x(κ)| − 1/radius` (Moré–Sorensen), which is convex
-/// and increasing in κ, so the iteration converges monotonically.
+/// radius`. In `A`'s eigenbasis (`A = Q Λ Qᵀ`, `c = Qᵀ b`) that is the secular equation
+/// `|x(κ)|² = Σ cᵢ² / (λᵢ + κ)²`; κ by Newton's method on `1/|x(κ)| − 1/radius`, which
+/// is concave and increasing in κ (Moré–Sorensen), started below the root at
+/// `|b|/radius − λ_max` (where `|x| ≥ |b|/(λ_max + κ)` is still at least the radius; the
+/// root itself when `A` is isotropic), so the iteration rises to it monotonically.
 fn disc(a: [[f64; 2]; 2], b: [f64; 2], radius: f64) -> [f64; 2] {
     if radius <= 0.0 || (b[0] == 0.0 && b[1] == 0.0) {
         return [0.0, 0.0];
     }
-    let solve = |k: f64| {
-        let (p, q, s) = (a[0][0] + k, a[0][1], a[1][1] + k);
-        let det = p * s - q * q;
-        [-(s * b[0] - q * b[1]) / det, -(p * b[1] - q * b[0]) / det]
-    };
     let det = a[0][0] * a[1][1] - a[0][1] * a[0][1];
-    if det > 0.0 && a[0][0] > 0.0 {
-        let x = solve(0.0);
-        if norm2(x[0], x[1]) <= radius {
-            return x;
-        }
-    } else {
+    if det.is_nan() || det <= 0.0 || a[0][0] <= 0.0 {
         // A degenerate block (a body without inertia along the plane): the force against
         // the rate, at the bound.
         let l = norm2(b[0], b[1]);
         return [-radius * b[0] / l, -radius * b[1] / l];
     }
-    let mut k = 0.0f64;
+    let free = [
+        -(a[1][1] * b[0] - a[0][1] * b[1]) / det,
+        -(a[0][0] * b[1] - a[0][1] * b[0]) / det,
+    ];
+    if norm2(free[0], free[1]) <= radius {
+        return free;
+    }
+    // Eigenpairs: λ₁ ≥ λ₂ > 0, q₁ the unit eigenvector of λ₁ (from the better conditioned
+    // of its two expressions), q₂ = q₁ turned a quarter.
+    let (mean, half) = (0.5 * (a[0][0] + a[1][1]), 0.5 * (a[0][0] - a[1][1]));
+    let d = norm2(half, a[0][1]);
+    let lambda = [mean + d, mean - d];
+    let q1 = if half >= 0.0 {
+        [lambda[0] - a[1][1], a[0][1]]
+    } else {
+        [a[0][1], lambda[0] - a[0][0]]
+    };
+    let l1 = norm2(q1[0], q1[1]);
+    let q1 = if l1 > 0.0 { [q1[0] / l1, q1[1] / l1] } else { [1.0, 0.0] };
+    let q2 = [-q1[1], q1[0]];
+    let c = [q1[0] * b[0] + q1[1] * b[1], q2[0] * b[0] + q2[1] * b[1]];
+    let mut k = (norm2(c[0], c[1]) / radius - lambda[0]).max(0.0);
     for _ in 0..60 {
-        let x = solve(k);
-        let l = norm2(x[0], x[1]);
-        // d|x|/dκ = −xᵀ (A + κI)⁻¹ x / |x|.
-        let y = {
-            let (p, q, s) = (a[0][0] + k, a[0][1], a[1][1] + k);
-            let det = p * s - q * q;
-            [(s * x[0] - q * x[1]) / det, (p * x[1] - q * x[0]) / det]
-        };
-        let dl = -(x[0] * y[0] + x[1] * y[1]) / l;
-        // φ(κ) = 1/|x| − 1/radius, φ' = −dl/|x|².
+        let y = [c[0] / (lambda[0] + k), c[1] / (lambda[1] + k)];
+        let l = norm2(y[0], y[1]);
+        // φ(κ) = 1/|x| − 1/radius, φ' = Σ cᵢ²/(λᵢ + κ)³ / |x|³.
         let phi = 1.0 / l - 1.0 / radius;
-        let dphi = -dl / (l * l);
-        let step = phi / dphi;
-        let next = (k - step).max(0.0);
+        let dphi = (y[0] * y[0] / (lambda[0] + k) + y[1] * y[1] / (lambda[1] + k)) / (l * l * l);
+        let next = (k - phi / dphi).max(0.0);
         if (next - k).abs() <= 4.0 * f64::EPSILON * next.max(1e-300) {
             k = next;
             break;
         }
         k = next;
     }
-    let x = solve(k);
-    // Exactly on the edge (the last rounding).
+    let y = [c[0] / (lambda[0] + k), c[1] / (lambda[1] + k)];
+    // x = −Q y, exactly on the edge (the last rounding).
+    let x = [-(q1[0] * y[0] + q2[0] * y[1]), -(q1[1] * y[0] + q2[1] * y[1])];
     let l = norm2(x[0], x[1]);
     [x[0] * radius / l, x[1] * radius / l]
 }

@@ -208,11 +208,13 @@ impl Workspace {
         // such a contact still sticks; above, its friction acts from the landing on, in
         // the μ-kick.
         s.mu.clear();
-        s.mu.extend(
-            s.points
-                .iter()
-                .map(|p| if p.gap(c, r) <= 1e-6 * length { p.mu } else { 0.0 }),
-        );
+        s.mu.extend(s.points.iter().map(|p| {
+            if p.gap(c, r) <= 1e-6 * length && !s.frictionless_drift {
+                p.mu
+            } else {
+                0.0
+            }
+        }));
         // W at the start rows, factored (the velocity solve of the last step factored them).
         if self.rows0.iter().any(|r| r.n > 0) && !self.factor_rows0 {
             self.factor(sys, super::super::workspace::Matrix::Start)?;
@@ -263,6 +265,14 @@ impl Workspace {
             &mut s.sigma,
             &mut s.order,
         );
+        // No friction where the drift holds none (the cone's radius is zero there, and its
+        // law would not see a warm friction force).
+        for (sigma, &mu) in s.sigma.chunks_exact_mut(3).zip(&s.mu) {
+            if mu == 0.0 {
+                sigma[1] = 0.0;
+                sigma[2] = 0.0;
+            }
+        }
         s.r0.resize(3 * n, 0.0);
         s.rates.resize(3 * n, 0.0);
         // Gap and slide to 1e-12 of the contact length: as rates over the step.
@@ -398,10 +408,13 @@ impl Workspace {
             // redundant sticking rows are consistent only at the solution, the drift's
             // curvature leaving the linearised ones off W's range; a tenth made the standing
             // quadruped take 5 drifts a step, a thousandth 1.9, the full tolerance stalls
-            // piles sooner); the step is accepted above, on the law at the drift's end.
+            // piles sooner); the step is accepted above, on the law at the drift's end. A
+            // solve that stalls within half the acceptance stops after 40 sweeps without
+            // halving its violation instead of 300 (`cone::Tolerance::loose`): measured on
+            // 100 boxes and spheres falling into a bin, to t = 0.9 s, 46.8 → 28.9 s.
             let inner = cone::Tolerance {
                 exact: (0.25 * tol).max(1e-3 * worst),
-                loose: 0.0,
+                loose: 0.5 * accept,
             };
             let done = solve_contacts(sys, s, hh, inner);
             report.contact_sweeps += u32::try_from(done.sweeps).unwrap_or(u32::MAX);
@@ -567,5 +580,69 @@ fn warm(
                 break;
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::multibody::{mjcf, MultibodyMethod, Simulation};
+
+    /// The last resort of a failed step (friction in the closing kick only) on a box at rest
+    /// on a 20° slope with µ = 0.5 (it sticks: tan 20° = 0.36): within that step it slides
+    /// `h² g sin θ / 2`, and the closing kick's friction, bounded by that kick's normal
+    /// impulse `µ (h/2) g cos θ`, leaves it moving downhill at `h g sin θ − µ (h/2) g cos θ`.
+    /// The next steps, holding it in both kicks, stop it, and it stays put.
+    #[test]
+    fn a_step_with_friction_in_the_closing_kick_only_slides_half_a_step_of_gravity() {
+        let (slope, h, g, mu) = (20f64.to_radians(), 1e-3, 9.81, 0.5);
+        let (sn, cs) = slope.sin_cos();
+        let (qw, qy) = ((slope / 2.0).cos(), (slope / 2.0).sin());
+        let text = format!(
+            "<mujoco><worldbody><geom type=\"plane\" size=\"0 0 1\" euler=\"0 {deg} 0\" friction=\"{mu}\"/>\
+             <body name=\"box\"><freejoint/><geom type=\"box\" size=\"0.1 0.1 0.1\" mass=\"1\" friction=\"{mu}\"/></body>\
+             </worldbody><keyframe><key qpos=\"{px} 0 {pz} {qw} 0 {qy} 0\"/></keyframe></mujoco>",
+            deg = slope.to_degrees(),
+            px = 0.1 * sn,
+            pz = 0.1 * cs,
+        );
+        let model = mjcf::parse(&text, "slope.xml").unwrap().model;
+        let prepared = Simulation::prepare(&model, MultibodyMethod::Liemid).unwrap();
+        let (mut sim, mut state) = (prepared.simulation, prepared.state);
+        let downhill = |c: crate::linalg::Vec3| c.x * cs - c.z * sn;
+        // One ordinary step: it sticks.
+        let start = downhill(state.c[0]);
+        sim.step(&mut state, h).unwrap();
+        assert!((downhill(state.c[0]) - start).abs() <= 1e-13);
+        let start = downhill(state.c[0]);
+        sim.integrator.work.contact.frictionless_drift = true;
+        let report = sim.step(&mut state, h).unwrap();
+        sim.integrator.work.contact.frictionless_drift = false;
+        assert!(report.contacts >= 4, "{report:?}");
+        let slid = downhill(state.c[0]) - start;
+        let expected = 0.5 * h * h * g * sn;
+        assert!(
+            (slid - expected).abs() <= 1e-9 * expected,
+            "slid {slid:e}, expected {expected:e}"
+        );
+        // The closing kick's normal impulse is the first kick's complement to within the
+        // position problem's tolerance as a rate (`1e-12 L / h`), and its friction µ times it.
+        let speed = downhill(state.p[0]);
+        let expected = h * g * sn - mu * 0.5 * h * g * cs;
+        let length = sim.system.contact.as_ref().unwrap().length;
+        let bound = mu * 1e-12 * length / h;
+        assert!(
+            (speed - expected).abs() <= bound,
+            "speed {speed:e}, expected {expected:e}, bound {bound:e}"
+        );
+        for _ in 0..3 {
+            sim.step(&mut state, h).unwrap();
+        }
+        assert!(state.p[0].norm() <= 1e-12, "still moving: {:?}", state.p[0]);
+        let before = downhill(state.c[0]);
+        for _ in 0..100 {
+            sim.step(&mut state, h).unwrap();
+        }
+        let moved = (downhill(state.c[0]) - before).abs();
+        assert!(moved <= 1e-12, "moved {moved:e} in 100 steps after");
     }
 }
