@@ -223,6 +223,8 @@ pub(super) fn solve<R: Response>(
                 }
                 None => BLOCK_PASSES,
             };
+            // The disc's multiplier from the last pass (the next pass's root is near it).
+            let mut kappa = f64::NAN;
             for _ in 0..passes {
                 let sn = if w[0][0] > 0.0 {
                     (-(rho[0] + w[0][1] * new[1] + w[0][2] * new[2]) / w[0][0]).max(0.0)
@@ -230,7 +232,7 @@ pub(super) fn solve<R: Response>(
                     0.0
                 };
                 let rho_t = [rho[1] + w[1][0] * sn, rho[2] + w[2][0] * sn];
-                let st = disc([[w[1][1], w[1][2]], [w[2][1], w[2][2]]], rho_t, mu_k * sn);
+                let st = disc([[w[1][1], w[1][2]], [w[2][1], w[2][2]]], rho_t, mu_k * sn, &mut kappa);
                 let next = [sn, st[0], st[1]];
                 let change = (0..3).fold(0.0f64, |m, i| m.max((next[i] - new[i]).abs()));
                 new = next;
@@ -369,8 +371,12 @@ pub(super) fn violation(rates: &[f64], sigma: &[f64], mu: &[f64]) -> f64 {
 /// `|x(κ)|² = Σ cᵢ² / (λᵢ + κ)²`; κ by Newton's method on `1/|x(κ)| − 1/radius`, which
 /// is concave and increasing in κ (Moré–Sorensen), started below the root at
 /// `|b|/radius − λ_max` (where `|x| ≥ |b|/(λ_max + κ)` is still at least the radius; the
-/// root itself when `A` is isotropic), so the iteration rises to it monotonically.
-fn disc(a: [[f64; 2]; 2], b: [f64; 2], radius: f64) -> [f64; 2] {
+/// root itself when `A` is isotropic), so the iteration rises to it monotonically; or at
+/// `kappa` (the last root, of a nearby problem) where that is higher: from above the root
+/// the first step lands below it, and the rise goes on from there. `kappa` receives the
+/// root (NaN where the minimiser is inside).
+fn disc(a: [[f64; 2]; 2], b: [f64; 2], radius: f64, kappa: &mut f64) -> [f64; 2] {
+    let hint = core::mem::replace(kappa, f64::NAN);
     if radius <= 0.0 || (b[0] == 0.0 && b[1] == 0.0) {
         return [0.0, 0.0];
     }
@@ -403,6 +409,9 @@ fn disc(a: [[f64; 2]; 2], b: [f64; 2], radius: f64) -> [f64; 2] {
     let q2 = [-q1[1], q1[0]];
     let c = [q1[0] * b[0] + q1[1] * b[1], q2[0] * b[0] + q2[1] * b[1]];
     let mut k = (norm2(c[0], c[1]) / radius - lambda[0]).max(0.0);
+    if hint > k {
+        k = hint;
+    }
     for _ in 0..60 {
         let y = [c[0] / (lambda[0] + k), c[1] / (lambda[1] + k)];
         let l = norm2(y[0], y[1]);
@@ -416,6 +425,7 @@ fn disc(a: [[f64; 2]; 2], b: [f64; 2], radius: f64) -> [f64; 2] {
         }
         k = next;
     }
+    *kappa = k;
     let y = [c[0] / (lambda[0] + k), c[1] / (lambda[1] + k)];
     // x = −Q y, exactly on the edge (the last rounding).
     let x = [-(q1[0] * y[0] + q2[0] * y[1]), -(q1[1] * y[0] + q2[1] * y[1])];
@@ -429,9 +439,30 @@ mod tests {
 
     #[test]
     fn the_disc_minimiser_meets_coulombs_law() {
-        let a = [[2.0, 0.7], [0.7, 1.0]];
-        for (b, radius) in [([3.0, -1.0], 0.5), ([0.1, 0.05], 10.0), ([-4.0, 2.0], 1.0)] {
-            let x = disc(a, b, radius);
+        // Both eigenvector branches (a₀₀ above and below a₁₁), an isotropic block, and the
+        // root started from no hint, from below it and from far above it.
+        let blocks = [
+            [[2.0, 0.7], [0.7, 1.0]],
+            [[1.0, 0.3], [0.3, 5.0]],
+            [[1.5, 0.0], [0.0, 1.5]],
+        ];
+        let cases = [
+            ([3.0, -1.0], 0.5),
+            ([0.1, 0.05], 10.0),
+            ([-4.0, 2.0], 1.0),
+            ([0.0, 7.0], 0.2),
+        ];
+        for (a, (b, radius), hint) in blocks
+            .iter()
+            .flat_map(|a| cases.iter().map(move |c| (*a, *c)))
+            .flat_map(|(a, c)| [f64::NAN, 0.0, 1e3].map(|h| (a, c, h)))
+        {
+            let mut kappa = hint;
+            let x = disc(a, b, radius, &mut kappa);
+            let mut none = f64::NAN;
+            let plain = disc(a, b, radius, &mut none);
+            let gap = norm2(x[0] - plain[0], x[1] - plain[1]);
+            assert!(gap <= 1e-15 * radius, "hint {hint}: {x:?} against {plain:?}");
             let r = [
                 a[0][0] * x[0] + a[0][1] * x[1] + b[0],
                 a[1][0] * x[0] + a[1][1] * x[1] + b[1],
@@ -441,8 +472,13 @@ mod tests {
                 assert!(r[0].abs() + r[1].abs() < 1e-14, "stuck but r = {r:?}");
             } else {
                 // r = −κ x with κ ≥ 0.
-                let kappa = -(r[0] * x[0] + r[1] * x[1]) / (l * l);
-                assert!(kappa >= 0.0);
+                let kappa_r = -(r[0] * x[0] + r[1] * x[1]) / (l * l);
+                assert!(kappa_r >= 0.0);
+                assert!(
+                    (kappa - kappa_r).abs() <= 1e-12 * (1.0 + kappa_r),
+                    "κ {kappa} against {kappa_r}"
+                );
+                let kappa = kappa_r;
                 let off = (r[0] + kappa * x[0]).hypot(r[1] + kappa * x[1]);
                 assert!(off < 1e-13 * (1.0 + r[0].hypot(r[1])), "off {off:e}");
                 assert!((l - radius).abs() < 1e-15 * radius.max(1.0));

@@ -43,7 +43,6 @@
 //! M. Anitescu, F. Potra, Nonlinear Dynamics 14 (1997).
 
 mod boxes;
-mod cluster;
 mod cone;
 mod detect;
 mod newton;

@@ -1,7 +1,7 @@
 //! The response `W = (h/2) D P M⁻¹ Dᵀ` of the contact problems and the solves over it: each
 //! contact's three rows, `W` formed densely (projected on the joints column by column) or
 //! applied body by body over free bodies (`Local`), and the cone solve with the finishes
-//! each allows (`polish.rs` and `newton.rs` on a dense `W`, `cluster.rs` on `Local`).
+//! each allows (`polish.rs` and `newton.rs` on a dense `W`; none on `Local`).
 //!
 //! Reference: docs/theory/multibody.md §6.
 
@@ -149,37 +149,6 @@ impl cone::Response for Local<'_> {
     }
 }
 
-impl super::cluster::Coupled for Local<'_> {
-    fn bodies(&self, k: usize) -> [Option<usize>; 2] {
-        [self.rows[k].a, self.rows[k].b]
-    }
-
-    fn coupling(&self, i: usize, j: usize) -> [[f64; 3]; 3] {
-        let (ri, rj) = (&self.rows[i], &self.rows[j]);
-        let mut block = [[0.0; 3]; 3];
-        // Each body the two contacts share, with the sign of each contact's force on it.
-        for (body_i, sign_i, ti) in [(ri.a, 1.0, &ri.ta), (ri.b, -1.0, &ri.tb)] {
-            for (body_j, sign_j, tj) in [(rj.a, 1.0, &rj.ta), (rj.b, -1.0, &rj.tb)] {
-                let (Some(bi), Some(bj)) = (body_i, body_j) else {
-                    continue;
-                };
-                if bi != bj {
-                    continue;
-                }
-                let inv_m = 1.0 / self.sys.mass[bi];
-                let it: [Vec3; 3] = core::array::from_fn(|c| self.sys.inertia[bi].apply_inverse(tj[c]));
-                let scale = self.hh * sign_i * sign_j;
-                for (r, row) in block.iter_mut().enumerate() {
-                    for (c, x) in row.iter_mut().enumerate() {
-                        *x += scale * (ri.dir[r].dot(rj.dir[c]) * inv_m + ti[r].dot(it[c]));
-                    }
-                }
-            }
-        }
-        block
-    }
-}
-
 impl ContactScratch {
     /// The body-by-body response over `self`'s rows at the forces in `sigma`, with the
     /// forces, the rates and the friction coefficients beside it.
@@ -246,11 +215,8 @@ pub(super) fn solve_contacts(
     if !s.local {
         return solve_dense(s, tolerance);
     }
-    let tol = tolerance.exact;
-    let mut cluster = core::mem::take(&mut s.cluster);
     let mut previous = core::mem::take(&mut s.previous);
     let (mut local, sigma, rates, mu) = s.local(sys, hh);
-    let bodies = sys.mass.len();
     let done = cone::solve(
         &mut local,
         mu,
@@ -258,91 +224,8 @@ pub(super) fn solve_contacts(
         rates,
         tolerance,
         Some(&mut previous),
-        |response, sigma, rates| super::cluster::finish(response, bodies, mu, sigma, rates, tol, &mut cluster),
+        |_, _, _| false,
     );
-    s.cluster = cluster;
     s.previous = previous;
     done
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::multibody::{mjcf, MultibodyMethod, Simulation};
-    use cone::Response;
-
-    /// The cluster finish's coupling blocks are the body-by-body response itself: `W_ij`
-    /// column by column from a unit force on contact `j` (two columns of spheres on a floor,
-    /// and a box leaning across them).
-    #[test]
-    fn the_coupling_blocks_are_the_responses_columns() {
-        let mut bodies = String::new();
-        for (k, (x, z)) in [(0.0, 0.1), (0.0, 0.3), (0.0, 0.5), (0.25, 0.1), (0.25, 0.3)]
-            .iter()
-            .enumerate()
-        {
-            bodies += &format!(
-                "<body name=\"s{k}\" pos=\"{x} 0 {z}\"><freejoint/><geom type=\"sphere\" size=\"0.1\" mass=\"{m}\"/></body>",
-                m = 1.0 + k as f64
-            );
-        }
-        bodies += "<body name=\"lid\" pos=\"0.125 0 0.65\" quat=\"0.99 0 0.1 0\"><freejoint/>\
-                   <geom type=\"box\" size=\"0.3 0.1 0.05\" mass=\"2\"/></body>";
-        let text = format!("<mujoco><worldbody><geom type=\"plane\" size=\"0 0 1\"/>{bodies}</worldbody></mujoco>");
-        let model = mjcf::parse(&text, "columns.xml").unwrap().model;
-        let prepared = Simulation::prepare(&model, MultibodyMethod::Liemid).unwrap();
-        let (sys, state) = (&prepared.simulation.system, &prepared.state);
-        let geometry = sys.contact.as_ref().unwrap();
-        let (mut points, mut broad, mut manifolds) = (Vec::new(), super::super::detect::Broad::default(), Vec::new());
-        let margin = vec![0.05; sys.mass.len()];
-        geometry.detect(
-            &state.c,
-            &state.rotation,
-            &margin,
-            &mut points,
-            &mut broad,
-            &mut manifolds,
-        );
-        assert!(points.len() >= 6, "{} points", points.len());
-        let (c, r) = (&state.c, &state.rotation);
-        let rows: Vec<Rows> = points
-            .iter()
-            .map(|p| {
-                let (x, n) = p.application(c, r);
-                Rows::at(p, c, r, x, [n, p.t1, p.t2])
-            })
-            .collect();
-        let n = rows.len();
-        let r0 = vec![0.0; 3 * n];
-        let (mut dv, mut dw) = (vec![Vec3::ZERO; sys.mass.len()], vec![Vec3::ZERO; sys.mass.len()]);
-        let hh = 5e-4;
-        let mut local = Local {
-            rows: &rows,
-            r0: &r0,
-            blocks: &[],
-            dv: &mut dv,
-            dw: &mut dw,
-            sys,
-            hh,
-        };
-        let mut worst: f64 = 0.0;
-        let mut scale: f64 = 0.0;
-        for j in 0..n {
-            for col in 0..3 {
-                local.start(&vec![0.0; 3 * n]);
-                let mut unit = [0.0; 3];
-                unit[col] = 1.0;
-                local.add(j, unit);
-                for i in 0..n {
-                    let rates = local.rates(i);
-                    let block = super::super::cluster::Coupled::coupling(&local, i, j);
-                    for row in 0..3 {
-                        worst = worst.max((rates[row] - block[row][col]).abs());
-                        scale = scale.max(rates[row].abs());
-                    }
-                }
-            }
-        }
-        assert!(scale > 0.0 && worst <= 1e-15 * scale, "worst {worst:e} of {scale:e}");
-    }
 }

@@ -80,7 +80,6 @@ pub(in crate::multibody) struct ContactScratch {
     pub(super) polish: super::polish::Polish,
     pub(super) slide: super::polish::Slide,
     pub(super) newton: super::newton::Newton,
-    pub(super) cluster: super::cluster::Cluster,
     /// The rates the dense response keeps.
     pub(super) kept: Vec<f64>,
     /// The forces of the cone solve's previous sweep (its extrapolation).
