@@ -447,7 +447,8 @@ def pile_case(binary: str, tmp: Path) -> list[tuple[str, str, str]]:
               f"{per * 1e6:.0f} us per step, most points {c['most_points']}, deepest penetration "
               f"{c['deepest_penetration']:.1e} m, {c['position_iterations'] / s['steps']:.2f} position iterations "
               f"and {c['solver_sweeps'] / s['steps']:.0f} cone sweeps per step; {c['loose_steps']} steps taken at the "
-              f"acceptance (worst {c['max_loose_violation']:.1e} of the length), {c['split_steps']} split")
+              f"acceptance (worst {c['max_loose_violation']:.1e} of the length), {c['split_steps']} split, "
+              f"{c['frictionless_drifts']} with friction in the closing kick only")
         if failure:
             cpu, ncon, _ = mj_pile(path, t_run, SETTINGS[0])
             print(f"  MuJoCo pyramidal over the same {t_run:.3f} s: {cpu * 1e6:.0f} us per step ({ncon} contacts at the end)")
