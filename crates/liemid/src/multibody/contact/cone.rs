@@ -56,6 +56,10 @@ pub(super) struct Tolerance {
     /// What the caller takes from a stalled solve (0: nothing): a solve whose violation is
     /// at most this stops as stalled after [`LOOSE_STALL_SWEEPS`] without halving it.
     pub loose: f64,
+    /// A solve that stalls outside `loose` while extrapolating goes on with plain sweeps
+    /// (the velocity solve, which nothing retries but a split; the position solve's outer
+    /// iteration has its own recourse, and 300 more sweeps there cost more than they save).
+    pub plain_after_stall: bool,
 }
 
 /// The outcome of a solve: sweeps made and the law's worst violation at the end.
@@ -129,22 +133,50 @@ impl Response for Dense<'_> {
     }
 }
 
+/// What a solve keeps between its sweeps (grown to the contacts' number, so a solve of as
+/// many contacts as a past one allocates nothing).
+#[derive(Clone, Debug, Default)]
+pub(super) struct Memory {
+    /// Extrapolate the sweeps (module docs).
+    pub extrapolate: bool,
+    /// The last sweep's forces (the extrapolation's).
+    previous: Vec<f64>,
+    /// Per contact, the last root of its disc (NaN: none yet), where the next sweep's
+    /// disc starts when that is above its own start.
+    kappa: Vec<f64>,
+}
+
+#[cfg(test)]
+impl Memory {
+    /// A memory whose solves extrapolate their sweeps.
+    pub fn extrapolating() -> Memory {
+        Memory {
+            extrapolate: true,
+            ..Memory::default()
+        }
+    }
+}
+
 /// Solve for `sigma` (started from its content, with `response` at those forces) with
 /// friction `mu`; `rates` receives the final rates. Stops when the worst violation is at
 /// most `tolerance.exact`; every [`FINISH_EVERY`] sweeps `finish` may complete the solve (it returns
-/// whether it changed `sigma` and the response). With `previous` (scratch: the last
-/// sweep's forces) the sweeps are extrapolated (module docs).
+/// whether it changed `sigma` and the response). With `memory.extrapolate` the sweeps
+/// are extrapolated (module docs).
 pub(super) fn solve<R: Response>(
     response: &mut R,
     mu: &[f64],
     sigma: &mut [f64],
     rates: &mut [f64],
     tolerance: Tolerance,
-    mut previous: Option<&mut Vec<f64>>,
+    memory: &mut Memory,
     mut finish: impl FnMut(&mut R, &mut [f64], &[f64]) -> bool,
 ) -> Solved {
     let (n, tol) = (mu.len(), tolerance.exact);
     let mut sweeps = 0;
+    memory.kappa.clear();
+    memory.kappa.resize(n, f64::NAN);
+    let kappas = &mut memory.kappa;
+    let mut previous = memory.extrapolate.then_some(&mut memory.previous);
     if let Some(previous) = previous.as_deref_mut() {
         previous.clear();
         previous.extend_from_slice(sigma);
@@ -178,6 +210,18 @@ pub(super) fn solve<R: Response>(
         } else {
             STALL_SWEEPS
         };
+        if tolerance.plain_after_stall
+            && sweeps - anchor_sweep >= patience
+            && worst > tolerance.loose
+            && previous.is_some()
+        {
+            // Stalled outside the acceptance while extrapolating: plain sweeps from here,
+            // with their own patience (a pile's velocity solve that stalled at 6.5e-3 of
+            // its speed scale with the extrapolation converged without it).
+            previous = None;
+            momentum = 0;
+            (anchor, anchor_sweep) = (worst, sweeps);
+        }
         if sweeps >= MAX_SWEEPS || sweeps - anchor_sweep >= patience {
             return Solved {
                 sweeps,
@@ -223,8 +267,8 @@ pub(super) fn solve<R: Response>(
                 }
                 None => BLOCK_PASSES,
             };
-            // The disc's multiplier from the last pass (the next pass's root is near it).
-            let mut kappa = f64::NAN;
+            // The disc's multiplier from the last pass or sweep (the next root is near it).
+            let kappa = &mut kappas[k];
             for _ in 0..passes {
                 let sn = if w[0][0] > 0.0 {
                     (-(rho[0] + w[0][1] * new[1] + w[0][2] * new[2]) / w[0][0]).max(0.0)
@@ -232,7 +276,7 @@ pub(super) fn solve<R: Response>(
                     0.0
                 };
                 let rho_t = [rho[1] + w[1][0] * sn, rho[2] + w[2][0] * sn];
-                let st = disc([[w[1][1], w[1][2]], [w[2][1], w[2][2]]], rho_t, mu_k * sn, &mut kappa);
+                let st = disc([[w[1][1], w[1][2]], [w[2][1], w[2][2]]], rho_t, mu_k * sn, kappa);
                 let next = [sn, st[0], st[1]];
                 let change = (0..3).fold(0.0f64, |m, i| m.max((next[i] - new[i]).abs()));
                 new = next;
@@ -515,14 +559,18 @@ mod tests {
                 rates: &mut kept,
             };
             dense.start(&r0, &sigma);
-            let tolerance = Tolerance { exact: 1e-14, loose };
+            let tolerance = Tolerance {
+                exact: 1e-14,
+                loose,
+                plain_after_stall: false,
+            };
             solve(
                 &mut dense,
                 &[0.0; 2],
                 &mut sigma,
                 &mut rates,
                 tolerance,
-                None,
+                &mut Memory::default(),
                 |_, _, _| false,
             )
         };
@@ -540,6 +588,59 @@ mod tests {
         );
     }
 
+    /// The velocity solve's recourse: an extrapolated solve that stalls outside its
+    /// acceptance goes on with plain sweeps and their own patience (two frictionless
+    /// contacts whose normals differ by a hair, as above, `W`'s eigenvalues 2 and 2e-7).
+    #[test]
+    fn an_extrapolated_solve_that_stalls_goes_on_with_plain_sweeps() {
+        let c = 1.0 - 1e-7;
+        let mut w = [0.0; 36];
+        for (i, j, v) in [
+            (0, 0, 1.0),
+            (3, 3, 1.0),
+            (0, 3, c),
+            (3, 0, c),
+            (1, 1, 1.0),
+            (2, 2, 1.0),
+            (4, 4, 1.0),
+            (5, 5, 1.0),
+        ] {
+            w[i * 6 + j] = v;
+        }
+        let r0 = [-(1.0 + c), 0.0, 0.0, -(1.0 + c), 0.0, 0.0];
+        let run = |plain_after_stall: bool| {
+            let (mut sigma, mut rates, mut kept) = ([0.0; 6], [0.0; 6], [0.0; 6]);
+            let mut dense = Dense {
+                w: &w,
+                rates: &mut kept,
+            };
+            dense.start(&r0, &sigma);
+            let tolerance = Tolerance {
+                exact: 1e-14,
+                loose: 0.0,
+                plain_after_stall,
+            };
+            solve(
+                &mut dense,
+                &[0.0; 2],
+                &mut sigma,
+                &mut rates,
+                tolerance,
+                &mut Memory::extrapolating(),
+                |_, _, _| false,
+            )
+        };
+        let alone = run(false);
+        let then_plain = run(true);
+        assert!(!alone.converged && !then_plain.converged);
+        assert!((STALL_SWEEPS..STALL_SWEEPS + 10).contains(&alone.sweeps), "{alone:?}");
+        assert!(
+            (2 * STALL_SWEEPS..2 * STALL_SWEEPS + 10).contains(&then_plain.sweeps),
+            "{then_plain:?}"
+        );
+        assert!(then_plain.worst <= alone.worst, "{alone:?} {then_plain:?}");
+    }
+
     #[test]
     fn one_contact_sticks_below_the_cone_and_slides_on_it() {
         // A point of unit mass on a plane: W = I (per unit force over the half-kick).
@@ -553,8 +654,12 @@ mod tests {
                 mu,
                 s,
                 r,
-                Tolerance { exact: tol, loose: 0.0 },
-                None,
+                Tolerance {
+                    exact: tol,
+                    loose: 0.0,
+                    plain_after_stall: false,
+                },
+                &mut Memory::default(),
                 |_, _, _| false,
             )
         };

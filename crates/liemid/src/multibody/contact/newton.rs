@@ -329,8 +329,9 @@ mod tests {
                 cone::Tolerance {
                     exact: 1e-13,
                     loose: 0.0,
+                    plain_after_stall: false,
                 },
-                None,
+                &mut cone::Memory::default(),
                 |d, sigma, _| newton(&w, &r0, &mu, sigma, d.rates, 1e-13, &mut scratch),
             );
             assert!(
@@ -555,8 +556,9 @@ mod tests {
             cone::Tolerance {
                 exact: STALLED_TOL,
                 loose: 0.0,
+                plain_after_stall: false,
             },
-            Some(&mut Vec::new()),
+            &mut cone::Memory::extrapolating(),
             |_, _, _| false,
         );
         assert!(alone.converged && (40..60).contains(&alone.sweeps), "{alone:?}");

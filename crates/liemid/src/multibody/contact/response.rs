@@ -82,12 +82,14 @@ fn solve_dense(s: &mut ContactScratch, tolerance: cone::Tolerance) -> cone::Solv
         polish,
         slide,
         newton,
+        memory,
         ..
     } = s;
     kept.resize(r0.len(), 0.0);
     let mut dense = cone::Dense { w, rates: kept };
     dense.start(r0, sigma);
-    cone::solve(&mut dense, mu, sigma, rates, tolerance, None, |d, sigma, _| {
+    memory.extrapolate = false;
+    cone::solve(&mut dense, mu, sigma, rates, tolerance, memory, |d, sigma, _| {
         super::polish::polish(w, r0, mu, sigma, d.rates, tol, polish)
             || super::newton::newton(w, r0, mu, sigma, d.rates, tol, newton)
             || super::polish::slide_newton(w, r0, mu, sigma, d.rates, tol, slide)
@@ -215,17 +217,10 @@ pub(super) fn solve_contacts(
     if !s.local {
         return solve_dense(s, tolerance);
     }
-    let mut previous = core::mem::take(&mut s.previous);
+    let mut memory = core::mem::take(&mut s.memory);
+    memory.extrapolate = true;
     let (mut local, sigma, rates, mu) = s.local(sys, hh);
-    let done = cone::solve(
-        &mut local,
-        mu,
-        sigma,
-        rates,
-        tolerance,
-        Some(&mut previous),
-        |_, _, _| false,
-    );
-    s.previous = previous;
+    let done = cone::solve(&mut local, mu, sigma, rates, tolerance, &mut memory, |_, _, _| false);
+    s.memory = memory;
     done
 }

@@ -82,8 +82,8 @@ pub(in crate::multibody) struct ContactScratch {
     pub(super) newton: super::newton::Newton,
     /// The rates the dense response keeps.
     pub(super) kept: Vec<f64>,
-    /// The forces of the cone solve's previous sweep (its extrapolation).
-    pub(super) previous: Vec<f64>,
+    /// What the cone solve keeps between its sweeps.
+    pub(super) memory: super::cone::Memory,
     /// Free bodies only (no joint rows, no armature): `W` applied body by body, never
     /// formed (`Local`): its diagonal blocks and the velocity changes of the forces.
     pub(super) local: bool,

@@ -415,6 +415,7 @@ impl Workspace {
             let inner = cone::Tolerance {
                 exact: (0.25 * tol).max(1e-3 * worst),
                 loose: 0.5 * accept,
+                plain_after_stall: false,
             };
             let done = solve_contacts(sys, s, hh, inner);
             report.contact_sweeps += u32::try_from(done.sweeps).unwrap_or(u32::MAX);
@@ -508,6 +509,7 @@ impl Workspace {
         let tolerance = cone::Tolerance {
             exact: 1e-12 * vscale,
             loose: accept,
+            plain_after_stall: true,
         };
         let done = solve_contacts(sys, &mut s, hh, tolerance);
         report.contact_sweeps += u32::try_from(done.sweeps).unwrap_or(u32::MAX);
