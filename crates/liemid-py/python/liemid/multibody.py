@@ -56,7 +56,7 @@ class MultibodyRun:
     command's JSON summary: ``most_points``, ``deepest_penetration`` (m),
     ``position_iterations``, ``solver_sweeps``, ``split_steps`` (steps whose contact solve
     failed, redone as two half steps), ``frictionless_drifts`` (steps of h/16 whose
-    position problem still failed, taken with friction in the closing kick only),
+    solve still failed, taken with friction in the closing kick only),
     ``loose_steps`` and ``max_loose_violation`` (steps
     taken where a stalled solve held the law to 1e-8 of the contact length)."""
 

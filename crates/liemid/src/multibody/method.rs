@@ -120,7 +120,7 @@ pub struct StepReport {
     /// Contact steps whose solve failed and were redone as two half steps (each half
     /// split again where it fails, to `h / 16`), over all levels.
     pub split_steps: u32,
-    /// Contact steps of `h / 16` whose position problem failed, taken with a drift that
+    /// Contact steps of `h / 16` whose solve failed, taken again with a drift that
     /// holds no contact by friction (friction in the closing kick only).
     pub frictionless_drifts: u32,
     /// Contact stages taken with the position problem's law holding to `1e-8` of the

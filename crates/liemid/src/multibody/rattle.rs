@@ -302,10 +302,10 @@ impl Workspace {
             return Err(e);
         }
         if depth >= MAX_SPLITS {
-            // The last resort, at h/16: the drift holds no contact by friction, and friction
-            // acts in the closing μ-kick only, as in velocity-level contact methods (a
-            // sticking contact slides `h² a_t / 2` within such a step, where `a_t` is its
-            // tangential acceleration). Its position problem has normal rows only, a
+            // The last resort, at h/16 (whichever solve failed): the drift holds no contact
+            // by friction, and friction acts in the closing μ-kick only, as in velocity-level
+            // contact methods (a sticking contact slides `h² a_t / 2` within such a step,
+            // where `a_t` is its tangential acceleration). Its position problem has normal rows only, a
             // problem Gauss–Seidel converges on; the velocity solve still holds Coulomb's
             // law exactly. Counted (`StepReport::frictionless_drifts`).
             self.lambda.copy_from_slice(&self.split_lambda);

@@ -113,7 +113,7 @@ pub(in crate::multibody) struct ContactScratch {
     pub(super) lambda_ok: Vec<[f64; 6]>,
     pub(super) mu: Vec<f64>,
     /// The drift holds no contact by friction (friction in the closing μ-kick only): the
-    /// fallback of a step whose position problem fails at every split.
+    /// fallback of a step whose solve fails at every split.
     pub(in crate::multibody) frictionless_drift: bool,
     pub(super) base_p: Vec<Vec3>,
     pub(super) base_pi: Vec<Vec3>,
