@@ -301,30 +301,27 @@ impl Workspace {
         if !numerical {
             return Err(e);
         }
-        if depth >= MAX_SPLITS {
-            // The last resort, at h/16 (whichever solve failed): the drift holds no contact
-            // by friction, and friction acts in the closing μ-kick only, as in velocity-level
-            // contact methods (a sticking contact slides `h² a_t / 2` within such a step,
-            // where `a_t` is its tangential acceleration). Its position problem has normal rows only, a
-            // problem Gauss–Seidel converges on; the velocity solve still holds Coulomb's
-            // law exactly. Counted (`StepReport::frictionless_drifts`).
-            self.lambda.copy_from_slice(&self.split_lambda);
-            self.lambda_prev.copy_from_slice(&self.split_lambda_prev);
-            self.limit.copy_from_slice(&self.split_limit);
-            self.cache_valid = false;
-            self.contact.frictionless_drift = true;
-            let retry = self.stage(sys, state, h, report, None);
-            self.contact.frictionless_drift = false;
-            if retry.is_ok() {
-                report.frictionless_drifts += 1;
-                return Ok(());
-            }
-            return Err(e);
-        }
+        // Either recourse starts again from the multipliers and limits of the step's start.
         self.lambda.copy_from_slice(&self.split_lambda);
         self.lambda_prev.copy_from_slice(&self.split_lambda_prev);
         self.limit.copy_from_slice(&self.split_limit);
         self.cache_valid = false;
+        if depth >= MAX_SPLITS {
+            // The last resort, at h/16 (whichever solve failed): the drift holds no contact
+            // by friction, and friction acts in the closing μ-kick only, as in velocity-level
+            // contact methods (a sticking contact slides `h² a_t / 2` within such a step,
+            // where `a_t` is its tangential acceleration). Its position problem has normal
+            // rows only, a problem Gauss–Seidel converges on; the velocity solve still holds
+            // Coulomb's law exactly. Counted (`StepReport::frictionless_drifts`).
+            self.contact.frictionless_drift = true;
+            let retry = self.stage(sys, state, h, report, None);
+            self.contact.frictionless_drift = false;
+            if retry.is_err() {
+                return Err(e);
+            }
+            report.frictionless_drifts += 1;
+            return Ok(());
+        }
         report.split_steps += 1;
         let t0 = state.t;
         self.split_stage(sys, state, 0.5 * h, report, depth + 1)?;

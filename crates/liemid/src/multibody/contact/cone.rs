@@ -542,13 +542,10 @@ mod tests {
         }
     }
 
-    /// Two frictionless contacts whose normals differ by a hair (`W`'s eigenvalues 2 and
-    /// 1e-5): Gauss–Seidel contracts by `1 − 2e-5` a sweep along their difference. Aiming
-    /// at the law exactly, the solve stops as stalled after [`STALL_SWEEPS`]; told that its
-    /// caller accepts the violation it has, after [`LOOSE_STALL_SWEEPS`].
-    #[test]
-    fn a_stalled_solve_inside_its_acceptance_stops_sooner() {
-        let c = 1.0 - 1e-5;
+    /// Two frictionless contacts whose normals differ by a hair: `W` couples their normal
+    /// rows by `c` (eigenvalues `1 ± c`), `r₀ = −W (1, 1)` (both pressed, `σ_n = 1` each at
+    /// the solution); solved from zero forces with `tolerance` and `memory`.
+    fn nearly_parallel_pair(c: f64, tolerance: Tolerance, memory: &mut Memory) -> Solved {
         let mut w = [0.0; 36];
         for (i, j, v) in [
             (0, 0, 1.0),
@@ -562,29 +559,37 @@ mod tests {
         ] {
             w[i * 6 + j] = v;
         }
-        // r₀ = −W (1, 1): both pressed, σ_n = 1 each at the solution.
         let r0 = [-(1.0 + c), 0.0, 0.0, -(1.0 + c), 0.0, 0.0];
+        let (mut sigma, mut rates, mut kept) = ([0.0; 6], [0.0; 6], [0.0; 6]);
+        let mut dense = Dense {
+            w: &w,
+            rates: &mut kept,
+        };
+        dense.start(&r0, &sigma);
+        solve(
+            &mut dense,
+            &[0.0; 2],
+            &mut sigma,
+            &mut rates,
+            tolerance,
+            memory,
+            |_, _, _| false,
+        )
+    }
+
+    /// The pair above with `W`'s eigenvalues 2 and 1e-5: Gauss–Seidel contracts by
+    /// `1 − 2e-5` a sweep along their difference. Aiming at the law exactly, the solve stops
+    /// as stalled after [`STALL_SWEEPS`]; told that its caller accepts the violation it has,
+    /// after [`LOOSE_STALL_SWEEPS`].
+    #[test]
+    fn a_stalled_solve_inside_its_acceptance_stops_sooner() {
         let run = |loose: f64| {
-            let (mut sigma, mut rates, mut kept) = ([0.0; 6], [0.0; 6], [0.0; 6]);
-            let mut dense = Dense {
-                w: &w,
-                rates: &mut kept,
-            };
-            dense.start(&r0, &sigma);
             let tolerance = Tolerance {
                 exact: 1e-14,
                 loose,
                 plain_after_stall: false,
             };
-            solve(
-                &mut dense,
-                &[0.0; 2],
-                &mut sigma,
-                &mut rates,
-                tolerance,
-                &mut Memory::default(),
-                |_, _, _| false,
-            )
+            nearly_parallel_pair(1.0 - 1e-5, tolerance, &mut Memory::default())
         };
         let exact = run(0.0);
         let loose = run(1.0);
@@ -601,48 +606,19 @@ mod tests {
     }
 
     /// The velocity solve's recourse: an extrapolated solve that stalls outside its
-    /// acceptance goes on with its own patience again, without the extrapolation (two
-    /// frictionless contacts whose normals differ by a hair, as above, `W`'s eigenvalues 2
-    /// and 1e-7): it stops after twice the sweeps, no worse. (That the later sweeps are
-    /// plain is the code's `previous = None`; the test sees the sweeps only.)
+    /// acceptance goes on with its own patience again, without the extrapolation (the pair
+    /// above with `W`'s eigenvalues 2 and 1e-7): it stops after twice the sweeps, no worse.
+    /// (That the later sweeps are plain is the code's `previous = None`; the test sees the
+    /// sweeps only.)
     #[test]
     fn an_extrapolated_solve_that_stalls_goes_on_with_plain_sweeps() {
-        let c = 1.0 - 1e-7;
-        let mut w = [0.0; 36];
-        for (i, j, v) in [
-            (0, 0, 1.0),
-            (3, 3, 1.0),
-            (0, 3, c),
-            (3, 0, c),
-            (1, 1, 1.0),
-            (2, 2, 1.0),
-            (4, 4, 1.0),
-            (5, 5, 1.0),
-        ] {
-            w[i * 6 + j] = v;
-        }
-        let r0 = [-(1.0 + c), 0.0, 0.0, -(1.0 + c), 0.0, 0.0];
         let run = |plain_after_stall: bool| {
-            let (mut sigma, mut rates, mut kept) = ([0.0; 6], [0.0; 6], [0.0; 6]);
-            let mut dense = Dense {
-                w: &w,
-                rates: &mut kept,
-            };
-            dense.start(&r0, &sigma);
             let tolerance = Tolerance {
                 exact: 1e-14,
                 loose: 0.0,
                 plain_after_stall,
             };
-            solve(
-                &mut dense,
-                &[0.0; 2],
-                &mut sigma,
-                &mut rates,
-                tolerance,
-                &mut Memory::extrapolating(),
-                |_, _, _| false,
-            )
+            nearly_parallel_pair(1.0 - 1e-7, tolerance, &mut Memory::extrapolating())
         };
         let alone = run(false);
         let then_plain = run(true);
