@@ -54,7 +54,8 @@ class MultibodyRun:
     loop-closing joints), as the command prints them; ``contacts`` the contact statistics
     of a model with contacts run by ``liemid`` (``None`` otherwise), named as in the
     command's JSON summary: ``most_points``, ``deepest_penetration`` (m),
-    ``position_iterations``, ``solver_sweeps``, ``split_steps`` (steps whose contact solve
+    ``position_iterations``, ``solver_sweeps`` (a solve over free bodies counts the
+    most sweeps of its islands), ``split_steps`` (steps whose contact solve
     failed, redone as two half steps), ``frictionless_drifts`` (steps of h/16 whose
     solve still failed, taken with friction in the closing kick only),
     ``loose_steps`` and ``max_loose_violation`` (steps

@@ -113,7 +113,8 @@ pub struct StepReport {
     /// Outer iterations of the contact position problem (each re-runs the drift), over
     /// all stages.
     pub contact_iterations: u32,
-    /// Projected Gauss–Seidel sweeps of the contact problems, over all stages.
+    /// Projected Gauss–Seidel sweeps of the contact problems, over all stages (over free
+    /// bodies, solved island by island, a solve counts its islands' most).
     pub contact_sweeps: u32,
     /// The deepest penetration found at a stage's start (m; 0 when none).
     pub penetration: f64,

@@ -45,6 +45,7 @@
 mod boxes;
 mod cone;
 mod detect;
+mod islands;
 mod newton;
 mod polish;
 mod response;

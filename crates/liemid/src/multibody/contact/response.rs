@@ -1,7 +1,9 @@
 //! The response `W = (h/2) D P M⁻¹ Dᵀ` of the contact problems and the solves over it: each
-//! contact's three rows, `W` formed densely (projected on the joints column by column) or
-//! applied body by body over free bodies (`Local`), and the cone solve with the finishes
-//! each allows (`polish.rs` and `newton.rs` on a dense `W`; none on `Local`).
+//! contact's three rows, `W` formed densely (projected on the joints column by column) on
+//! jointed bodies; over free bodies one problem per island (`islands.rs`), each island's
+//! `W` formed from its rows in a scene of at most [`LOCAL_FROM`] contacts, else applied
+//! body by body (`Local`); and the cone solve with the finishes each allows (`polish.rs`
+//! and `newton.rs` on a dense `W`; none on `Local`).
 //!
 //! Reference: docs/theory/multibody.md §6.
 
@@ -10,10 +12,16 @@ use crate::linalg::Vec3;
 use super::super::system::MultibodySystem;
 use super::super::workspace::Workspace;
 use super::cone;
+use super::islands::Islands;
 use super::scratch::{ContactScratch, Rows};
 
-/// Contacts on free bodies from which `W` is applied body by body (`Local`) instead of
-/// formed.
+/// Contacts on free bodies from which each island's `W` is applied body by body (`Local`)
+/// instead of formed with the dense finishes (`polish.rs`, `newton.rs`). The count is the
+/// scene's, not the island's: a stack of ten boxes (one island of 40 contacts) needs the
+/// Newton finish, while in a pile the islands of 17 to 64 resting contacts made it fail
+/// at `(3n)³` a try (measured on 100 spheres falling into a bin, 2 s: 15-17 s with the
+/// dense finishes on islands of at most 16 contacts and the Newton finish on those of at most 64, against 6.0-7.0 s
+/// with this rule).
 const LOCAL_FROM: usize = 64;
 
 impl Workspace {
@@ -38,13 +46,11 @@ impl Workspace {
         }
     }
 
-    /// Make `W` ready for the solves: body by body for free bodies (no joint rows, no
-    /// armature: the blocks only), else dense (`contact_response`).
+    /// Make `W` ready for the solves: over free bodies (no joint rows, no armature) the
+    /// diagonal blocks and the islands, else dense (`contact_response`).
     pub(super) fn prepare_response(&mut self, sys: &MultibodySystem, s: &mut ContactScratch, hh: f64, start: bool) {
         let rows = if start { &self.rows0 } else { &self.rows1 };
-        // Few contacts keep the dense W even on free bodies: its finishes (`polish.rs`)
-        // need the active set's rows of W.
-        s.local = sys.armature.is_none() && !rows.iter().any(|r| r.n > 0) && s.rows.len() > LOCAL_FROM;
+        s.local = sys.armature.is_none() && !rows.iter().any(|r| r.n > 0);
         if !s.local {
             self.contact_response(sys, s, hh, start);
             return;
@@ -65,26 +71,36 @@ impl Workspace {
             }
             s.blocks.push(block);
         }
+        s.islands.build(&s.rows, &s.blocks, sys.mass.len());
     }
 }
 
-/// The cone problem of `s` (`W` dense in `s.w`, `r₀`, `µ`) from the forces in `s.sigma`, with
-/// the active-set finish (`polish.rs`).
-fn solve_dense(s: &mut ContactScratch, tolerance: cone::Tolerance) -> cone::Solved {
+/// The finishes of a solve over a dense `W` (`polish.rs`, `newton.rs`) and their scratch.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Finishes {
+    polish: super::polish::Polish,
+    slide: super::polish::Slide,
+    newton: super::newton::Newton,
+}
+
+/// The cone problem over a dense `w` (row-major) with `r₀`, `µ`, from the forces in
+/// `sigma`, with the active-set and Newton finishes; `kept` holds the rates the response
+/// keeps.
+#[allow(clippy::too_many_arguments)]
+fn solve_dense(
+    w: &[f64],
+    r0: &[f64],
+    mu: &[f64],
+    sigma: &mut [f64],
+    rates: &mut [f64],
+    kept: &mut Vec<f64>,
+    finishes: &mut Finishes,
+    memory: &mut cone::Memory,
+    tolerance: cone::Tolerance,
+) -> cone::Solved {
     let tol = tolerance.exact;
-    let ContactScratch {
-        w,
-        r0,
-        mu,
-        sigma,
-        rates,
-        kept,
-        polish,
-        slide,
-        newton,
-        memory,
-        ..
-    } = s;
+    let Finishes { polish, slide, newton } = finishes;
+    kept.clear();
     kept.resize(r0.len(), 0.0);
     let mut dense = cone::Dense { w, rates: kept };
     dense.start(r0, sigma);
@@ -207,20 +223,122 @@ pub(super) fn minus_w_sigma(sys: &MultibodySystem, s: &mut ContactScratch, hh: f
 }
 
 /// The cone problem of `s` from the forces in `s.sigma`, by the response `s` is prepared
-/// for.
+/// for: over free bodies island by island (each to `tolerance`; the result has the most
+/// sweeps any island made and the worst violation of all), else over the dense `W`.
 pub(super) fn solve_contacts(
     sys: &MultibodySystem,
     s: &mut ContactScratch,
     hh: f64,
     tolerance: cone::Tolerance,
 ) -> cone::Solved {
-    if !s.local {
-        return solve_dense(s, tolerance);
+    let ContactScratch {
+        w,
+        r0,
+        mu,
+        sigma,
+        rates,
+        kept,
+        finishes,
+        memory,
+        islands,
+        dv,
+        dw,
+        local,
+        ..
+    } = s;
+    if !*local {
+        return solve_dense(w, r0, mu, sigma, rates, kept, finishes, memory, tolerance);
     }
-    let mut memory = core::mem::take(&mut s.memory);
-    memory.extrapolate = true;
-    let (mut local, sigma, rates, mu) = s.local(sys, hh);
-    let done = cone::solve(&mut local, mu, sigma, rates, tolerance, &mut memory, |_, _, _| false);
-    s.memory = memory;
-    done
+    let Islands {
+        order,
+        starts,
+        rows,
+        blocks,
+        mu: island_mu,
+        sigma: island_sigma,
+        r0: island_r0,
+        rates: island_rates,
+        w: island_w,
+        kept: island_kept,
+        ..
+    } = islands;
+    gather(order, mu, 1, island_mu);
+    gather(order, sigma, 3, island_sigma);
+    gather(order, r0, 3, island_r0);
+    island_rates.clear();
+    island_rates.resize(island_r0.len(), 0.0);
+    dv.iter_mut().for_each(|v| *v = Vec3::ZERO);
+    dw.iter_mut().for_each(|v| *v = Vec3::ZERO);
+    let mut all = cone::Solved {
+        sweeps: 0,
+        worst: 0.0,
+        converged: true,
+    };
+    let dense = order.len() <= LOCAL_FROM;
+    for bounds in starts.windows(2) {
+        let range = bounds[0]..bounds[1];
+        let (c, f) = (range.clone(), 3 * range.start..3 * range.end);
+        let done = if dense {
+            super::islands::dense_w(&sys.mass, &sys.inertia, &rows[c.clone()], hh, island_w);
+            solve_dense(
+                island_w,
+                &island_r0[f.clone()],
+                &island_mu[c],
+                &mut island_sigma[f.clone()],
+                &mut island_rates[f],
+                island_kept,
+                finishes,
+                memory,
+                tolerance,
+            )
+        } else {
+            // The island's bodies start without velocity changes (the islands share none).
+            let mut local = Local {
+                rows: &rows[c.clone()],
+                r0: &island_r0[f.clone()],
+                blocks: &blocks[c.clone()],
+                dv,
+                dw,
+                sys,
+                hh,
+            };
+            let sigma = &mut island_sigma[f.clone()];
+            for k in 0..local.rows.len() {
+                local.add_unchecked(k, [sigma[3 * k], sigma[3 * k + 1], sigma[3 * k + 2]]);
+            }
+            memory.extrapolate = true;
+            cone::solve(
+                &mut local,
+                &island_mu[c],
+                sigma,
+                &mut island_rates[f],
+                tolerance,
+                memory,
+                |_, _, _| false,
+            )
+        };
+        all = cone::Solved {
+            sweeps: all.sweeps.max(done.sweeps),
+            worst: all.worst.max(done.worst),
+            converged: all.converged && done.converged,
+        };
+    }
+    scatter(order, island_sigma, 3, sigma);
+    scatter(order, island_rates, 3, rates);
+    all
+}
+
+/// `to[j] = from[order[j]]`, `width` values each.
+fn gather(order: &[usize], from: &[f64], width: usize, to: &mut Vec<f64>) {
+    to.clear();
+    for &k in order {
+        to.extend_from_slice(&from[width * k..width * (k + 1)]);
+    }
+}
+
+/// `to[order[j]] = from[j]`, `width` values each.
+fn scatter(order: &[usize], from: &[f64], width: usize, to: &mut [f64]) {
+    for (j, &k) in order.iter().enumerate() {
+        to[width * k..width * (k + 1)].copy_from_slice(&from[width * j..width * (j + 1)]);
+    }
 }

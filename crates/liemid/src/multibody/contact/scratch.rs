@@ -77,17 +77,19 @@ pub(in crate::multibody) struct ContactScratch {
     pub(super) sigma_ok: Vec<f64>,
     /// The forces with the least violation of the position problem's iteration so far.
     pub(super) sigma_best: Vec<f64>,
-    pub(super) polish: super::polish::Polish,
-    pub(super) slide: super::polish::Slide,
-    pub(super) newton: super::newton::Newton,
+    /// The finishes of the dense solves.
+    pub(super) finishes: super::response::Finishes,
     /// The rates the dense response keeps.
     pub(super) kept: Vec<f64>,
     /// What the cone solve keeps between its sweeps.
     pub(super) memory: super::cone::Memory,
-    /// Free bodies only (no joint rows, no armature): `W` applied body by body, never
-    /// formed (`Local`): its diagonal blocks and the velocity changes of the forces.
+    /// Free bodies only (no joint rows, no armature): `W` never formed whole, the contacts
+    /// solved island by island (`islands.rs`), the large islands body by body (`Local`):
+    /// the diagonal blocks and the velocity changes of the forces.
     pub(super) local: bool,
     pub(super) blocks: Vec<[[f64; 3]; 3]>,
+    /// Over free bodies, the contacts grouped into independent problems.
+    pub(super) islands: super::islands::Islands,
     pub(super) dv: Vec<Vec3>,
     pub(super) dw: Vec<Vec3>,
     /// The last step's points and position forces (the warm start).
