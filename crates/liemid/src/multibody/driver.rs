@@ -43,7 +43,8 @@ pub struct MultibodyRun {
     /// The deepest penetration found at a step's start (m).
     pub max_penetration: f64,
     /// Outer iterations of the contact position problem, and projected Gauss–Seidel
-    /// sweeps of the contact problems, over the run.
+    /// sweeps of the contact problems, over the run (a solve over free bodies counts the
+    /// most sweeps of its islands).
     pub contact_iterations: u64,
     /// See `contact_iterations`.
     pub contact_sweeps: u64,

@@ -3,8 +3,8 @@
 //! free bodies `W` couples only contacts that share a body, so `W` is block diagonal over
 //! the islands and the cone problem splits into one independent problem per island: each
 //! is solved to the same tolerance on its own (a settled island stops sweeping while
-//! another is still falling), and the small ones take the dense response with its finishes
-//! (`polish.rs`, `newton.rs`) at the cost of their own size, not the whole scene's.
+//! another is still falling), and in a small scene each island takes the dense response with
+//! its finishes (`polish.rs`, `newton.rs`) at the cost of its own size, not the scene's.
 //!
 //! Reference: docs/theory/multibody.md §6.
 

@@ -196,7 +196,8 @@ pub(super) fn newton(
             rates.copy_from_slice(&s.trial_rates);
             return true;
         }
-        if it == MAX_ITERATIONS {
+        // (Checked after the law, so a last step that reached it is kept.)
+        if it == MAX_ITERATIONS || stagnant >= STAGNANT {
             break;
         }
         // (JᵀJ + λ I) Δ = −Jᵀ F, the lower triangle, row by row of J over its nonzeros
@@ -252,9 +253,6 @@ pub(super) fn newton(
         let before = phi;
         phi = residual(w, mu, &s.scale, &s.sigma, &s.rates, &mut s.f, Some(&mut s.jac), band);
         stagnant = if phi > 0.5 * before { stagnant + 1 } else { 0 };
-        if stagnant >= STAGNANT {
-            return false;
-        }
     }
     false
 }

@@ -84,7 +84,8 @@ pub(in crate::multibody) struct ContactScratch {
     /// What the cone solve keeps between its sweeps.
     pub(super) memory: super::cone::Memory,
     /// Free bodies only (no joint rows, no armature): `W` never formed whole, the contacts
-    /// solved island by island (`islands.rs`), the large islands body by body (`Local`):
+    /// solved island by island (`islands.rs`), every island of a scene of more than 64
+    /// contacts body by body (`Local`):
     /// the diagonal blocks and the velocity changes of the forces.
     pub(super) local: bool,
     pub(super) blocks: Vec<[[f64; 3]; 3]>,

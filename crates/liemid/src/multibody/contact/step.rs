@@ -484,6 +484,12 @@ impl Workspace {
                 s.r0[at] -= e * s.approach[k];
             }
         }
+        // The speed scale of the velocity solve's tolerance: the bodies' speeds after the
+        // μ-kick without contact forces (read before the response is formed, whose
+        // projections per column overwrite `vel`, `omega`).
+        let vscale = (0..sys.mass.len()).fold(sys.velocity_floor(), |m, i| {
+            m.max(self.vel[i].norm() + geometry.length * self.omega[i].norm())
+        });
         self.prepare_response(sys, &mut s, hh, false);
         s.sigma.clear();
         s.sigma.resize(3 * n, 0.0);
@@ -501,9 +507,6 @@ impl Workspace {
             &mut s.sigma,
             &mut s.order,
         );
-        let vscale = (0..sys.mass.len()).fold(sys.velocity_floor(), |m, i| {
-            m.max(self.vel[i].norm() + geometry.length * self.omega[i].norm())
-        });
         // A solve that stalls is taken where what it leaves would move a contact by at most
         // `ACCEPT` of the length over a step (the position problem's acceptance), counted.
         let accept = ACCEPT * geometry.length / (2.0 * hh);
