@@ -9,8 +9,9 @@ For each page (made here by the `liemid` binary given with --liemid):
 - the WebGL canvas is not blank: the 3-D area of a screenshot holds enough distinct
   colours;
 - the scene moves: screenshots after 1.5 s and 4 s of virtual time differ (a still page gets one
-  more look at 8 s, for a loaded machine, and then one opened at its middle frame with
-  `#frame=N`, since SwiftShader may draw only one or two frames of a heavy scene).
+  more look at 8 s, for a loaded machine, and then its first and middle frames are opened
+  with `#frame=N` and compared, since SwiftShader may draw only one or two frames of a heavy
+  scene and a scene that comes to rest may show its resting frames in both looks).
 
 The checker is tested first on two pages that must fail: one with a deliberate
 `<img src="http://example.invalid/x.png">` (a request) and one with nothing drawn (blank).
@@ -203,12 +204,14 @@ def check(browser: str, proxy: Proxy, page: Path, shots: Path, name: str) -> Tup
             moved = changed(a, b)
         if moved < MIN_CHANGED and frames and int(frames.group(1)) > 1:
             # SwiftShader sometimes draws only one or two frames of a heavy scene within the
-            # budget; the slider's own path (`#frame=N`, the middle frame) shows whether
-            # another moment of the run looks different.
-            middle = shots / f"{name}-middle.png"
+            # budget, and a scene that comes to rest (a dropped cube) can show its resting
+            # frames in both looks; the slider's own path (`#frame=N`) opens the first and
+            # the middle frame, which show whether two moments of the run look different.
+            first, middle = shots / f"{name}-first.png", shots / f"{name}-middle.png"
+            requests += screenshot(browser, proxy, page, first, 1500, Path(profile), "#frame=0")
             fragment = f"#frame={int(frames.group(1)) // 2}"
             requests += screenshot(browser, proxy, page, middle, 1500, Path(profile), fragment)
-            b = stage(middle)
+            a, b = stage(first), stage(middle)
             moved = changed(a, b)
     if requests:
         failures.append(f"{len(requests)} network request(s) left the page: {requests[:3]}")
@@ -216,7 +219,7 @@ def check(browser: str, proxy: Proxy, page: Path, shots: Path, name: str) -> Tup
     if colours < MIN_COLOURS:
         failures.append(f"the canvas is blank: {colours} distinct colours (at least {MIN_COLOURS} expected)")
     if moved < MIN_CHANGED:
-        failures.append(f"nothing moved between 1.5 s and 4 s (nor 8 s, nor at the middle frame): {100 * moved:.3f} % of the stage changed")
+        failures.append(f"nothing moved between 1.5 s and 4 s (nor 8 s, nor between the first and the middle frame): {100 * moved:.3f} % of the stage changed")
     measured = {
         "bytes": page.stat().st_size,
         "frames": frames.group(0) if frames else None,

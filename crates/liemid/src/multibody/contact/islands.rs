@@ -11,32 +11,7 @@
 use crate::inertia::Inertia;
 use crate::linalg::Vec3;
 
-use super::scratch::Rows;
-
-/// The islands of one set of contact rows, and the rows, blocks and friction coefficients
-/// gathered island by island (the forces and the rates are gathered per solve).
-#[derive(Clone, Debug, Default)]
-pub(super) struct Islands {
-    /// Union–find over the bodies: each body's parent.
-    parent: Vec<usize>,
-    /// Per body, its island's index (`usize::MAX`: none yet); per contact, its island.
-    label: Vec<usize>,
-    island_of: Vec<usize>,
-    /// The contacts island by island; island `i` is `order[starts[i]..starts[i + 1]]`.
-    pub(super) order: Vec<usize>,
-    pub(super) starts: Vec<usize>,
-    /// The contacts' rows, diagonal blocks and friction coefficients in `order`.
-    pub(super) rows: Vec<Rows>,
-    pub(super) blocks: Vec<[[f64; 3]; 3]>,
-    pub(super) mu: Vec<f64>,
-    /// The forces, the rates' constant `r₀` and the rates in `order` (three per contact).
-    pub(super) sigma: Vec<f64>,
-    pub(super) r0: Vec<f64>,
-    pub(super) rates: Vec<f64>,
-    /// One island's dense `W` and the rates its solve keeps.
-    pub(super) w: Vec<f64>,
-    pub(super) kept: Vec<f64>,
-}
+use super::scratch::{Islands, Rows};
 
 impl Islands {
     /// Group `rows` (contacts between free bodies, `bodies` of them) into islands, in the

@@ -12,8 +12,7 @@ use crate::linalg::Vec3;
 use super::super::system::MultibodySystem;
 use super::super::workspace::Workspace;
 use super::cone;
-use super::islands::Islands;
-use super::scratch::{ContactScratch, Rows};
+use super::scratch::{ContactScratch, Finishes, Islands, Rows};
 
 /// Contacts on free bodies from which each island's `W` is applied body by body (`Local`)
 /// instead of formed with the dense finishes (`polish.rs`, `newton.rs`). The count is the
@@ -73,14 +72,6 @@ impl Workspace {
         }
         s.islands.build(&s.rows, &s.blocks, sys.mass.len());
     }
-}
-
-/// The finishes of a solve over a dense `W` (`polish.rs`, `newton.rs`) and their scratch.
-#[derive(Clone, Debug, Default)]
-pub(super) struct Finishes {
-    polish: super::polish::Polish,
-    slide: super::polish::Slide,
-    newton: super::newton::Newton,
 }
 
 /// The cone problem over a dense `w` (row-major) with `r₀`, `µ`, from the forces in

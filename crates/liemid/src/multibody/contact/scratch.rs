@@ -59,6 +59,39 @@ impl Rows {
     }
 }
 
+/// The islands of one set of contact rows, and the rows, blocks and friction coefficients
+/// gathered island by island (the forces and the rates are gathered per solve).
+#[derive(Clone, Debug, Default)]
+pub(super) struct Islands {
+    /// Union–find over the bodies: each body's parent.
+    pub(super) parent: Vec<usize>,
+    /// Per body, its island's index (`usize::MAX`: none yet); per contact, its island.
+    pub(super) label: Vec<usize>,
+    pub(super) island_of: Vec<usize>,
+    /// The contacts island by island; island `i` is `order[starts[i]..starts[i + 1]]`.
+    pub(super) order: Vec<usize>,
+    pub(super) starts: Vec<usize>,
+    /// The contacts' rows, diagonal blocks and friction coefficients in `order`.
+    pub(super) rows: Vec<Rows>,
+    pub(super) blocks: Vec<[[f64; 3]; 3]>,
+    pub(super) mu: Vec<f64>,
+    /// The forces, the rates' constant `r₀` and the rates in `order` (three per contact).
+    pub(super) sigma: Vec<f64>,
+    pub(super) r0: Vec<f64>,
+    pub(super) rates: Vec<f64>,
+    /// One island's dense `W` and the rates its solve keeps.
+    pub(super) w: Vec<f64>,
+    pub(super) kept: Vec<f64>,
+}
+
+/// The finishes of a solve over a dense `W` (`polish.rs`, `newton.rs`) and their scratch.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Finishes {
+    pub(super) polish: super::polish::Polish,
+    pub(super) slide: super::polish::Slide,
+    pub(super) newton: super::newton::Newton,
+}
+
 /// Scratch of the contact solves, grown as contacts appear (a step with the same number of
 /// contacts as a past one allocates nothing).
 #[derive(Clone, Default)]
@@ -78,7 +111,7 @@ pub(in crate::multibody) struct ContactScratch {
     /// The forces with the least violation of the position problem's iteration so far.
     pub(super) sigma_best: Vec<f64>,
     /// The finishes of the dense solves.
-    pub(super) finishes: super::response::Finishes,
+    pub(super) finishes: Finishes,
     /// The rates the dense response keeps.
     pub(super) kept: Vec<f64>,
     /// What the cone solve keeps between its sweeps.
@@ -90,7 +123,7 @@ pub(in crate::multibody) struct ContactScratch {
     pub(super) local: bool,
     pub(super) blocks: Vec<[[f64; 3]; 3]>,
     /// Over free bodies, the contacts grouped into independent problems.
-    pub(super) islands: super::islands::Islands,
+    pub(super) islands: Islands,
     pub(super) dv: Vec<Vec3>,
     pub(super) dw: Vec<Vec3>,
     /// The last step's points and position forces (the warm start).
