@@ -150,7 +150,12 @@ impl cone::Response for Local<'_> {
     }
 
     fn rates(&self, k: usize) -> [f64; 3] {
-        core::array::from_fn(|i| self.r0[3 * k + i] + self.rows[k].rate(i, self.dv, self.dw))
+        let r = self.rows[k].rates(self.dv, self.dw);
+        [
+            self.r0[3 * k] + r[0],
+            self.r0[3 * k + 1] + r[1],
+            self.r0[3 * k + 2] + r[2],
+        ]
     }
 
     fn add(&mut self, k: usize, delta: [f64; 3]) {
