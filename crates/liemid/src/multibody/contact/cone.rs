@@ -10,7 +10,11 @@
 //! Gauss–Seidel over the contacts: each contact's normal force with its friction held, then
 //! its friction force as the minimiser of `½ σ_tᵀ W_tt σ_t + ρ_tᵀ σ_t` over the disc
 //! `|σ_t| ≤ µ σ_n` (its optimality conditions are exactly the law above: inside, `r_t = 0`;
-//! on the edge, `r_t = −κ σ_t`), the others held. A sweep ends with the law's worst
+//! on the edge, `r_t = −κ σ_t`), the others held. That alternation's fixed point is found
+//! at once where the contact sticks (one 3x3 solve, `stick`) or, approaching, slides (one
+//! scalar root for κ, `slide`); the alternation runs only where neither applies (on a
+//! pile of boxes and spheres it took 6.5 passes a contact where it ran, each a disc solve,
+//! and the disc was 60 % of the run's time). A sweep ends with the law's worst
 //! violation, and the solve stops when it is below the tolerance; it fails after
 //! [`MAX_SWEEPS`] sweeps.
 //!
@@ -260,15 +264,15 @@ pub(super) fn solve<R: Response>(
             // (a box corner's normal force turns the box and so moves the corner along the
             // plane: one pass each would leave that coupling to the outer sweeps).
             let mut new = old;
-            let passes = match stick(w, rho, mu_k) {
+            // The disc's multiplier from the last pass or sweep (the next root is near it).
+            let kappa = &mut kappas[k];
+            let passes = match stick(w, rho, mu_k).or_else(|| slide(w, rho, mu_k, kappa)) {
                 Some(x) => {
                     new = x;
                     0
                 }
                 None => BLOCK_PASSES,
             };
-            // The disc's multiplier from the last pass or sweep (the next root is near it).
-            let kappa = &mut kappas[k];
             let mut tangential = Disc::new([[w[1][1], w[1][2]], [w[2][1], w[2][2]]]);
             for _ in 0..passes {
                 let sn = if w[0][0] > 0.0 {
@@ -410,6 +414,117 @@ pub(super) fn violation(rates: &[f64], sigma: &[f64], mu: &[f64]) -> f64 {
     worst
 }
 
+/// The eigenpairs of a 2x2 symmetric positive definite `a` of determinant `det`: λ₁ ≥ λ₂ > 0,
+/// q₁ the unit eigenvector of λ₁ (from the better conditioned of its two expressions), q₂ =
+/// q₁ turned a quarter.
+#[inline]
+fn eigen2(a: [[f64; 2]; 2], det: f64) -> ([f64; 2], [f64; 2], [f64; 2]) {
+    let (mean, half) = (0.5 * (a[0][0] + a[1][1]), 0.5 * (a[0][0] - a[1][1]));
+    let d = norm2(half, a[0][1]);
+    // λ₂ = det/λ₁, not `mean − d`: that difference cancels on a nearly singular block
+    // (a point free to move along one tangent only) and can come out 0 or negative.
+    let lambda = [mean + d, det / (mean + d)];
+    let q1 = if half >= 0.0 {
+        [lambda[0] - a[1][1], a[0][1]]
+    } else {
+        [a[0][1], lambda[0] - a[0][0]]
+    };
+    let l1 = norm2(q1[0], q1[1]);
+    let q1 = if l1 > 0.0 { [q1[0] / l1, q1[1] / l1] } else { [1.0, 0.0] };
+    (lambda, q1, [-q1[1], q1[0]])
+}
+
+/// The contact's sliding force in one solve, where the alternation of normal and friction
+/// force would converge to one with `σ_n > 0` on the cone's edge: with the normal rate zero,
+/// `σ_n = −(ρ_n + w_ntᵀ σ_t)/w_nn`, and the tangential rates `r_t = −κ σ_t` give
+/// `σ_t(κ) = −(S + κ I)⁻¹ c` with the Schur complement `S = W_tt − w_tn w_ntᵀ/w_nn` and
+/// `c = ρ_t − w_tn ρ_n/w_nn`; κ ≥ 0 is a root of `g(κ) = |σ_t(κ)| − µ σ_n(κ)` (in `S`'s
+/// eigenbasis `σ_t = −Q y`, `yᵢ = cᵢ/(λᵢ + κ)`). An approaching contact (`ρ_n < 0`) that
+/// does not stick has `g(0) > 0` and `g(κ) < 0` beyond
+/// `κ_hi = |c| (w_nn + µ |w_tn|)/(−µ ρ_n) − λ₂`, so a root lies between: Newton's method on
+/// `g`, kept inside the bracket by bisection. `None` (the caller alternates) for a
+/// separating contact, a degenerate block, or no root within [`SLIDE_ITERATIONS`]; started
+/// at `kappa` (the last root) where that lies in the bracket, and `kappa` receives the root.
+/// The force is put exactly on the edge (`|σ_t| = µ σ_n`, the last rounding).
+#[inline]
+fn slide(w: [[f64; 3]; 3], rho: [f64; 3], mu: f64, kappa: &mut f64) -> Option<[f64; 3]> {
+    let (wnn, rn) = (w[0][0], rho[0]);
+    if mu <= 0.0 || wnn.is_nan() || wnn <= 0.0 || rn.is_nan() || rn >= 0.0 {
+        return None;
+    }
+    let p = [w[1][0], w[2][0]];
+    let sc = [
+        [w[1][1] - p[0] * p[0] / wnn, w[1][2] - p[0] * p[1] / wnn],
+        [w[2][1] - p[1] * p[0] / wnn, w[2][2] - p[1] * p[1] / wnn],
+    ];
+    let c = [rho[1] - p[0] * rn / wnn, rho[2] - p[1] * rn / wnn];
+    let det = sc[0][0] * sc[1][1] - sc[0][1] * sc[0][1];
+    if det.is_nan() || det <= 1e-12 * sc[0][0] * sc[1][1] || sc[0][0] <= 0.0 {
+        return None;
+    }
+    let (lambda, q1, q2) = eigen2(sc, det);
+    let ct = [q1[0] * c[0] + q1[1] * c[1], q2[0] * c[0] + q2[1] * c[1]];
+    let pt = [q1[0] * p[0] + q1[1] * p[1], q2[0] * p[0] + q2[1] * p[1]];
+    let m = mu / wnn;
+    // g and g' at κ: |y| − m (p̃·y − ρ_n).
+    let g = |k: f64| {
+        let d = [1.0 / (lambda[0] + k), 1.0 / (lambda[1] + k)];
+        let y = [ct[0] * d[0], ct[1] * d[1]];
+        let l = norm2(y[0], y[1]);
+        let value = l - m * (pt[0] * y[0] + pt[1] * y[1] - rn);
+        let dl = -(y[0] * y[0] * d[0] + y[1] * y[1] * d[1]) / l;
+        let ds = -(pt[0] * y[0] * d[0] + pt[1] * y[1] * d[1]);
+        (value, dl - m * ds, y)
+    };
+    let at_zero = g(0.0).0;
+    let mut lo = 0.0f64;
+    let mut hi = norm2(c[0], c[1]) * (wnn + mu * norm2(p[0], p[1])) / (-mu * rn) - lambda[1];
+    if at_zero.is_nan() || at_zero <= 0.0 || !(hi > 0.0 && hi.is_finite()) {
+        return None;
+    }
+    // From below the root when there is no hint (`|y|` is convex and decreasing in κ).
+    let hint = core::mem::replace(kappa, f64::NAN);
+    let mut k = if hint > lo && hint < hi { hint } else { lo };
+    let mut root = None;
+    for _ in 0..SLIDE_ITERATIONS {
+        let (value, slope, y) = g(k);
+        if value == 0.0 {
+            root = Some((k, y));
+            break;
+        }
+        if value > 0.0 {
+            lo = k;
+        } else {
+            hi = k;
+        }
+        let newton = k - value / slope;
+        let next = if newton > lo && newton < hi {
+            newton
+        } else {
+            0.5 * (lo + hi)
+        };
+        if (next - k).abs() <= 4.0 * f64::EPSILON * next || hi - lo <= 4.0 * f64::EPSILON * hi {
+            root = Some((next, g(next).2));
+            break;
+        }
+        k = next;
+    }
+    let (k, y) = root?;
+    let st = [-(q1[0] * y[0] + q2[0] * y[1]), -(q1[1] * y[0] + q2[1] * y[1])];
+    let sn = -(rn + w[0][1] * st[0] + w[0][2] * st[1]) / wnn;
+    let l = norm2(st[0], st[1]);
+    if !(sn > 0.0 && l > 0.0) {
+        return None;
+    }
+    *kappa = k;
+    let f = mu * sn / l;
+    Some([sn, st[0] * f, st[1] * f])
+}
+
+/// Most iterations of [`slide`]'s root search (Newton converges in a few; bisection halves
+/// the bracket).
+const SLIDE_ITERATIONS: usize = 100;
+
 /// The minimiser of `½ xᵀ A x + bᵀ x` over `|x| ≤ radius` (`A` 2x2 symmetric positive
 /// definite): the free minimiser when inside, else `x(κ) = −(A + κ I)⁻¹ b` with `|x(κ)| =
 /// radius`. In `A`'s eigenbasis (`A = Q Λ Qᵀ`, `c = Qᵀ b`) that is the secular equation
@@ -467,23 +582,7 @@ impl Disc {
         if norm2(free[0], free[1]) <= radius {
             return free;
         }
-        let (lambda, q1, q2) = *self.eigen.get_or_insert_with(|| {
-            // Eigenpairs: λ₁ ≥ λ₂ > 0, q₁ the unit eigenvector of λ₁ (from the better
-            // conditioned of its two expressions), q₂ = q₁ turned a quarter.
-            let (mean, half) = (0.5 * (a[0][0] + a[1][1]), 0.5 * (a[0][0] - a[1][1]));
-            let d = norm2(half, a[0][1]);
-            // λ₂ = det/λ₁, not `mean − d`: that difference cancels on a nearly singular block
-            // (a point free to move along one tangent only) and can come out 0 or negative.
-            let lambda = [mean + d, det / (mean + d)];
-            let q1 = if half >= 0.0 {
-                [lambda[0] - a[1][1], a[0][1]]
-            } else {
-                [a[0][1], lambda[0] - a[0][0]]
-            };
-            let l1 = norm2(q1[0], q1[1]);
-            let q1 = if l1 > 0.0 { [q1[0] / l1, q1[1] / l1] } else { [1.0, 0.0] };
-            (lambda, q1, [-q1[1], q1[0]])
-        });
+        let (lambda, q1, q2) = *self.eigen.get_or_insert_with(|| eigen2(a, det));
         let c = [q1[0] * b[0] + q1[1] * b[1], q2[0] * b[0] + q2[1] * b[1]];
         let mut k = (norm2(c[0], c[1]) / radius - lambda[0]).max(0.0);
         if hint > k {
@@ -521,6 +620,87 @@ impl Disc {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The alternation of normal and friction force within one contact, as the sweeps run
+    /// it when neither `stick` nor `slide` applies, to `passes` passes from `old`.
+    fn alternate(w: [[f64; 3]; 3], rho: [f64; 3], mu: f64, old: [f64; 3], passes: usize) -> [f64; 3] {
+        let (mut new, mut kappa) = (old, f64::NAN);
+        for _ in 0..passes {
+            let sn = (-(rho[0] + w[0][1] * new[1] + w[0][2] * new[2]) / w[0][0]).max(0.0);
+            let rho_t = [rho[1] + w[1][0] * sn, rho[2] + w[2][0] * sn];
+            let st = disc([[w[1][1], w[1][2]], [w[2][1], w[2][2]]], rho_t, mu * sn, &mut kappa);
+            new = [sn, st[0], st[1]];
+        }
+        new
+    }
+
+    #[test]
+    fn the_sliding_solve_meets_coulombs_law_where_the_alternation_converges() {
+        // Blocks of a unit push at a point r of a body (mass m, principal inertia J) in a
+        // random contact frame: W_ij = dᵢ·dⱼ/m + (r × dᵢ)·J⁻¹ (r × dⱼ); approaching rates
+        // (ρ_n < 0) and friction coefficients from 0.1 to 1.
+        let mut rng = crate::random::Rng::new(45);
+        let (mut sliding, mut solved, mut compared) = (0, 0, 0);
+        for case in 0..4000 {
+            let m = 0.1 + 10.0 * rng.uniform();
+            let j: [f64; 3] = core::array::from_fn(|_| m * 1e-3 * (0.2 + rng.uniform()));
+            let r: [f64; 3] = core::array::from_fn(|_| 0.1 * rng.normal());
+            let frame = rng.rotation();
+            let d: [[f64; 3]; 3] = core::array::from_fn(|i| core::array::from_fn(|k| frame.m[k][i]));
+            let cross = |a: [f64; 3], b: [f64; 3]| {
+                [
+                    a[1] * b[2] - a[2] * b[1],
+                    a[2] * b[0] - a[0] * b[2],
+                    a[0] * b[1] - a[1] * b[0],
+                ]
+            };
+            let w: [[f64; 3]; 3] = core::array::from_fn(|a| {
+                core::array::from_fn(|b| {
+                    let (ta, tb) = (cross(r, d[a]), cross(r, d[b]));
+                    (0..3).map(|k| d[a][k] * d[b][k] / m + ta[k] * tb[k] / j[k]).sum()
+                })
+            });
+            let rho = [-rng.uniform(), 2.0 * rng.normal(), 2.0 * rng.normal()];
+            let mu = 0.1 + 0.9 * rng.uniform();
+            if stick(w, rho, mu).is_some() {
+                continue;
+            }
+            sliding += 1;
+            let mut kappa = f64::NAN;
+            let Some(x) = slide(w, rho, mu, &mut kappa) else {
+                continue;
+            };
+            solved += 1;
+            // The law: r_n = 0, |σ_t| = µ σ_n, r_t = −κ σ_t with κ ≥ 0 (the root returned).
+            let rate: [f64; 3] = core::array::from_fn(|i| rho[i] + (0..3).map(|k| w[i][k] * x[k]).sum::<f64>());
+            let scale = rho.iter().map(|v| v.abs()).sum::<f64>();
+            assert!(x[0] > 0.0, "case {case}: σ_n = {}", x[0]);
+            assert!(rate[0].abs() <= 1e-12 * scale, "case {case}: r_n = {:e}", rate[0]);
+            let l = norm2(x[1], x[2]);
+            assert!((l - mu * x[0]).abs() <= 1e-15 * l, "case {case}: off the edge");
+            assert!(kappa >= 0.0, "case {case}: κ = {kappa}");
+            let off = norm2(rate[1] + kappa * x[1], rate[2] + kappa * x[2]);
+            assert!(off <= 1e-12 * scale, "case {case}: r_t + κ σ_t = {off:e} of {scale}");
+            // Where the alternation from zero force converges (to round-off in 2000 passes),
+            // it reaches the same force.
+            let a = alternate(w, rho, mu, [0.0; 3], 2000);
+            let b = alternate(w, rho, mu, a, 1);
+            let step = (0..3).fold(0.0f64, |s, i| s.max((a[i] - b[i]).abs()));
+            if step <= 1e-14 * x[0] {
+                compared += 1;
+                let gap = (0..3).fold(0.0f64, |s, i| s.max((a[i] - x[i]).abs()));
+                assert!(
+                    gap <= 1e-10 * x[0],
+                    "case {case}: {x:?} against the alternation's {a:?}"
+                );
+            }
+        }
+        // Most approaching contacts that do not stick slide, and the solve finds each.
+        assert!(sliding > 1000, "{sliding} sliding cases");
+        assert_eq!(solved, sliding, "{solved} of {sliding} solved");
+        // (3602 of 3667 measured: the rest did not converge in 2000 passes.)
+        assert!(compared > 3500, "{compared} compared with the alternation");
+    }
 
     #[test]
     fn the_disc_minimiser_meets_coulombs_law() {
