@@ -28,10 +28,10 @@ const LOCAL_FROM: usize = 64;
 /// pile of 100 boxes and spheres drawn with seeds 1, 2 and 3, to 2 s (with the one-root
 /// sliding solve, `cone.rs`): without the rescue seeds 1 and 3 stopped with an error (seed
 /// 1 at t = 0.68 s, a position solve stalled after the split to `h/16` and the last
-/// resort); with it all three complete, at 26.5, 28.1 and 44.9 ms a step. Up to 200 contacts instead (without
-/// the sliding solve) the three completed to 1 s at 70-100 ms a step, and 100 spheres
-/// took 22.3 s instead of 4.1: Newton on the large islands of a settled pile costs more
-/// than the sweeps it saves.
+/// resort); with it all three complete, at 26.5, 28.1 and 44.9 ms a step. Up to 200
+/// contacts instead the three completed to 1 s at 70-100 ms a step, and 100 spheres took
+/// 22.3 s instead of 4.1: Newton on the large islands of a settled pile costs more than
+/// the sweeps it saves.
 const RESCUE_UP_TO: usize = 64;
 
 impl Workspace {
@@ -329,7 +329,7 @@ pub(super) fn solve_contacts(
                 // A stalled island (redundant resting contacts) goes on from where the
                 // sweeps stopped over its dense `W`, with the finishes: also one stalled
                 // inside the caller's acceptance (rescuing only those outside it, up to 200
-                // contacts and without the sliding solve, failed two of those three piles).
+                // contacts, failed seed 3 and took seed 1 past 200 s of CPU to t = 1 s).
                 super::islands::dense_w(&sys.mass, &sys.inertia, &rows[c.clone()], hh, island_w);
                 let rescued = solve_dense(
                     island_w,
