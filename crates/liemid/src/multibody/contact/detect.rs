@@ -72,7 +72,7 @@ pub(in crate::multibody) struct Broad {
 }
 
 /// One contact point of a step: the bodies, the material points and the normal.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 pub(in crate::multibody) struct ContactPoint {
     pub a: Option<usize>,
     pub b: Option<usize>,
