@@ -172,6 +172,11 @@ impl Workspace {
             };
             newton_error(self.method_name, equation, state.t, h, e)
         };
+        // The two solves' factors from the last drift, kept while the iteration is warm
+        // (the same stage, corrections small); invalid until both solves succeed again.
+        let reuse = warm && self.arm_factored;
+        self.arm_factored = false;
+        let (dinv1, dinv2) = self.arm_dinv.split_at_mut(nb);
         super::armature::coupled_increments(
             arm,
             &sys.inertia,
@@ -179,8 +184,9 @@ impl Workspace {
             &self.big_p,
             hh,
             warm,
+            reuse,
             &mut self.psi1,
-            &mut self.arm_dinv,
+            dinv1,
             &mut self.arm_g,
         )
         .map_err(fail)?;
@@ -196,11 +202,13 @@ impl Workspace {
             &self.pi_a,
             hh,
             warm,
+            reuse,
             &mut self.psi2,
-            &mut self.arm_dinv,
+            dinv2,
             &mut self.arm_g,
         )
         .map_err(fail)?;
+        self.arm_factored = true;
         for i in 0..nb {
             let inc2 = so3::Increment::new(self.psi2[i]);
             self.r_new[i] = inc2.rotate(&self.r_new[i]);

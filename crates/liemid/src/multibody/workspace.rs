@@ -180,9 +180,12 @@ pub(super) struct Workspace {
     /// leading order in `h`), from the same Jacobian.
     pub(super) drift_rate: Vec<Mat3>,
     /// Scratch of the coupled drift with hinge armature (`armature.rs`; empty without):
-    /// the inverted pivots of Newton's Jacobian and the residual.
+    /// the inverted pivots of the Jacobians of its two solves (`Ψ₁`, then `Ψ₂`, each over
+    /// the bodies) and the residual.
     pub(super) arm_dinv: Vec<Mat3>,
     pub(super) arm_g: Vec<Vec3>,
+    /// Whether `arm_dinv` holds the factors of the last drift's two solves.
+    pub(super) arm_factored: bool,
     /// Whether the solver holds the factorization of `G(q) M⁻¹ G(q)ᵀ` at `rows0` (the
     /// last velocity solve's, kept for the next position solve).
     pub(super) factor_rows0: bool,
@@ -275,7 +278,7 @@ impl Workspace {
             effective: vec![Mat3::IDENTITY; nb],
             drift_rate: vec![Mat3::IDENTITY; nb],
             arm_dinv: if sys.armature.is_some() {
-                vec![Mat3::ZERO; nb]
+                vec![Mat3::ZERO; 2 * nb]
             } else {
                 Vec::new()
             },
@@ -284,6 +287,7 @@ impl Workspace {
             } else {
                 Vec::new()
             },
+            arm_factored: false,
             factor_rows0: false,
             profiling: false,
             solver_time: std::time::Duration::ZERO,
