@@ -426,8 +426,40 @@ impl Workspace {
             if !done.converged {
                 stalled = Some((done, worst));
             }
+            if self.rows0.iter().any(|r| r.n > 0) {
+                self.follow_contact_forces(sys, s, hh);
+            }
         }
         unreachable!("the outer loop returns")
+    }
+
+    /// The joints' multipliers moved with the contact forces' change since the last drift
+    /// (`s.sigma − s.sigma_ok`), to first order: the multipliers that keep the start rows'
+    /// rates of that impulse at zero, one solve with the factored `G M⁻¹ Gᵀ` (the position
+    /// solve's quasi-Newton matrix). Without it each contact iteration's drift started the
+    /// joints from the last iteration's multipliers, a residual of the order of the force
+    /// change: on the standing quadruped 5.5e-6 and five position iterations, with it
+    /// 4.9e-10 and three (545 → 488 M instructions to 0.3 s, callgrind).
+    fn follow_contact_forces(&mut self, sys: &MultibodySystem, s: &mut ContactScratch, hh: f64) {
+        let (mut lin, mut ang) = (core::mem::take(&mut s.linear), core::mem::take(&mut s.angular));
+        lin.iter_mut().for_each(|v| *v = Vec3::ZERO);
+        ang.iter_mut().for_each(|v| *v = Vec3::ZERO);
+        for (k, rows) in s.rows.iter().enumerate() {
+            for i in 0..3 {
+                let change = s.sigma[3 * k + i] - s.sigma_ok[3 * k + i];
+                if change != 0.0 {
+                    rows.apply(i, hh * change, &mut lin, &mut ang);
+                }
+            }
+        }
+        self.project(sys, &mut lin, &mut ang, hh, true, true);
+        s.linear = lin;
+        s.angular = ang;
+        for ((jr, delta), lambda) in self.rows0.iter().zip(&self.delta).zip(&mut self.lambda) {
+            for (l, d) in lambda[..jr.n].iter_mut().zip(&delta[..jr.n]) {
+                *l += d;
+            }
+        }
     }
 
     /// The velocity half: the contacts touching at the end (gap within 1e-9 of the contact
