@@ -6,12 +6,13 @@
 
 use crate::linalg::{Mat3, Vec3};
 
+use super::super::constraints::JointRows;
 use super::detect::ContactPoint;
 use parry3d_f64::query::ContactManifold;
 
 /// The three rows of one contact at one configuration: directions (normal, two tangents)
 /// and the body-frame moments of a unit force along each on `a` and on `b`.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct Rows {
     pub(super) a: Option<usize>,
     pub(super) b: Option<usize>,
@@ -79,6 +80,17 @@ impl Rows {
     }
 }
 
+/// A dense `W` and what it was formed for (`ContactScratch::end_w`).
+#[derive(Clone, Debug, Default)]
+pub(super) struct EndResponse {
+    pub(super) w: Vec<f64>,
+    pub(super) hh: f64,
+    pub(super) rows: Vec<Rows>,
+    pub(super) joints: Vec<JointRows>,
+    /// Whether `w` is a response formed for the rest (cleared when not).
+    pub(super) valid: bool,
+}
+
 /// The islands of one set of contact rows, and the rows, blocks and friction coefficients
 /// gathered island by island (the forces and the rates are gathered per solve).
 #[derive(Clone, Debug, Default)]
@@ -124,6 +136,10 @@ pub(in crate::multibody) struct ContactScratch {
     pub(super) manifolds: Vec<ContactManifold<(), ()>>,
     pub(super) margin: Vec<f64>,
     pub(super) w: Vec<f64>,
+    /// The velocity solve's dense `W` over jointed bodies, with the half step, contact rows
+    /// and joint rows it was formed for: the next step's position solve starts at that
+    /// configuration and takes it where all of these are the same (`response.rs`).
+    pub(super) end_w: EndResponse,
     pub(super) r0: Vec<f64>,
     pub(super) rates: Vec<f64>,
     pub(super) sigma: Vec<f64>,
