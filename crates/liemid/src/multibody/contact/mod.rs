@@ -17,9 +17,9 @@
 //! on the joints' constraints): the velocity one is linear, the position one is solved by an
 //! outer iteration that re-runs the drift (with its joint solve) at each new `σ`, `r` being
 //! the gap and the slide over the step divided by `h`. Each linear problem is solved by
-//! projected Gauss–Seidel over the contacts (`cone.rs`: each contact's normal force, then
-//! its friction force as the exact minimiser over Coulomb's disc `|σ_t| ≤ µ σ_n`, the
-//! elliptic cone), to a stated tolerance; a step whose solve does not converge is an error.
+//! projected Gauss–Seidel over the contacts (`cone.rs`; each contact's own 3x3 problem in
+//! `block.rs`: its normal force, then its friction force as the exact minimiser over
+//! Coulomb's disc `|σ_t| ≤ µ σ_n`, the elliptic cone), to a stated tolerance; a step whose solve does not converge is an error.
 //! No velocity bias, no Baumgarte term, no softness: a body at rest stays at rest to the
 //! solver's tolerance, and a body on a slope below its friction angle does not creep.
 //!
@@ -42,6 +42,7 @@
 //! friction in finite freedom dynamics", 1988; D. Stewart, J. Trinkle, IJNME 39 (1996);
 //! M. Anitescu, F. Potra, Nonlinear Dynamics 14 (1997).
 
+mod block;
 mod boxes;
 mod cone;
 mod detect;
