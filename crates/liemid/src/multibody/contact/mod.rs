@@ -52,6 +52,7 @@ mod polish;
 mod response;
 mod scratch;
 mod step;
+mod warm;
 
 pub(super) use detect::ContactGeometry;
 pub(super) use scratch::ContactScratch;
