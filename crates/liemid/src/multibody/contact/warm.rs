@@ -7,9 +7,10 @@ use super::detect::ContactPoint;
 
 /// How far a contact may have moved since the last step and still start from its force.
 /// On free bodies [`WarmReach::Exact`] (a resting contact): measured on 100 spheres falling
-/// into a bin, seeds 1-3 to 2 s, a reach of `1e-3` cost 3.2 → 3.9-4.4 position iterations
-/// a step and 7.6-9.8 → 8.0-13.3 s, and a mixed pile of boxes and spheres penetrated
-/// 4.3e-5 m. On jointed bodies [`WarmReach::Near`]: a standing robot's foot rocks on its
+/// into a bin, seeds 1-3 to 2 s, a reach of `1e-3` (in the position solve, taking a
+/// contact's force once it had been found two steps running) cost 3.2 → 3.9-4.4 position
+/// iterations a step and 6.7-9.8 → 8.0-13.3 s, and a pile of boxes and spheres (seed 2)
+/// penetrated 4.3e-5 m. On jointed bodies [`WarmReach::Near`]: a standing robot's foot rocks on its
 /// sphere by more than `1e-9` of the length a step, and without its force each drift of
 /// the contact iteration re-solved the joints' multipliers from a residual of 3.9e-3 (the
 /// standing quadruped: 1.9 → 1.2 contact iterations a step, 342 → 244 µs a step; the
