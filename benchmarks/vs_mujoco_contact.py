@@ -27,8 +27,9 @@ default timestep is 2e-3; the files set 1e-3).
    call; liemid: stepping_seconds / steps from its JSON) and liemid's deepest penetration.
    liemid's run is capped (LIEMID_PILE_CAP seconds of wall clock, default 900): when the
    cap or a failed step stops it, what happened is printed. `--pile-seed N` draws the
-   piles' tilts and offsets from seed N (default 1; with 2 and 3 liemid's mixed pile stops
-   at t = 0.908 and 0.858 s, docs/multibody.md).
+   piles' tilts and offsets from seed N (default 1; with 2 and 3 liemid's mixed pile
+   stopped at t = 0.908 and 0.858 s before the sliding solve and the rescue of stalled
+   islands, and completes since, docs/multibody.md).
 
 Timings are CPU of one run on a shared machine: rough. The accuracy numbers are the point.
 

@@ -19,7 +19,8 @@
 //! the gap and the slide over the step divided by `h`. Each linear problem is solved by
 //! projected Gauss–Seidel over the contacts (`cone.rs`; each contact's own 3x3 problem in
 //! `block.rs`: its normal force, then its friction force as the exact minimiser over
-//! Coulomb's disc `|σ_t| ≤ µ σ_n`, the elliptic cone), to a stated tolerance; a step whose solve does not converge is an error.
+//! Coulomb's disc `|σ_t| ≤ µ σ_n`, the elliptic cone), to a stated tolerance; a step whose
+//! solve does not converge is an error.
 //! No velocity bias, no Baumgarte term, no softness: a body at rest stays at rest to the
 //! solver's tolerance, and a body on a slope below its friction angle does not creep.
 //!

@@ -9,6 +9,7 @@
 
 use crate::linalg::Vec3;
 
+use super::super::constraints::JointRows;
 use super::super::system::MultibodySystem;
 use super::super::workspace::Workspace;
 use super::cone;
@@ -33,6 +34,13 @@ const LOCAL_FROM: usize = 64;
 /// 22.3 s instead of 4.1: Newton on the large islands of a settled pile costs more than
 /// the sweeps it saves.
 const RESCUE_UP_TO: usize = 64;
+
+/// Whether the contact problems' bodies move freely: no joint rows and no armature (then
+/// `W` is applied body by body over islands, and the warm start takes only resting
+/// contacts, `warm.rs`).
+pub(super) fn free_bodies(sys: &MultibodySystem, rows: &[JointRows]) -> bool {
+    sys.armature.is_none() && !rows.iter().any(|r| r.n > 0)
+}
 
 impl Workspace {
     /// The contact problem's response `W = (h/2) D P M⁻¹ Dᵀ` over `s.rows` (row-major into
@@ -60,30 +68,19 @@ impl Workspace {
     /// diagonal blocks and the islands, else dense (`contact_response`).
     pub(super) fn prepare_response(&mut self, sys: &MultibodySystem, s: &mut ContactScratch, hh: f64, start: bool) {
         let rows = if start { &self.rows0 } else { &self.rows1 };
-        s.local = sys.armature.is_none() && !rows.iter().any(|r| r.n > 0);
+        s.local = free_bodies(sys, rows);
         if !s.local {
             // The velocity solve's `W` at the end of a step is the next step's at its start
             // when the contacts, the joint rows and the half step are the same (the joints'
             // factor is the same matrix's): on the standing quadruped 946 of 1000 steps take
             // it, 12 projections fewer each (487 → 431 M instructions to 0.3 s, callgrind),
             // and the run to 2 s gives the same JSON bit for bit as forming `W` again.
-            let end = &mut s.end_w;
-            if start && end.valid && end.hh == hh && end.rows == s.rows && end.joints == *rows {
-                s.w.clear();
-                s.w.extend_from_slice(&end.w);
+            if start && s.end_w.copy_if_for(hh, &s.rows, rows, &mut s.w) {
                 return;
             }
             self.contact_response(sys, s, hh, start);
-            let end = &mut s.end_w;
-            end.valid = !start;
             if !start {
-                end.w.clear();
-                end.w.extend_from_slice(&s.w);
-                end.hh = hh;
-                end.rows.clear();
-                end.rows.extend_from_slice(&s.rows);
-                end.joints.clear();
-                end.joints.extend_from_slice(&self.rows1);
+                s.end_w.keep(&s.w, hh, &s.rows, &self.rows1);
             }
             return;
         }

@@ -80,15 +80,38 @@ impl Rows {
     }
 }
 
-/// A dense `W` and what it was formed for (`ContactScratch::end_w`).
+/// A dense `W` and what it was formed for (`ContactScratch::end_w`): the half step, the
+/// contact rows and the joint rows, which with the constant masses determine it.
 #[derive(Clone, Debug, Default)]
 pub(super) struct EndResponse {
-    pub(super) w: Vec<f64>,
-    pub(super) hh: f64,
-    pub(super) rows: Vec<Rows>,
-    pub(super) joints: Vec<JointRows>,
-    /// Whether `w` is a response formed for the rest (cleared when not).
-    pub(super) valid: bool,
+    w: Vec<f64>,
+    hh: f64,
+    rows: Vec<Rows>,
+    joints: Vec<JointRows>,
+}
+
+impl EndResponse {
+    /// Keep `w`, formed for `hh`, `rows` and `joints`.
+    pub(super) fn keep(&mut self, w: &[f64], hh: f64, rows: &[Rows], joints: &[JointRows]) {
+        self.w.clear();
+        self.w.extend_from_slice(w);
+        self.hh = hh;
+        self.rows.clear();
+        self.rows.extend_from_slice(rows);
+        self.joints.clear();
+        self.joints.extend_from_slice(joints);
+    }
+
+    /// Copy the kept `W` into `w` if it was formed for `hh`, `rows` and `joints`; whether it
+    /// was.
+    pub(super) fn copy_if_for(&self, hh: f64, rows: &[Rows], joints: &[JointRows], w: &mut Vec<f64>) -> bool {
+        let same = self.hh == hh && self.rows == rows && self.joints == joints;
+        if same {
+            w.clear();
+            w.extend_from_slice(&self.w);
+        }
+        same
+    }
 }
 
 /// The islands of one set of contact rows, and the rows, blocks and friction coefficients

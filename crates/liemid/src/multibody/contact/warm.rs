@@ -4,17 +4,18 @@
 use super::super::constraints::JointRows;
 use super::super::system::MultibodySystem;
 use super::detect::ContactPoint;
+use super::response::free_bodies;
 
 /// How far a contact may have moved since the last step and still start from its force.
 /// On free bodies [`WarmReach::Exact`] (a resting contact): measured on 100 spheres falling
 /// into a bin, seeds 1-3 to 2 s, a reach of `1e-3` (in the position solve, taking a
 /// contact's force once it had been found two steps running) cost 3.2 → 3.9-4.4 position
 /// iterations a step and 6.7-9.8 → 8.0-13.3 s, and a pile of boxes and spheres (seed 2)
-/// penetrated 4.3e-5 m. On jointed bodies [`WarmReach::Near`]: a standing robot's foot rocks on its
-/// sphere by more than `1e-9` of the length a step, and without its force each drift of
-/// the contact iteration re-solved the joints' multipliers from a residual of 3.9e-3 (the
-/// standing quadruped: 1.9 → 1.2 contact iterations a step, 342 → 244 µs a step; the
-/// humanoid lying on the floor: 653 → 572 µs, 132 → 2 steps at the acceptance).
+/// penetrated 4.3e-5 m. On jointed bodies [`WarmReach::Near`]: a standing robot's foot
+/// rocks on its sphere by more than `1e-9` of the length a step, and without its force each
+/// drift of the contact iteration re-solved the joints' multipliers from a residual of
+/// 3.9e-3 (the standing quadruped: 1.9 → 1.2 contact iterations a step, 342 → 244 µs a
+/// step; the humanoid lying on the floor: 653 → 572 µs, 132 → 2 steps at the acceptance).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum WarmReach {
     /// The same bodies, each material point within `1e-9` of the length and the normal in
@@ -30,10 +31,10 @@ impl WarmReach {
     /// [`WarmReach::Near`] where the bodies are jointed (joint rows or armature), else
     /// [`WarmReach::Exact`].
     pub(super) fn of(sys: &MultibodySystem, rows: &[JointRows]) -> WarmReach {
-        if sys.armature.is_some() || rows.iter().any(|r| r.n > 0) {
-            WarmReach::Near
-        } else {
+        if free_bodies(sys, rows) {
             WarmReach::Exact
+        } else {
+            WarmReach::Near
         }
     }
 }
